@@ -1,0 +1,50 @@
+/* Private: one contact body, a PETSc subdomain. */
+#pragma once
+
+#include <mbc/private/sceneimpl.h>
+
+struct _n_MBCBody {
+  char        name[MBC_NAME_LEN];
+  PetscInt    index;      /* position in the scene */
+  MPI_Comm    comm;       /* the body's sub-communicator of the job's */
+  MBCScene    scene;      /* borrowed */
+  MBCBodyDesc desc;
+  PetscBool   simplex;
+
+  DM      dm;             /* displacement field, Lagrange P1/Q1 */
+  DM      dmStress;       /* cellwise stress, 6 components (xx yy zz xy yz xz) */
+  PetscFE fe;
+  PetscReal lambda, mu;   /* Lamé constants */
+
+  Mat K, M;               /* unconstrained stiffness and mass (lumped: diagonal) */
+  PetscReal cM, cK;       /* damping C = cM M + cK K (never formed) */
+  Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
+  KSP ksp;
+  PetscReal a0, a1;       /* coefficients of A = aK K + aM M */
+  PetscReal aK, aM;
+  PetscReal wext, wdamp;  /* external work and damping dissipation so far (dynamic) */
+
+  PetscInt  nloads;       /* scene loads acting on this body */
+  PetscInt *load_index;   /* index of each into the scene's loads */
+  Vec      *load;         /* assembled load vector of each, for a unit time factor */
+
+  PetscInt   nbc;         /* constrained DOFs owned by this rank */
+  PetscInt  *bc_rows;     /* their global rows, sorted, unique */
+  PetscInt  *bc_entry;    /* for each, the dirichlet entry that prescribes it (last one wins) */
+  PetscBool  bc_component[3]; /* some DOF of this component is constrained on some rank */
+
+  Vec u, v, a;            /* displacement, velocity, acceleration */
+  Vec du, rhs, f, fold, g, work, work2;
+};
+
+PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, MBCBody *);
+PETSC_INTERN PetscErrorCode MBCBodySetUp(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyDestroy(MBCBody *);
+PETSC_INTERN PetscErrorCode MBCBodyAssembleLoads(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);
+PETSC_INTERN PetscErrorCode MBCBodyExternalForce(MBCBody, PetscReal, PetscBool, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyPrescribed(MBCBody, PetscReal, Vec);
+PETSC_INTERN PetscErrorCode MBCBodySetConstrainedRows(MBCBody, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyConstrainedSolve(MBCBody, KSP, PetscReal, PetscReal, Vec, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyComputeStress(MBCBody, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], PetscReal);

@@ -1,0 +1,88 @@
+/* Private: the scene as read from the scene file (docs/scene-h5.md). */
+#pragma once
+
+#include <mbcontact.h>
+#include <petscds.h>
+#include <petscviewerhdf5.h>
+
+#define MBC_NAME_LEN 256
+
+typedef enum {
+  MBC_TIME_CONSTANT, /* present from the start: part of the initial static state */
+  MBC_TIME_SUDDEN,   /* full value for t >= 0, body at rest at t = 0 */
+  MBC_TIME_TABLE     /* factor from a time table, body at rest at t = 0 */
+} MBCTimeKind;
+PETSC_INTERN const char *const MBCTimeKinds[];
+
+typedef enum {
+  MBC_LOAD_GRAVITY,
+  MBC_LOAD_BODY_FORCE,
+  MBC_LOAD_PRESSURE,
+  MBC_LOAD_TRACTION
+} MBCLoadKind;
+PETSC_INTERN const char *const MBCLoadKinds[];
+
+typedef struct {
+  PetscInt   n;
+  PetscReal *t, *f;
+} MBCTimeTable;
+
+typedef struct {
+  char      name[MBC_NAME_LEN], cell_type[16];
+  PetscInt  num_cells, num_vertices;
+  PetscReal E, nu, density, damping, rayleigh_alpha, rayleigh_beta;
+} MBCBodyDesc;
+
+typedef struct {
+  char      name[MBC_NAME_LEN];
+  PetscInt  id, num_faces;
+} MBCSurfaceDesc;
+
+typedef struct {
+  PetscInt  k;
+  PetscReal mu;
+  char     *master, *slave; /* surface names joined by "," */
+} MBCCoupleDesc;
+
+typedef struct {
+  char        surface[MBC_NAME_LEN];
+  PetscInt    surface_id, component, time_function;
+  PetscReal   value;
+  MBCTimeKind time;
+} MBCDirichletDesc;
+
+typedef struct {
+  MBCLoadKind kind;
+  PetscReal   vector[3], value;
+  char        surface[MBC_NAME_LEN];
+  PetscInt    surface_id, time_function;
+  char       *bodies; /* body names joined by ",", "" for all */
+  MBCTimeKind time;
+} MBCLoadDesc;
+
+typedef struct {
+  char      name[MBC_NAME_LEN], body[MBC_NAME_LEN];
+  PetscReal x[3];
+} MBCPointDesc;
+
+struct _n_MBCScene {
+  char            filename[PETSC_MAX_PATH_LEN], title[MBC_NAME_LEN];
+  MBCAnalysisType analysis;
+  MBCMassType     mass;
+  PetscReal       dt, final_time, newmark_beta, newmark_gamma;
+
+  PetscInt          nbodies, nsurfaces, ncouples, ntables, ndirichlet, nloads, npoints;
+  MBCBodyDesc      *bodies;
+  MBCSurfaceDesc   *surfaces;
+  MBCCoupleDesc    *couples;
+  MBCTimeTable     *tables;
+  MBCDirichletDesc *dirichlet;
+  MBCLoadDesc      *loads;
+  MBCPointDesc     *points;
+
+  PetscInt  output_every;
+  PetscBool output_displacement, output_stress, output_energy;
+};
+
+PETSC_EXTERN PetscErrorCode MBCTimeFactor(MBCScene, MBCTimeKind, PetscInt, PetscReal, PetscReal *);
+PETSC_INTERN PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *, const char[], PetscBool *);

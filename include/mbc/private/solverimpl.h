@@ -1,0 +1,44 @@
+/* Private: the solver, the bodies of a scene and their time stepping. */
+#pragma once
+
+#include <mbc/private/bodyimpl.h>
+
+typedef struct {
+  PetscInt  body;         /* body holding the nearest vertex */
+  PetscInt  rank;         /* world rank owning it */
+  PetscInt  row;          /* its first global row in the body's displacement Vec (on that rank) */
+  PetscReal distance, xv[3];
+} MBCPointLocation;
+
+struct _n_MBCSolver {
+  MPI_Comm  comm;
+  MBCScene  scene;        /* owned */
+  PetscBool setupcalled;
+
+  MBCAnalysisType analysis;
+  MBCMassType     mass;
+  PetscReal       dt, final_time, beta, gamma;
+  PetscInt        nsteps, step;
+  PetscReal       time;
+
+  PetscInt  nbodies;
+  MBCBody  *bodies;       /* NULL where this rank is not in the body */
+  PetscMPIInt *body_first_rank, *body_nranks;
+
+  /* output */
+  char      output[PETSC_MAX_PATH_LEN];
+  PetscInt  output_every, noutputs;
+  PetscReal *output_times;
+  PetscViewer *h5;        /* per body, NULL where the rank is not in the body */
+  FILE     *points_csv, *energy_csv;
+  MBCPointLocation *points;
+  PetscBool monitor, view;
+
+  /* energy bookkeeping (dynamic) */
+  PetscReal work, dissipated;
+};
+
+PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);

@@ -1,0 +1,42 @@
+static const char help[] = "mbcontact: finite-element multibody contact with Coulomb friction.\n"
+                           "Usage: mpirun -n P mbcontact -scene SCENE.h5 [-mbc_monitor] [-mbc_view] [-log_view]\n"
+                           "Make SCENE.h5 with mbcontact-prep SCENE.yaml -o SCENE.h5.\n\n";
+
+#include <mbcontact.h>
+
+static PetscErrorCode Run(void)
+{
+  char      file[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set;
+  MBCScene  scene;
+  MBCSolver solver;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-scene", file, sizeof(file), &set));
+  PetscCheck(set && file[0], PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "No scene file: give -scene SCENE.h5 (make one with mbcontact-prep)");
+  PetscCall(MBCSceneLoad(PETSC_COMM_WORLD, file, &scene));
+  PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
+  PetscCall(MBCSolverSetScene(solver, scene));
+  PetscCall(MBCSolverSetFromOptions(solver));
+  PetscCall(MBCSolverSolve(solver));
+  PetscCall(MBCSolverDestroy(&solver));
+  PetscFunctionReturn(0);
+}
+
+int main(int argc, char **argv)
+{
+  PetscErrorCode ierr;
+  PetscMPIInt    size;
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  ierr = Run();
+  if (ierr) {
+    /* A user error may be found on some ranks only; the others must not wait in a collective. */
+    PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+    if (size > 1) MPI_Abort(PETSC_COMM_WORLD, 1);
+    PetscFinalize();
+    return 1;
+  }
+  PetscCall(PetscFinalize());
+  return 0;
+}

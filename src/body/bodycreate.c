@@ -1,0 +1,171 @@
+/* A body: its DMPlex, loaded and distributed by PETSc from the scene file, on its own communicator. */
+#include <mbc/private/bodyimpl.h>
+#include <mbc/private/pointwise.h>
+
+/* Every cell must have a positive Jacobian determinant at every quadrature point. */
+static PetscErrorCode BodyCheckGeometry(MBCBody body)
+{
+  PetscQuadrature q;
+  PetscInt        cStart, cEnd, nq, bad = -1;
+  PetscReal      *v0, *J, *invJ, *detJ, worst = 0;
+  IS              cellNumbering;
+  const PetscInt *gnum;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFEGetQuadrature(body->fe, &q));
+  PetscCall(PetscQuadratureGetData(q, NULL, NULL, &nq, NULL, NULL));
+  PetscCall(PetscMalloc4(3 * nq, &v0, 9 * nq, &J, 9 * nq, &invJ, nq, &detJ));
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  PetscCall(DMPlexGetCellNumbering(body->dm, &cellNumbering));
+  PetscCall(ISGetIndices(cellNumbering, &gnum));
+  for (PetscInt c = cStart; c < cEnd && bad < 0; c++) {
+    PetscCall(DMPlexComputeCellGeometryFEM(body->dm, c, q, v0, J, invJ, detJ));
+    for (PetscInt i = 0; i < nq; i++) {
+      if (!(detJ[i] > 0)) {
+        bad   = gnum[c - cStart] < 0 ? -(gnum[c - cStart] + 1) : gnum[c - cStart];
+        worst = detJ[i];
+        break;
+      }
+    }
+  }
+  PetscCall(ISRestoreIndices(cellNumbering, &gnum));
+  PetscCall(PetscFree4(v0, J, invJ, detJ));
+  PetscCheck(bad < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s': cell %" PetscInt_FMT " is inverted or degenerate (Jacobian determinant %g at a quadrature point)", body->scene->filename, body->name, bad, (double)worst);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode BodyLoadMesh(MBCBody body)
+{
+  PetscViewer viewer;
+  DM          dmDist = NULL;
+  PetscMPIInt size;
+  PetscBool   isPlex;
+
+  PetscFunctionBegin;
+  PetscCall(DMCreate(body->comm, &body->dm));
+  PetscCall(DMSetType(body->dm, DMPLEX));
+  PetscCall(PetscObjectSetName((PetscObject)body->dm, body->name));
+  PetscCall(PetscViewerHDF5Open(body->comm, body->scene->filename, FILE_MODE_READ, &viewer));
+  PetscCall(DMLoad(body->dm, viewer));
+  PetscCall(PetscViewerDestroy(&viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)body->dm, DMPLEX, &isPlex));
+  PetscCallMPI(MPI_Comm_size(body->comm, &size));
+  if (size > 1) {
+    PetscCall(DMPlexDistribute(body->dm, 0, NULL, &dmDist));
+    if (dmDist) {
+      PetscCall(DMDestroy(&body->dm));
+      body->dm = dmDist;
+      PetscCall(PetscObjectSetName((PetscObject)body->dm, body->name));
+    }
+  }
+  PetscCall(DMPlexIsSimplex(body->dm, &body->simplex));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, MBCBody *newbody)
+{
+  MBCBody     body;
+  PetscDS     ds;
+  PetscFE     feStress;
+  PetscScalar constants[MBC_NUM_CONSTANTS] = {0};
+  char        prefix[MBC_NAME_LEN + 8];
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&body));
+  body->comm  = comm;
+  body->scene = scene;
+  body->index = index;
+  body->desc  = scene->bodies[index];
+  PetscCall(PetscStrncpy(body->name, body->desc.name, sizeof(body->name)));
+  body->lambda = body->desc.E * body->desc.nu / ((1 + body->desc.nu) * (1 - 2 * body->desc.nu));
+  body->mu     = body->desc.E / (2 * (1 + body->desc.nu));
+
+  PetscCall(PetscLogEventBegin(MBC_BodyLoad, 0, 0, 0, 0));
+  PetscCall(BodyLoadMesh(body));
+  PetscCall(PetscLogEventEnd(MBC_BodyLoad, 0, 0, 0, 0));
+
+  /* P1/Q1 displacement; quadrature of order 2 integrates the mass matrix of affine cells exactly
+     and gives hexahedra the full 2x2x2 Gauss rule (no hourglass modes). */
+  PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
+  PetscCall(PetscFECreateLagrange(comm, 3, 3, body->simplex, 1, 2, &body->fe));
+  PetscCall(PetscObjectSetName((PetscObject)body->fe, "displacement"));
+  PetscCall(DMSetField(body->dm, 0, NULL, (PetscObject)body->fe));
+  PetscCall(DMCreateDS(body->dm));
+  constants[0] = body->lambda;
+  constants[1] = body->mu;
+  PetscCall(DMGetDS(body->dm, &ds));
+  PetscCall(PetscDSSetJacobian(ds, 0, 0, NULL, NULL, NULL, MBCPointwiseElasticity_g3));
+  PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, constants));
+  PetscCall(BodyCheckGeometry(body));
+
+  /* Cellwise stress: piecewise constant, 6 components. */
+  PetscCall(DMClone(body->dm, &body->dmStress));
+  PetscCall(PetscFECreateLagrange(comm, 3, 6, body->simplex, 0, 2, &feStress));
+  PetscCall(PetscObjectSetName((PetscObject)feStress, "stress"));
+  PetscCall(DMSetField(body->dmStress, 0, NULL, (PetscObject)feStress));
+  PetscCall(PetscFEDestroy(&feStress));
+  PetscCall(DMCreateDS(body->dmStress));
+  PetscCall(DMGetDS(body->dmStress, &ds));
+  PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, constants));
+  *newbody = body;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyDestroy(MBCBody *body)
+{
+  MBCBody b = *body;
+
+  PetscFunctionBegin;
+  if (!b) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < b->nloads; i++) PetscCall(VecDestroy(&b->load[i]));
+  PetscCall(PetscFree2(b->load, b->load_index));
+  PetscCall(PetscFree2(b->bc_rows, b->bc_entry));
+  PetscCall(MatDestroy(&b->K));
+  PetscCall(MatDestroy(&b->M));
+  PetscCall(MatDestroy(&b->A));
+  PetscCall(KSPDestroy(&b->ksp));
+  PetscCall(VecDestroy(&b->u));
+  PetscCall(VecDestroy(&b->v));
+  PetscCall(VecDestroy(&b->a));
+  PetscCall(VecDestroy(&b->du));
+  PetscCall(VecDestroy(&b->rhs));
+  PetscCall(VecDestroy(&b->f));
+  PetscCall(VecDestroy(&b->fold));
+  PetscCall(VecDestroy(&b->g));
+  PetscCall(VecDestroy(&b->work));
+  PetscCall(VecDestroy(&b->work2));
+  PetscCall(PetscFEDestroy(&b->fe));
+  PetscCall(DMDestroy(&b->dmStress));
+  PetscCall(DMDestroy(&b->dm));
+  if (b->comm != MPI_COMM_NULL) PetscCallMPI(MPI_Comm_free(&b->comm));
+  PetscCall(PetscFree(*body));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetName(MBCBody body, const char **name)
+{
+  PetscFunctionBegin;
+  *name = body ? body->name : NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetDM(MBCBody body, DM *dm)
+{
+  PetscFunctionBegin;
+  *dm = body ? body->dm : NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetDisplacement(MBCBody body, Vec *u)
+{
+  PetscFunctionBegin;
+  *u = body ? body->u : NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetKSP(MBCBody body, KSP *ksp)
+{
+  PetscFunctionBegin;
+  *ksp = body ? body->ksp : NULL;
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,226 @@
+/* Assembly of a body's stiffness, mass and load vectors, and its constrained DOFs. */
+#include <mbc/private/bodyimpl.h>
+#include <mbc/private/pointwise.h>
+
+static PetscErrorCode BodyAssembleStiffness(MBCBody body)
+{
+  Vec zero;
+
+  PetscFunctionBegin;
+  PetscCall(DMCreateMatrix(body->dm, &body->K));
+  PetscCall(DMGetLocalVector(body->dm, &zero));
+  PetscCall(VecZeroEntries(zero));
+  PetscCall(DMPlexSNESComputeJacobianFEM(body->dm, zero, body->K, body->K, NULL));
+  PetscCall(DMRestoreLocalVector(body->dm, &zero));
+  PetscCall(MatSetOption(body->K, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscFunctionReturn(0);
+}
+
+/* Consistent mass rho * int N_i N_j, or its row sums on the diagonal (lumped). */
+static PetscErrorCode BodyAssembleMass(MBCBody body, MBCMassType type)
+{
+  Mat M;
+  Vec diag;
+
+  PetscFunctionBegin;
+  PetscCall(DMCreateMassMatrix(body->dm, body->dm, &M));
+  PetscCall(MatScale(M, body->desc.density));
+  if (type == MBC_MASS_LUMPED) {
+    PetscCall(MatCreateVecs(M, &diag, NULL));
+    PetscCall(MatGetRowSum(M, diag));
+    PetscCall(MatDestroy(&M));
+    PetscCall(MatDuplicate(body->K, MAT_DO_NOT_COPY_VALUES, &M));
+    PetscCall(MatZeroEntries(M));
+    PetscCall(MatDiagonalSet(M, diag, INSERT_VALUES));
+    PetscCall(VecDestroy(&diag));
+  }
+  PetscCall(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE));
+  body->M = M;
+  PetscFunctionReturn(0);
+}
+
+/* Number of faces of a surface in this body, over the body's communicator. */
+static PetscErrorCode BodySurfaceSize(MBCBody body, PetscInt id, PetscInt *n)
+{
+  DMLabel  label;
+  PetscInt local = 0;
+
+  PetscFunctionBegin;
+  PetscCall(DMGetLabel(body->dm, "Face Sets", &label));
+  if (label) PetscCall(DMLabelGetStratumSize(label, id, &local));
+  PetscCall(MPIU_Allreduce(&local, n, 1, MPIU_INT, MPI_SUM, body->comm));
+  PetscFunctionReturn(0);
+}
+
+/* The load vector of one scene load for a unit time factor, in a clone of the body's DM whose
+   discrete system holds only that load; the clone shares topology, section and layout. */
+static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
+{
+  DM          dm;
+  PetscDS     ds;
+  Vec         zero, Floc;
+  PetscScalar c[MBC_NUM_CONSTANTS] = {0};
+
+  PetscFunctionBegin;
+  c[0] = body->lambda;
+  c[1] = body->mu;
+  for (PetscInt d = 0; d < 3; d++) c[2 + d] = load->vector[d];
+  if (load->kind == MBC_LOAD_GRAVITY)
+    for (PetscInt d = 0; d < 3; d++) c[2 + d] *= body->desc.density;
+  if (load->kind == MBC_LOAD_PRESSURE) c[5] = load->value;
+  PetscCall(DMClone(body->dm, &dm));
+  PetscCall(DMSetField(dm, 0, NULL, (PetscObject)body->fe));
+  PetscCall(DMCreateDS(dm));
+  PetscCall(DMGetDS(dm, &ds));
+  if (load->kind == MBC_LOAD_GRAVITY || load->kind == MBC_LOAD_BODY_FORCE) {
+    PetscCall(PetscDSSetResidual(ds, 0, MBCPointwiseBodyForce_f0, NULL));
+  } else {
+    DMLabel       label;
+    PetscWeakForm wf;
+    PetscInt      bd, id = load->surface_id;
+
+    PetscCall(DMGetLabel(dm, "Face Sets", &label));
+    PetscCall(DMAddBoundary(dm, DM_BC_NATURAL, load->surface, label, 1, &id, 0, 0, NULL, NULL, NULL, NULL, &bd));
+    PetscCall(PetscDSGetBoundary(ds, bd, &wf, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(PetscWeakFormSetIndexBdResidual(wf, label, id, 0, 0, 0, MBCPointwiseTraction_f0, 0, NULL));
+  }
+  PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, c));
+  PetscCall(DMGetLocalVector(dm, &zero));
+  PetscCall(DMGetLocalVector(dm, &Floc));
+  PetscCall(VecZeroEntries(zero));
+  PetscCall(VecZeroEntries(Floc));
+  PetscCall(DMPlexSNESComputeResidualFEM(dm, zero, Floc, NULL));
+  PetscCall(VecZeroEntries(F));
+  PetscCall(DMLocalToGlobal(dm, Floc, ADD_VALUES, F));
+  PetscCall(DMRestoreLocalVector(dm, &Floc));
+  PetscCall(DMRestoreLocalVector(dm, &zero));
+  PetscCall(DMDestroy(&dm));
+  PetscFunctionReturn(0);
+}
+
+/* The scene loads acting on this body: volume loads naming it (or all bodies), surface loads on its faces. */
+PetscErrorCode MBCBodyAssembleLoads(MBCBody body)
+{
+  MBCScene scene = body->scene;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc2(scene->nloads, &body->load, scene->nloads, &body->load_index));
+  body->nloads = 0;
+  for (PetscInt l = 0; l < scene->nloads; l++) {
+    MBCLoadDesc *load = &scene->loads[l];
+    PetscBool    applies;
+
+    PetscCall(MBCLoadAppliesToBody(load, body->name, &applies));
+    if (applies && load->surface_id >= 1) {
+      PetscInt n;
+      PetscCall(BodySurfaceSize(body, load->surface_id, &n));
+      applies = (PetscBool)(n > 0);
+    }
+    if (!applies) continue;
+    PetscCall(DMCreateGlobalVector(body->dm, &body->load[body->nloads]));
+    PetscCall(BodyAssembleLoad(body, load, body->load[body->nloads]));
+    body->load_index[body->nloads++] = l;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Owned global rows of the DOFs prescribed by the scene's dirichlet entries; where entries
+   overlap (an edge shared by two surfaces) the later entry wins. */
+static PetscErrorCode BodySetUpConstraints(MBCBody body)
+{
+  MBCScene     scene = body->scene;
+  DMLabel      label;
+  PetscSection gsec;
+  PetscInt     vStart, vEnd, n = 0, cap = 0, *rows = NULL, *entry = NULL;
+  PetscInt     local[3] = {0, 0, 0}, global[3];
+
+  PetscFunctionBegin;
+  PetscCall(DMGetLabel(body->dm, "Face Sets", &label));
+  PetscCall(DMGetGlobalSection(body->dm, &gsec));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  for (PetscInt e = 0; label && e < scene->ndirichlet; e++) {
+    MBCDirichletDesc *d = &scene->dirichlet[e];
+    IS                faceIS;
+    const PetscInt   *faces;
+    PetscInt          nfaces;
+
+    PetscCall(DMLabelGetStratumIS(label, d->surface_id, &faceIS));
+    if (!faceIS) continue;
+    PetscCall(ISGetLocalSize(faceIS, &nfaces));
+    PetscCall(ISGetIndices(faceIS, &faces));
+    for (PetscInt f = 0; f < nfaces; f++) {
+      PetscInt *closure = NULL, nclosure;
+
+      PetscCall(DMPlexGetTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
+      for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+        PetscInt point = closure[p], off;
+        if (point < vStart || point >= vEnd) continue;
+        PetscCall(PetscSectionGetOffset(gsec, point, &off));
+        if (off < 0) continue; /* owned by another rank */
+        if (n == cap) {
+          cap = 2 * cap + 64;
+          PetscCall(PetscRealloc(cap * sizeof(PetscInt), &rows));
+          PetscCall(PetscRealloc(cap * sizeof(PetscInt), &entry));
+        }
+        rows[n]    = off + d->component;
+        entry[n++] = e;
+      }
+      PetscCall(DMPlexRestoreTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
+    }
+    PetscCall(ISRestoreIndices(faceIS, &faces));
+    PetscCall(ISDestroy(&faceIS));
+  }
+  /* sort by row, keep the last entry of each row */
+  PetscCall(PetscSortIntWithArray(n, rows, entry));
+  PetscCall(PetscMalloc2(n, &body->bc_rows, n, &body->bc_entry));
+  body->nbc = 0;
+  for (PetscInt i = 0; i < n; i++) {
+    if (body->nbc && body->bc_rows[body->nbc - 1] == rows[i]) {
+      body->bc_entry[body->nbc - 1] = PetscMax(body->bc_entry[body->nbc - 1], entry[i]);
+      continue;
+    }
+    body->bc_rows[body->nbc]  = rows[i];
+    body->bc_entry[body->nbc] = entry[i];
+    body->nbc++;
+  }
+  PetscCall(PetscFree(rows));
+  PetscCall(PetscFree(entry));
+  for (PetscInt i = 0; i < body->nbc; i++) local[scene->dirichlet[body->bc_entry[i]].component] = 1;
+  PetscCall(MPIU_Allreduce(local, global, 3, MPIU_INT, MPI_MAX, body->comm));
+  for (PetscInt c = 0; c < 3; c++) body->bc_component[c] = global[c] ? PETSC_TRUE : PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodySetUp(MBCBody body)
+{
+  MBCScene scene   = body->scene;
+  PetscBool dynamic = (PetscBool)(scene->analysis == MBC_ANALYSIS_DYNAMIC);
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_BodyAssemble, 0, 0, 0, 0));
+  PetscCall(BodyAssembleStiffness(body));
+  if (dynamic) PetscCall(BodyAssembleMass(body, scene->mass));
+  body->cM = body->desc.damping + body->desc.rayleigh_alpha;
+  body->cK = body->desc.rayleigh_beta;
+  PetscCall(MBCBodyAssembleLoads(body));
+  PetscCall(BodySetUpConstraints(body));
+  PetscCall(DMCreateGlobalVector(body->dm, &body->u));
+  PetscCall(PetscObjectSetName((PetscObject)body->u, "displacement"));
+  PetscCall(VecDuplicate(body->u, &body->du));
+  PetscCall(VecDuplicate(body->u, &body->rhs));
+  PetscCall(VecDuplicate(body->u, &body->f));
+  PetscCall(VecDuplicate(body->u, &body->g));
+  PetscCall(VecDuplicate(body->u, &body->work));
+  if (dynamic) {
+    PetscCall(VecDuplicate(body->u, &body->v));
+    PetscCall(VecDuplicate(body->u, &body->a));
+    PetscCall(VecDuplicate(body->u, &body->fold));
+    PetscCall(VecDuplicate(body->u, &body->work2));
+  }
+  PetscCall(PetscLogEventEnd(MBC_BodyAssemble, 0, 0, 0, 0));
+  if (!dynamic) {
+    /* K alone: without inertia, every component needs a prescribed DOF somewhere. */
+    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
+  }
+  PetscFunctionReturn(0);
+}

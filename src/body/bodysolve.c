@@ -1,0 +1,156 @@
+/* Factorization of a body's operator and constrained solves with it. */
+#include <mbc/private/bodyimpl.h>
+#include <mbc/private/pointwise.h>
+
+/* A = aK K + aM M with the constrained rows and columns zeroed and 1 on the diagonal
+   (MatZeroRowsColumns: eliminating DOFs or a big diagonal number would make the contact
+   flexibility matrix singular or ill-conditioned), factored once by a KSP with the options
+   prefixes body_ (all bodies) then body_<name>_ (this body). */
+PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newksp, Mat *newA, const char purpose[])
+{
+  Mat            A;
+  KSP            ksp;
+  PC             pc;
+  PetscMPIInt    size;
+  char           prefix[MBC_NAME_LEN + 16];
+  PCFailedReason reason;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_BodyFactor, 0, 0, 0, 0));
+  if (aK != 0) {
+    PetscCall(MatDuplicate(body->K, MAT_COPY_VALUES, &A));
+    if (aK != 1) PetscCall(MatScale(A, aK));
+    if (aM != 0) PetscCall(MatAXPY(A, aM, body->M, SUBSET_NONZERO_PATTERN));
+  } else {
+    PetscCall(MatDuplicate(body->M, MAT_COPY_VALUES, &A));
+    if (aM != 1) PetscCall(MatScale(A, aM));
+  }
+  PetscCall(MatZeroRowsColumns(A, body->nbc, body->bc_rows, 1.0, NULL, NULL));
+  PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
+
+  PetscCall(KSPCreate(body->comm, &ksp));
+  PetscCall(KSPSetOperators(ksp, A, A));
+  PetscCall(KSPSetType(ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCSetType(pc, PCCHOLESKY));
+  PetscCallMPI(MPI_Comm_size(body->comm, &size));
+  if (size > 1) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  PetscCall(KSPSetOptionsPrefix(ksp, "body_"));
+  PetscCall(KSPSetFromOptions(ksp));
+  PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
+  PetscCall(KSPSetOptionsPrefix(ksp, prefix));
+  PetscCall(KSPSetFromOptions(ksp));
+  PetscCall(KSPSetUp(ksp));
+  PetscCall(PCGetFailedReasonRank(pc, &reason));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &reason, 1, MPI_INT, MPI_MAX, body->comm));
+  PetscCheck(reason == PC_NOERROR, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': factorization of the %s operator failed (%s); is the body held against rigid-body motion?", body->name, purpose, PCFailedReasons[reason]);
+  PetscCall(PetscLogEventEnd(MBC_BodyFactor, 0, 0, 0, 0));
+  *newksp = ksp;
+  *newA   = A;
+  PetscFunctionReturn(0);
+}
+
+/* Solves A x = rhs where A = aK K + aM M was factored with constrained rows/cols zeroed.
+   g (or NULL for zero) holds the prescribed values on constrained rows: their columns are
+   moved to the right side, as MatZeroRowsColumns would. rhs is overwritten. */
+/* rhs = g (or 0 where g is NULL) on the constrained rows. */
+PetscErrorCode MBCBodySetConstrainedRows(MBCBody body, Vec g, Vec rhs)
+{
+  PetscScalar       *r;
+  const PetscScalar *gv = NULL;
+  PetscInt           rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(rhs, &rstart, NULL));
+  PetscCall(VecGetArray(rhs, &r));
+  if (g) PetscCall(VecGetArrayRead(g, &gv));
+  for (PetscInt i = 0; i < body->nbc; i++) r[body->bc_rows[i] - rstart] = gv ? gv[body->bc_rows[i] - rstart] : 0.0;
+  if (g) PetscCall(VecRestoreArrayRead(g, &gv));
+  PetscCall(VecRestoreArray(rhs, &r));
+  PetscFunctionReturn(0);
+}
+
+/* Solves A x = rhs where A = aK K + aM M was factored with constrained rows/cols zeroed.
+   g (or NULL for zero) holds the prescribed values on constrained rows: their columns are
+   moved to the right side, as MatZeroRowsColumns would. rhs is overwritten. */
+PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, PetscReal aM, Vec g, Vec rhs, Vec x)
+{
+  KSPConvergedReason reason;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_BodySolve, 0, 0, 0, 0));
+  if (g) {
+    if (aK != 0) {
+      PetscCall(MatMult(body->K, g, body->work));
+      PetscCall(VecAXPY(rhs, -aK, body->work));
+    }
+    if (aM != 0) {
+      PetscCall(MatMult(body->M, g, body->work));
+      PetscCall(VecAXPY(rhs, -aM, body->work));
+    }
+  }
+  PetscCall(MBCBodySetConstrainedRows(body, g, rhs));
+  PetscCall(KSPSolve(ksp, rhs, x));
+  PetscCall(KSPGetConvergedReason(ksp, &reason));
+  PetscCheck(reason > 0, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': linear solve failed (%s)", body->name, KSPConvergedReasons[reason]);
+  PetscCall(PetscLogEventEnd(MBC_BodySolve, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* F = sum of the body's loads times their time factors at t; constantOnly keeps the loads
+   that are present from the start. */
+PetscErrorCode MBCBodyExternalForce(MBCBody body, PetscReal t, PetscBool constantOnly, Vec F)
+{
+  PetscFunctionBegin;
+  PetscCall(VecZeroEntries(F));
+  for (PetscInt i = 0; i < body->nloads; i++) {
+    MBCLoadDesc *load = &body->scene->loads[body->load_index[i]];
+    PetscReal    factor;
+
+    if (constantOnly && load->time != MBC_TIME_CONSTANT) continue;
+    PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
+    if (factor != 0) PetscCall(VecAXPY(F, factor, body->load[i]));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* g = prescribed displacement at time t on the constrained rows, 0 elsewhere. */
+PetscErrorCode MBCBodyPrescribed(MBCBody body, PetscReal t, Vec g)
+{
+  PetscScalar *gv;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecZeroEntries(g));
+  PetscCall(VecGetOwnershipRange(g, &rstart, NULL));
+  PetscCall(VecGetArray(g, &gv));
+  for (PetscInt i = 0; i < body->nbc; i++) {
+    MBCDirichletDesc *d = &body->scene->dirichlet[body->bc_entry[i]];
+    PetscReal         factor;
+
+    PetscCall(MBCTimeFactor(body->scene, d->time, d->time_function, t, &factor));
+    gv[body->bc_rows[i] - rstart] = d->value * factor;
+  }
+  PetscCall(VecRestoreArray(g, &gv));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyComputeStress(MBCBody body, Vec u, Vec stress)
+{
+  void (*funcs[1])(PetscInt, PetscInt, PetscInt, const PetscInt[], const PetscInt[], const PetscScalar[], const PetscScalar[], const PetscScalar[], const PetscInt[], const PetscInt[], const PetscScalar[], const PetscScalar[], const PetscScalar[], PetscReal, const PetscReal[], PetscInt, const PetscScalar[], PetscScalar[]);
+
+  PetscFunctionBegin;
+  funcs[0] = MBCPointwiseStress;
+  PetscCall(DMProjectField(body->dmStress, 0.0, u, funcs, INSERT_VALUES, stress));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyCheckFinite(MBCBody body, Vec x, const char what[], PetscReal t)
+{
+  PetscReal norm;
+
+  PetscFunctionBegin;
+  PetscCall(VecNorm(x, NORM_INFINITY, &norm));
+  PetscCheck(!PetscIsInfOrNanReal(norm), body->comm, PETSC_ERR_FP, "Body '%s': the %s is not finite at time %g (check the scene's numbers and the body's constraints)", body->name, what, (double)t);
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,515 @@
+/* Reads the metadata of a scene file (layout: docs/scene-h5.md) with the HDF5 C API.
+   Every rank reads it: it is small, and the bodies' meshes are read by PETSc itself. */
+#include <mbc/private/sceneimpl.h>
+#include <hdf5.h>
+
+const char *const MBCAnalysisTypes[] = {"static", "dynamic", "MBCAnalysisType", "MBC_ANALYSIS_", NULL};
+const char *const MBCMassTypes[]     = {"consistent", "lumped", "MBCMassType", "MBC_MASS_", NULL};
+const char *const MBCTimeKinds[]     = {"constant", "sudden", "table", "MBCTimeKind", "MBC_TIME_", NULL};
+const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "MBCLoadKind", "MBC_LOAD_", NULL};
+
+typedef struct {
+  const char *file;
+  hid_t       obj;
+  char        path[MBC_NAME_LEN];
+} H5Node;
+
+static PetscErrorCode H5NodeOpen(const char *file, hid_t parent, const char *parentpath, const char *name, H5Node *node)
+{
+  PetscFunctionBegin;
+  node->file = file;
+  PetscCall(PetscSNPrintf(node->path, sizeof(node->path), "%s/%s", parentpath, name));
+  PetscCheck(H5Lexists(parent, name, H5P_DEFAULT) > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: group %s is missing (write scene files with mbcontact-prep)", file, node->path);
+  node->obj = H5Gopen2(parent, name, H5P_DEFAULT);
+  PetscCheck(node->obj >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot open group %s", file, node->path);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode H5NodeClose(H5Node *node)
+{
+  PetscFunctionBegin;
+  if (node->obj >= 0) H5Gclose(node->obj);
+  node->obj = -1;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode H5AttrOpen(H5Node *node, const char *name, hid_t *attr)
+{
+  PetscFunctionBegin;
+  PetscCheck(H5Aexists(node->obj, name) > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is missing", node->file, name, node->path);
+  *attr = H5Aopen(node->obj, name, H5P_DEFAULT);
+  PetscCheck(*attr >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot open attribute %s of %s", node->file, name, node->path);
+  PetscFunctionReturn(0);
+}
+
+/* Reads nvalues reals; a missing optional attribute leaves them unchanged. */
+static PetscErrorCode H5ReadReals(H5Node *node, const char *name, PetscInt nvalues, PetscReal *values, PetscBool optional)
+{
+  hid_t    attr, space;
+  hssize_t n;
+  double   buf[16];
+
+  PetscFunctionBegin;
+  if (optional && H5Aexists(node->obj, name) <= 0) PetscFunctionReturn(0);
+  PetscCall(H5AttrOpen(node, name, &attr));
+  space = H5Aget_space(attr);
+  n     = H5Sget_simple_extent_npoints(space);
+  H5Sclose(space);
+  PetscCheck(n == nvalues && n <= 16, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s has %lld values, expected %" PetscInt_FMT, node->file, name, node->path, (long long)n, nvalues);
+  PetscCheck(H5Aread(attr, H5T_NATIVE_DOUBLE, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not a number", node->file, name, node->path);
+  H5Aclose(attr);
+  for (PetscInt i = 0; i < nvalues; i++) {
+    PetscCheck(PetscIsNormalReal(buf[i]) || buf[i] == 0.0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not finite (%g)", node->file, name, node->path, buf[i]);
+    values[i] = (PetscReal)buf[i];
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode H5ReadReal(H5Node *node, const char *name, PetscReal *value, PetscBool optional)
+{
+  PetscFunctionBegin;
+  PetscCall(H5ReadReals(node, name, 1, value, optional));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode H5ReadInt(H5Node *node, const char *name, PetscInt *value, PetscBool optional)
+{
+  hid_t     attr;
+  long long v;
+
+  PetscFunctionBegin;
+  if (optional && H5Aexists(node->obj, name) <= 0) PetscFunctionReturn(0);
+  PetscCall(H5AttrOpen(node, name, &attr));
+  PetscCheck(H5Aread(attr, H5T_NATIVE_LLONG, &v) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not an integer", node->file, name, node->path);
+  H5Aclose(attr);
+  *value = (PetscInt)v;
+  PetscFunctionReturn(0);
+}
+
+/* Reads a fixed- or variable-length string; *str is allocated when str != NULL, else copied to buf. */
+static PetscErrorCode H5ReadString(H5Node *node, const char *name, char *buf, size_t len, char **str, PetscBool optional)
+{
+  hid_t  attr, ftype, mtype;
+  char  *s = NULL;
+  size_t size;
+
+  PetscFunctionBegin;
+  if (optional && H5Aexists(node->obj, name) <= 0) {
+    if (str) PetscCall(PetscStrallocpy("", str));
+    else buf[0] = 0;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(H5AttrOpen(node, name, &attr));
+  ftype = H5Aget_type(attr);
+  PetscCheck(H5Tget_class(ftype) == H5T_STRING, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not a string", node->file, name, node->path);
+  if (H5Tis_variable_str(ftype) > 0) {
+    char *vs = NULL;
+    mtype    = H5Tcopy(H5T_C_S1);
+    H5Tset_size(mtype, H5T_VARIABLE);
+    PetscCheck(H5Aread(attr, mtype, &vs) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read string %s of %s", node->file, name, node->path);
+    PetscCall(PetscStrallocpy(vs ? vs : "", &s));
+    H5free_memory(vs);
+  } else {
+    size  = H5Tget_size(ftype);
+    mtype = H5Tcopy(H5T_C_S1);
+    H5Tset_size(mtype, size + 1);
+    PetscCall(PetscCalloc1(size + 2, &s));
+    PetscCheck(H5Aread(attr, mtype, s) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read string %s of %s", node->file, name, node->path);
+  }
+  H5Tclose(mtype);
+  H5Tclose(ftype);
+  H5Aclose(attr);
+  if (str) *str = s;
+  else {
+    size_t slen;
+    PetscCall(PetscStrlen(s, &slen));
+    PetscCheck(slen < len, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: string %s of %s is longer than %zu characters", node->file, name, node->path, len - 1);
+    PetscCall(PetscStrncpy(buf, s, len));
+    PetscCall(PetscFree(s));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Maps a string attribute onto an enum; an unknown value is an error naming it and the choices. */
+static PetscErrorCode H5ReadEnum(H5Node *node, const char *name, const char *const *list, PetscInt *value, PetscBool optional)
+{
+  char      s[MBC_NAME_LEN];
+  PetscBool found = PETSC_FALSE;
+  PetscInt  n;
+
+  PetscFunctionBegin;
+  if (optional && H5Aexists(node->obj, name) <= 0) PetscFunctionReturn(0);
+  PetscCall(H5ReadString(node, name, s, sizeof(s), NULL, PETSC_FALSE));
+  for (n = 0; list[n + 3]; n++) { /* PETSc enum lists end with type name, prefix, NULL */ }
+  for (PetscInt i = 0; i < n; i++) {
+    PetscCall(PetscStrcmp(s, list[i], &found));
+    if (found) {
+      *value = i;
+      break;
+    }
+  }
+  PetscCheck(found, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s of %s is '%s', not one of %s%s%s%s%s%s%s", node->file, name, node->path, s, list[0], n > 1 ? ", " : "", n > 1 ? list[1] : "", n > 2 ? ", " : "", n > 2 ? list[2] : "", n > 3 ? ", " : "", n > 3 ? list[3] : "");
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode H5ReadCount(H5Node *node, PetscInt *count)
+{
+  PetscFunctionBegin;
+  PetscCall(H5ReadInt(node, "count", count, PETSC_FALSE));
+  PetscCheck(*count >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: negative count in %s", node->file, node->path);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode H5EntryOpen(H5Node *list, PetscInt i, H5Node *entry)
+{
+  char name[32];
+
+  PetscFunctionBegin;
+  PetscCall(PetscSNPrintf(name, sizeof(name), "%" PetscInt_FMT, i));
+  PetscCall(H5NodeOpen(list->file, list->obj, list->path, name, entry));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadTimeTable(H5Node *entry, MBCTimeTable *table)
+{
+  hid_t   dset, space;
+  hsize_t dims[2];
+  double *buf;
+
+  PetscFunctionBegin;
+  PetscCheck(H5Lexists(entry->obj, "table", H5P_DEFAULT) > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: dataset %s/table is missing", entry->file, entry->path);
+  dset  = H5Dopen2(entry->obj, "table", H5P_DEFAULT);
+  space = H5Dget_space(dset);
+  PetscCheck(H5Sget_simple_extent_ndims(space) == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/table must have shape (n, 2)", entry->file, entry->path);
+  H5Sget_simple_extent_dims(space, dims, NULL);
+  PetscCheck(dims[1] == 2 && dims[0] >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/table must have shape (n, 2), n >= 1", entry->file, entry->path);
+  PetscCall(PetscMalloc1(2 * dims[0], &buf));
+  PetscCheck(H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/table", entry->file, entry->path);
+  H5Sclose(space);
+  H5Dclose(dset);
+  table->n = (PetscInt)dims[0];
+  PetscCall(PetscMalloc2(table->n, &table->t, table->n, &table->f));
+  for (PetscInt i = 0; i < table->n; i++) {
+    table->t[i] = buf[2 * i];
+    table->f[i] = buf[2 * i + 1];
+    PetscCheck(!PetscIsInfOrNanReal(table->t[i]) && !PetscIsInfOrNanReal(table->f[i]), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/table row %" PetscInt_FMT " is not finite", entry->file, entry->path, i);
+    PetscCheck(i == 0 || table->t[i] > table->t[i - 1], PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/table times must increase strictly (row %" PetscInt_FMT ")", entry->file, entry->path, i);
+  }
+  PetscCall(PetscFree(buf));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadTimeKind(H5Node *entry, MBCScene scene, MBCTimeKind *time, PetscInt *tf)
+{
+  PetscInt kind = MBC_TIME_CONSTANT;
+
+  PetscFunctionBegin;
+  PetscCall(H5ReadEnum(entry, "time", MBCTimeKinds, &kind, PETSC_FALSE));
+  *time = (MBCTimeKind)kind;
+  *tf   = -1;
+  PetscCall(H5ReadInt(entry, "time_function", tf, PETSC_TRUE));
+  if (*time == MBC_TIME_TABLE) PetscCheck(*tf >= 0 && *tf < scene->ntables, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s names time function %" PetscInt_FMT ", but the scene has %" PetscInt_FMT, entry->file, entry->path, *tf, scene->ntables);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
+{
+  PetscFunctionBegin;
+  PetscCall(H5ReadString(e, "name", b->name, sizeof(b->name), NULL, PETSC_FALSE));
+  PetscCall(H5ReadString(e, "cell_type", b->cell_type, sizeof(b->cell_type), NULL, PETSC_FALSE));
+  PetscCall(H5ReadInt(e, "num_cells", &b->num_cells, PETSC_FALSE));
+  PetscCall(H5ReadInt(e, "num_vertices", &b->num_vertices, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "E", &b->E, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "nu", &b->nu, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "density", &b->density, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "damping", &b->damping, PETSC_TRUE));
+  PetscCall(H5ReadReal(e, "rayleigh_alpha", &b->rayleigh_alpha, PETSC_TRUE));
+  PetscCall(H5ReadReal(e, "rayleigh_beta", &b->rayleigh_beta, PETSC_TRUE));
+  /* The prep checks these too; a hand-edited file must not reach the assembly. */
+  PetscCheck(b->E > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': Young's modulus E = %g must be positive", e->file, b->name, (double)b->E);
+  PetscCheck(b->nu > -1.0 && b->nu < 0.5, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': Poisson's ratio nu = %g must lie in (-1, 0.5)", e->file, b->name, (double)b->nu);
+  PetscCheck(b->density >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': density %g must not be negative", e->file, b->name, (double)b->density);
+  PetscCheck(b->damping >= 0 && b->rayleigh_alpha >= 0 && b->rayleigh_beta >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': damping coefficients must not be negative", e->file, b->name);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadAnalysis(H5Node *root, MBCScene s)
+{
+  H5Node   e;
+  PetscInt v;
+
+  PetscFunctionBegin;
+  PetscCall(H5NodeOpen(s->filename, root->obj, root->path, "analysis", &e));
+  v = MBC_ANALYSIS_STATIC;
+  PetscCall(H5ReadEnum(&e, "type", MBCAnalysisTypes, &v, PETSC_FALSE));
+  s->analysis = (MBCAnalysisType)v;
+  v = MBC_MASS_CONSISTENT;
+  PetscCall(H5ReadEnum(&e, "mass", MBCMassTypes, &v, PETSC_TRUE));
+  s->mass          = (MBCMassType)v;
+  s->dt            = 1.0;
+  s->final_time    = 1.0;
+  s->newmark_beta  = 0.25;
+  s->newmark_gamma = 0.5;
+  PetscCall(H5ReadReal(&e, "dt", &s->dt, PETSC_TRUE));
+  PetscCall(H5ReadReal(&e, "final_time", &s->final_time, PETSC_TRUE));
+  PetscCall(H5ReadReal(&e, "newmark_beta", &s->newmark_beta, PETSC_TRUE));
+  PetscCall(H5ReadReal(&e, "newmark_gamma", &s->newmark_gamma, PETSC_TRUE));
+  PetscCall(H5NodeClose(&e));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadOutput(H5Node *root, MBCScene s)
+{
+  H5Node   e, pts, p;
+  char    *fields;
+  PetscInt energy = 0;
+
+  PetscFunctionBegin;
+  s->output_every        = 1;
+  s->output_displacement = PETSC_TRUE;
+  s->output_stress       = PETSC_TRUE;
+  if (H5Lexists(root->obj, "output", H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
+  PetscCall(H5NodeOpen(s->filename, root->obj, root->path, "output", &e));
+  PetscCall(H5ReadInt(&e, "every", &s->output_every, PETSC_TRUE));
+  PetscCheck(s->output_every >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: output/every = %" PetscInt_FMT " must be at least 1", s->filename, s->output_every);
+  if (H5Aexists(e.obj, "fields") > 0) {
+    PetscCall(H5ReadString(&e, "fields", NULL, 0, &fields, PETSC_FALSE));
+    s->output_displacement = (PetscBool)(strstr(fields, "displacement") != NULL);
+    s->output_stress       = (PetscBool)(strstr(fields, "stress") != NULL);
+    PetscCall(PetscFree(fields));
+  }
+  PetscCall(H5ReadInt(&e, "energy", &energy, PETSC_TRUE));
+  s->output_energy = energy ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(H5ReadInt(&e, "points_count", &s->npoints, PETSC_TRUE));
+  if (s->npoints > 0) {
+    PetscCall(PetscCalloc1(s->npoints, &s->points));
+    PetscCall(H5NodeOpen(s->filename, e.obj, e.path, "points", &pts));
+    for (PetscInt i = 0; i < s->npoints; i++) {
+      PetscCall(H5EntryOpen(&pts, i, &p));
+      PetscCall(H5ReadString(&p, "name", s->points[i].name, MBC_NAME_LEN, NULL, PETSC_FALSE));
+      PetscCall(H5ReadString(&p, "body", s->points[i].body, MBC_NAME_LEN, NULL, PETSC_TRUE));
+      PetscCall(H5ReadReals(&p, "x", 3, s->points[i].x, PETSC_FALSE));
+      PetscCall(H5NodeClose(&p));
+    }
+    PetscCall(H5NodeClose(&pts));
+  }
+  PetscCall(H5NodeClose(&e));
+  PetscFunctionReturn(0);
+}
+
+/* Opens list group `name` under root, reads its count, allocates `size`-byte entries. */
+static PetscErrorCode ReadList(H5Node *root, const char *name, H5Node *list, PetscInt *count)
+{
+  PetscFunctionBegin;
+  *count   = 0;
+  list->obj = -1;
+  if (H5Lexists(root->obj, name, H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
+  PetscCall(H5NodeOpen(root->file, root->obj, root->path, name, list));
+  PetscCall(H5ReadCount(list, count));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneRead(MBCScene s, hid_t file)
+{
+  H5Node   root, list, e;
+  PetscInt version = 0, v;
+
+  PetscFunctionBegin;
+  root.file = s->filename;
+  root.obj  = file;
+  root.path[0] = 0;
+  PetscCheck(H5Lexists(file, "mbcontact", H5P_DEFAULT) > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "File %s is not an mbcontact scene file (no /mbcontact group); make one with mbcontact-prep", s->filename);
+  PetscCall(H5NodeOpen(s->filename, file, "", "mbcontact", &root));
+  PetscCall(H5ReadInt(&root, "format_version", &version, PETSC_FALSE));
+  PetscCheck(version == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s has format version %" PetscInt_FMT "; this mbcontact reads version 1", s->filename, version);
+  PetscCall(H5ReadString(&root, "title", s->title, sizeof(s->title), NULL, PETSC_TRUE));
+  PetscCall(ReadAnalysis(&root, s));
+
+  PetscCall(ReadList(&root, "bodies", &list, &s->nbodies));
+  PetscCheck(s->nbodies > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s has no bodies", s->filename);
+  PetscCall(PetscCalloc1(s->nbodies, &s->bodies));
+  for (PetscInt i = 0; i < s->nbodies; i++) {
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(ReadBody(&e, &s->bodies[i]));
+    if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCheck(s->bodies[i].density > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->filename, s->bodies[i].name);
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "surfaces", &list, &s->nsurfaces));
+  PetscCall(PetscCalloc1(s->nsurfaces, &s->surfaces));
+  for (PetscInt i = 0; i < s->nsurfaces; i++) {
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadString(&e, "name", s->surfaces[i].name, MBC_NAME_LEN, NULL, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "id", &s->surfaces[i].id, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "num_faces", &s->surfaces[i].num_faces, PETSC_TRUE));
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "couples", &list, &s->ncouples));
+  PetscCall(PetscCalloc1(s->ncouples, &s->couples));
+  for (PetscInt i = 0; i < s->ncouples; i++) {
+    MBCCoupleDesc *c = &s->couples[i];
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadInt(&e, "k", &c->k, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "mu", &c->mu, PETSC_TRUE));
+    PetscCall(H5ReadString(&e, "master", NULL, 0, &c->master, PETSC_FALSE));
+    PetscCall(H5ReadString(&e, "slave", NULL, 0, &c->slave, PETSC_FALSE));
+    PetscCheck(c->k >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple %s has real constant k = %" PetscInt_FMT "; k must be at least 1", s->filename, e.path, c->k);
+    PetscCheck(c->mu >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g < 0", s->filename, c->k, (double)c->mu);
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "time_functions", &list, &s->ntables));
+  PetscCall(PetscCalloc1(s->ntables, &s->tables));
+  for (PetscInt i = 0; i < s->ntables; i++) {
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(ReadTimeTable(&e, &s->tables[i]));
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "dirichlet", &list, &s->ndirichlet));
+  PetscCall(PetscCalloc1(s->ndirichlet, &s->dirichlet));
+  for (PetscInt i = 0; i < s->ndirichlet; i++) {
+    MBCDirichletDesc *d = &s->dirichlet[i];
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadString(&e, "surface", d->surface, MBC_NAME_LEN, NULL, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "surface_id", &d->surface_id, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "component", &d->component, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "value", &d->value, PETSC_FALSE));
+    PetscCall(ReadTimeKind(&e, s, &d->time, &d->time_function));
+    PetscCheck(d->component >= 0 && d->component < 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s has component %" PetscInt_FMT ", not 0, 1 or 2", s->filename, e.path, d->component);
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "loads", &list, &s->nloads));
+  PetscCall(PetscCalloc1(s->nloads, &s->loads));
+  for (PetscInt i = 0; i < s->nloads; i++) {
+    MBCLoadDesc *l = &s->loads[i];
+    PetscCall(H5EntryOpen(&list, i, &e));
+    v = 0;
+    PetscCall(H5ReadEnum(&e, "kind", MBCLoadKinds, &v, PETSC_FALSE));
+    l->kind       = (MBCLoadKind)v;
+    l->surface_id = -1;
+    PetscCall(H5ReadReals(&e, "vector", 3, l->vector, PETSC_TRUE));
+    PetscCall(H5ReadReal(&e, "value", &l->value, PETSC_TRUE));
+    PetscCall(H5ReadString(&e, "surface", l->surface, MBC_NAME_LEN, NULL, PETSC_TRUE));
+    PetscCall(H5ReadInt(&e, "surface_id", &l->surface_id, PETSC_TRUE));
+    PetscCall(H5ReadString(&e, "bodies", NULL, 0, &l->bodies, PETSC_TRUE));
+    PetscCall(ReadTimeKind(&e, s, &l->time, &l->time_function));
+    if (l->kind == MBC_LOAD_PRESSURE || l->kind == MBC_LOAD_TRACTION) PetscCheck(l->surface_id >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s load %s needs a surface", s->filename, MBCLoadKinds[l->kind], e.path);
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadOutput(&root, s));
+  PetscCall(H5NodeClose(&root));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scene)
+{
+  MBCScene  s;
+  PetscBool exists;
+  hid_t     file;
+
+  PetscFunctionBegin;
+  PetscCall(MBCInitializePackage());
+  PetscCall(PetscLogEventBegin(MBC_SceneLoad, 0, 0, 0, 0));
+  PetscCall(PetscTestFile(filename, 'r', &exists));
+  PetscCheck(exists, comm, PETSC_ERR_FILE_OPEN, "Scene file %s does not exist or cannot be read", filename);
+  PetscCall(PetscNew(&s));
+  PetscCall(PetscStrncpy(s->filename, filename, sizeof(s->filename)));
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* our messages replace HDF5's error stack dump */
+  PetscCheck(H5Fis_hdf5(filename) > 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s is not an HDF5 file; make scene files with mbcontact-prep", filename);
+  file = H5Fopen(filename, H5F_ACC_RDONLY, H5P_DEFAULT);
+  PetscCheck(file >= 0, comm, PETSC_ERR_FILE_OPEN, "Cannot open scene file %s", filename);
+  PetscCall(SceneRead(s, file));
+  H5Fclose(file);
+  PetscCall(PetscLogEventEnd(MBC_SceneLoad, 0, 0, 0, 0));
+  *scene = s;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneDestroy(MBCScene *scene)
+{
+  MBCScene s = *scene;
+
+  PetscFunctionBegin;
+  if (!s) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].master));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].slave));
+  for (PetscInt i = 0; i < s->ntables; i++) PetscCall(PetscFree2(s->tables[i].t, s->tables[i].f));
+  for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].bodies));
+  PetscCall(PetscFree(s->bodies));
+  PetscCall(PetscFree(s->surfaces));
+  PetscCall(PetscFree(s->couples));
+  PetscCall(PetscFree(s->tables));
+  PetscCall(PetscFree(s->dirichlet));
+  PetscCall(PetscFree(s->loads));
+  PetscCall(PetscFree(s->points));
+  PetscCall(PetscFree(*scene));
+  PetscFunctionReturn(0);
+}
+
+/* The factor multiplying a load or prescribed value at time t. */
+PetscErrorCode MBCTimeFactor(MBCScene s, MBCTimeKind kind, PetscInt tf, PetscReal t, PetscReal *factor)
+{
+  MBCTimeTable *tab;
+  PetscInt      i;
+
+  PetscFunctionBegin;
+  if (kind != MBC_TIME_TABLE) {
+    *factor = 1.0;
+    PetscFunctionReturn(0);
+  }
+  tab = &s->tables[tf];
+  if (t <= tab->t[0]) *factor = tab->f[0];
+  else if (t >= tab->t[tab->n - 1]) *factor = tab->f[tab->n - 1];
+  else {
+    for (i = 1; tab->t[i] < t; i++) { }
+    *factor = tab->f[i - 1] + (tab->f[i] - tab->f[i - 1]) * (t - tab->t[i - 1]) / (tab->t[i] - tab->t[i - 1]);
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *load, const char body[], PetscBool *applies)
+{
+  char  *list, *tok, *save = NULL;
+
+  PetscFunctionBegin;
+  *applies = PETSC_TRUE;
+  if (!load->bodies || !load->bodies[0]) PetscFunctionReturn(0);
+  *applies = PETSC_FALSE;
+  PetscCall(PetscStrallocpy(load->bodies, &list));
+  for (tok = strtok_r(list, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(tok, body, &same));
+    if (same) *applies = PETSC_TRUE;
+  }
+  PetscCall(PetscFree(list));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Scene %s%s%s: %s analysis, dt %g, final time %g, Newmark beta %g gamma %g, %s mass\n", s->filename, s->title[0] ? " - " : "", s->title, MBCAnalysisTypes[s->analysis], (double)s->dt, (double)s->final_time, (double)s->newmark_beta, (double)s->newmark_gamma, MBCMassTypes[s->mass]));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  for (PetscInt i = 0; i < s->nbodies; i++) {
+    MBCBodyDesc *b = &s->bodies[i];
+    PetscCall(PetscViewerASCIIPrintf(viewer, "body %s: %" PetscInt_FMT " %s cells, %" PetscInt_FMT " vertices, E %g nu %g density %g damping %g rayleigh %g %g\n", b->name, b->num_cells, b->cell_type, b->num_vertices, (double)b->E, (double)b->nu, (double)b->density, (double)b->damping, (double)b->rayleigh_alpha, (double)b->rayleigh_beta));
+  }
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "couple %" PetscInt_FMT ": master %s (+k), slave %s (-k), mu %g\n", s->couples[i].k, s->couples[i].master, s->couples[i].slave, (double)s->couples[i].mu));
+  for (PetscInt i = 0; i < s->ndirichlet; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed u%c = %g on %s (%s)\n", "xyz"[s->dirichlet[i].component], (double)s->dirichlet[i].value, s->dirichlet[i].surface, MBCTimeKinds[s->dirichlet[i].time]));
+  for (PetscInt i = 0; i < s->nloads; i++) {
+    MBCLoadDesc *l = &s->loads[i];
+    PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
+  }
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,437 @@
+/* The solver: places bodies on sub-communicators, sets them up, steps in time. */
+#include <mbc/private/solverimpl.h>
+
+PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
+{
+  MBCSolver s;
+
+  PetscFunctionBegin;
+  PetscCall(MBCInitializePackage());
+  PetscCall(PetscNew(&s));
+  s->comm = comm;
+  *solver = s;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
+{
+  size_t len;
+
+  PetscFunctionBegin;
+  s->scene        = scene;
+  s->analysis     = scene->analysis;
+  s->mass         = scene->mass;
+  s->dt           = scene->dt;
+  s->final_time   = scene->final_time;
+  s->beta         = scene->newmark_beta;
+  s->gamma        = scene->newmark_gamma;
+  s->output_every = scene->output_every;
+  PetscCall(PetscStrncpy(s->output, scene->filename, sizeof(s->output)));
+  PetscCall(PetscStrlen(s->output, &len));
+  if (len > 3 && !strcmp(s->output + len - 3, ".h5")) s->output[len - 3] = 0;
+  PetscCall(PetscStrlcat(s->output, "_result", sizeof(s->output)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
+{
+  PetscEnum analysis = (PetscEnum)s->analysis, mass = (PetscEnum)s->mass;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(s->comm, NULL, "mbcontact solver options", "MBCSolver");
+  PetscCall(PetscOptionsEnum("-mbc_analysis", "Analysis type (overrides the scene's)", "MBCSolverSetFromOptions", MBCAnalysisTypes, analysis, &analysis, NULL));
+  PetscCall(PetscOptionsEnum("-mbc_mass", "Mass matrix", "MBCSolverSetFromOptions", MBCMassTypes, mass, &mass, NULL));
+  PetscCall(PetscOptionsReal("-mbc_dt", "Time (or load) step", "MBCSolverSetFromOptions", s->dt, &s->dt, NULL));
+  PetscCall(PetscOptionsReal("-mbc_final_time", "Final time", "MBCSolverSetFromOptions", s->final_time, &s->final_time, NULL));
+  PetscCall(PetscOptionsReal("-mbc_newmark_beta", "Newmark beta", "MBCSolverSetFromOptions", s->beta, &s->beta, NULL));
+  PetscCall(PetscOptionsReal("-mbc_newmark_gamma", "Newmark gamma", "MBCSolverSetFromOptions", s->gamma, &s->gamma, NULL));
+  PetscCall(PetscOptionsInt("-mbc_output_every", "Write fields every this many steps", "MBCSolverSetFromOptions", s->output_every, &s->output_every, NULL));
+  PetscCall(PetscOptionsString("-mbc_output", "Prefix of the result files", "MBCSolverSetFromOptions", s->output, s->output, sizeof(s->output), NULL));
+  PetscCall(PetscOptionsBool("-mbc_monitor", "Print a line per step", "MBCSolverSetFromOptions", s->monitor, &s->monitor, NULL));
+  PetscCall(PetscOptionsBool("-mbc_view", "Print the scene and the decomposition", "MBCSolverSetFromOptions", s->view, &s->view, NULL));
+  PetscOptionsEnd();
+  s->analysis = (MBCAnalysisType)analysis;
+  s->mass     = (MBCMassType)mass;
+  s->scene->analysis = s->analysis; /* the bodies read these from the scene */
+  s->scene->mass     = s->mass;
+  PetscCheck(s->dt > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive", (double)s->dt);
+  PetscCheck(s->final_time >= s->dt * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be at least one step (%g)", (double)s->final_time, (double)s->dt);
+  PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
+    PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);
+    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+  }
+  s->nsteps = (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9);
+  PetscFunctionReturn(0);
+}
+
+/* Bodies onto ranks: with at least as many bodies as ranks, greedy by cell count onto the
+   least loaded rank; with fewer, each body gets a contiguous range of ranks in proportion to
+   its cells. (A METIS partition of the body graph weighted by contact comes with contact.) */
+static PetscErrorCode SolverDecompose(MBCSolver s)
+{
+  MBCScene    scene = s->scene;
+  PetscInt    N     = scene->nbodies;
+  PetscMPIInt P, rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(s->comm, &P));
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscCalloc2(N, &s->body_first_rank, N, &s->body_nranks));
+  if (N >= P) {
+    PetscInt *order, *weight;
+    PetscReal *load;
+    PetscCall(PetscMalloc3(N, &order, N, &weight, P, &load));
+    for (PetscInt b = 0; b < N; b++) {
+      order[b]  = b;
+      weight[b] = -scene->bodies[b].num_cells;
+    }
+    PetscCall(PetscSortIntWithArray(N, weight, order));
+    for (PetscMPIInt r = 0; r < P; r++) load[r] = 0;
+    for (PetscInt i = 0; i < N; i++) {
+      PetscMPIInt best = 0;
+      for (PetscMPIInt r = 1; r < P; r++)
+        if (load[r] < load[best]) best = r;
+      s->body_first_rank[order[i]] = best;
+      s->body_nranks[order[i]]     = 1;
+      load[best] += (PetscReal)(-weight[i]) + 1;
+    }
+    PetscCall(PetscFree3(order, weight, load));
+  } else {
+    PetscMPIInt first = 0;
+    for (PetscInt b = 0; b < N; b++) s->body_nranks[b] = 1;
+    for (PetscMPIInt extra = P - (PetscMPIInt)N; extra > 0; extra--) {
+      PetscInt best = 0;
+      for (PetscInt b = 1; b < N; b++)
+        if ((PetscReal)scene->bodies[b].num_cells / s->body_nranks[b] > (PetscReal)scene->bodies[best].num_cells / s->body_nranks[best]) best = b;
+      s->body_nranks[best]++;
+    }
+    for (PetscInt b = 0; b < N; b++) {
+      s->body_first_rank[b] = first;
+      first += s->body_nranks[b];
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverSetUp(MBCSolver s)
+{
+  MBCScene    scene = s->scene;
+  PetscMPIInt rank;
+
+  PetscFunctionBegin;
+  if (s->setupcalled) PetscFunctionReturn(0);
+  PetscCheck(scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Call MBCSolverSetScene() first");
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(SolverDecompose(s));
+  s->nbodies = scene->nbodies;
+  PetscCall(PetscCalloc1(s->nbodies, &s->bodies));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscBool mine = (PetscBool)(rank >= s->body_first_rank[b] && rank < s->body_first_rank[b] + s->body_nranks[b]);
+    MPI_Comm  comm;
+
+    PetscCallMPI(MPI_Comm_split(s->comm, mine ? 0 : MPI_UNDEFINED, rank, &comm));
+    if (mine) PetscCall(MBCBodyCreate(comm, scene, b, &s->bodies[b]));
+  }
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));
+  s->setupcalled = PETSC_TRUE;
+  if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
+  PetscFunctionReturn(0);
+}
+
+/* Sums per-body scalars (known on every rank of the body) over all bodies, on every rank. */
+static PetscErrorCode SolverSumOverBodies(MBCSolver s, PetscInt n, PetscReal (*value)(MBCBody, PetscInt), PetscReal sum[])
+{
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < n; i++) sum[i] = 0;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscMPIInt brank;
+    if (!s->bodies[b]) continue;
+    PetscCallMPI(MPI_Comm_rank(s->bodies[b]->comm, &brank));
+    if (brank) continue;
+    for (PetscInt i = 0; i < n; i++) sum[i] += value(s->bodies[b], i);
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sum, (PetscMPIInt)n, MPIU_REAL, MPI_SUM, s->comm));
+  PetscFunctionReturn(0);
+}
+
+static PetscReal BodyEnergyTerm(MBCBody body, PetscInt i)
+{
+  return i == 0 ? body->wext : body->wdamp;
+}
+
+/* kinetic, strain, external work, damping dissipation, summed over bodies. */
+PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[4])
+{
+  PetscReal local[2] = {0, 0}, works[2];
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody     body = s->bodies[b];
+    PetscScalar vMv = 0, uKu;
+    PetscMPIInt brank;
+    if (!body) continue;
+    PetscCall(MatMult(body->K, body->u, body->work));
+    PetscCall(VecDot(body->u, body->work, &uKu));
+    if (body->v) {
+      PetscCall(MatMult(body->M, body->v, body->work));
+      PetscCall(VecDot(body->v, body->work, &vMv));
+    }
+    PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
+    if (!brank) {
+      local[0] += 0.5 * PetscRealPart(vMv);
+      local[1] += 0.5 * PetscRealPart(uKu);
+    }
+  }
+  PetscCallMPI(MPI_Allreduce(local, energy, 2, MPIU_REAL, MPI_SUM, s->comm));
+  PetscCall(SolverSumOverBodies(s, 2, BodyEnergyTerm, works));
+  energy[2] = works[0];
+  energy[3] = works[1];
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverMonitor(MBCSolver s)
+{
+  PetscReal umax = 0, e[4];
+
+  PetscFunctionBegin;
+  if (!s->monitor) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscReal n;
+    if (!s->bodies[b]) continue;
+    PetscCall(VecNorm(s->bodies[b]->u, NORM_INFINITY, &n));
+    umax = PetscMax(umax, n);
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, s->comm));
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
+    PetscCall(MBCSolverEnergy(s, e));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e total %.6e\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3])));
+  } else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e\n", s->step, (double)s->time, (double)umax));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverStatic(MBCSolver s)
+{
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
+    body->aK = 1.0;
+    body->aM = 0.0;
+  }
+  for (s->step = 1; s->step <= s->nsteps; s->step++) {
+    s->time = PetscMin(s->step * s->dt, s->final_time);
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody body = s->bodies[b];
+      if (!body) continue;
+      PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
+      PetscCall(MBCBodyPrescribed(body, s->time, body->g));
+      PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->u));
+      PetscCall(MBCBodyCheckFinite(body, body->u, "displacement", s->time));
+    }
+    PetscCall(SolverMonitor(s));
+    PetscCall(MBCSolverOutputStep(s));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Initial state of a dynamic analysis: static equilibrium under the constant loads and the
+   prescribed values at t = 0, at rest, and the acceleration the loads at t = 0 give. */
+static PetscErrorCode BodyDynamicInitialState(MBCBody body)
+{
+  PetscReal fnorm, gnorm, rnorm;
+  KSP       ksp;
+  Mat       A;
+
+  PetscFunctionBegin;
+  PetscCall(VecZeroEntries(body->u));
+  PetscCall(VecZeroEntries(body->v));
+  PetscCall(VecZeroEntries(body->a));
+  PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_TRUE, body->rhs));
+  PetscCall(MBCBodyPrescribed(body, 0.0, body->g));
+  PetscCall(VecNorm(body->rhs, NORM_INFINITY, &fnorm));
+  PetscCall(VecNorm(body->g, NORM_INFINITY, &gnorm));
+  if (fnorm > 0 || gnorm > 0) {
+    PetscCall(MBCBodyFactor(body, 1.0, 0.0, &ksp, &A, "initial static stiffness"));
+    PetscCall(MBCBodyConstrainedSolve(body, ksp, 1.0, 0.0, body->g, body->rhs, body->u));
+    PetscCall(KSPDestroy(&ksp));
+    PetscCall(MatDestroy(&A));
+  }
+  /* M a0 = F(0) - K u0 on the free DOFs */
+  PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_FALSE, body->fold));
+  PetscCall(VecCopy(body->fold, body->rhs));
+  PetscCall(MatMult(body->K, body->u, body->work));
+  PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+  PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rhs));
+  PetscCall(VecNorm(body->rhs, NORM_INFINITY, &rnorm));
+  if (rnorm > 0) {
+    PetscCall(MBCBodyFactor(body, 0.0, 1.0, &ksp, &A, "mass"));
+    PetscCall(MBCBodyConstrainedSolve(body, ksp, 0.0, 1.0, NULL, body->rhs, body->a));
+    PetscCall(KSPDestroy(&ksp));
+    PetscCall(MatDestroy(&A));
+  }
+  PetscCall(VecDot(body->fold, body->u, &body->wext)); /* so that total = T + U - F.u for constant F */
+  body->wdamp = 0;
+  PetscFunctionReturn(0);
+}
+
+/* x += cM M y + cK K y (the damping matrix is never formed). */
+static PetscErrorCode BodyAddDamping(MBCBody body, PetscReal scale, Vec y, Vec x)
+{
+  PetscFunctionBegin;
+  if (body->cM != 0) {
+    PetscCall(MatMult(body->M, y, body->work));
+    PetscCall(VecAXPY(x, scale * body->cM, body->work));
+  }
+  if (body->cK != 0) {
+    PetscCall(MatMult(body->K, y, body->work));
+    PetscCall(VecAXPY(x, scale * body->cK, body->work));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Newmark in incremental form: K~ dU = F(t+dt) - K u + M (a2 v + a3 a) + C (a4 v + a5 a),
+   K~ = K + a0 M + a1 C factored once (the paper's form; contact adds B lambda to the right). */
+static PetscErrorCode SolverDynamic(MBCSolver s)
+{
+  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
+  const PetscReal a0 = 1 / (beta * dt * dt), a1 = gamma / (beta * dt), a2 = 1 / (beta * dt), a3 = 1 / (2 * beta) - 1;
+  const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    PetscCall(BodyDynamicInitialState(body));
+    body->aK = 1 + a1 * body->cK;
+    body->aM = a0 + a1 * body->cM;
+    PetscCall(MBCBodyFactor(body, body->aK, body->aM, &body->ksp, &body->A, "Newmark effective stiffness"));
+  }
+  s->step = 0;
+  s->time = 0;
+  PetscCall(SolverMonitor(s));
+  PetscCall(MBCSolverOutputStep(s));
+  for (s->step = 1; s->step <= s->nsteps; s->step++) {
+    s->time = s->step * dt;
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody     body = s->bodies[b];
+      PetscScalar work, dv;
+      PetscInt    rstart;
+      PetscScalar *gv;
+      const PetscScalar *uv;
+      if (!body) continue;
+      PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->f));
+      PetscCall(VecCopy(body->f, body->rhs));
+      PetscCall(MatMult(body->K, body->u, body->work));
+      PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+      PetscCall(VecAXPBY(body->work2, a2, 0.0, body->v)); /* work2 = a2 v + a3 a */
+      PetscCall(VecAXPY(body->work2, a3, body->a));
+      PetscCall(MatMult(body->M, body->work2, body->work));
+      PetscCall(VecAXPY(body->rhs, 1.0, body->work));
+      if (body->cM != 0 || body->cK != 0) {
+        PetscCall(VecAXPBY(body->work2, a4, 0.0, body->v));
+        PetscCall(VecAXPY(body->work2, a5, body->a));
+        PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
+      }
+      /* increments of the prescribed values */
+      PetscCall(MBCBodyPrescribed(body, s->time, body->g));
+      PetscCall(VecGetOwnershipRange(body->g, &rstart, NULL));
+      PetscCall(VecGetArray(body->g, &gv));
+      PetscCall(VecGetArrayRead(body->u, &uv));
+      for (PetscInt i = 0; i < body->nbc; i++) gv[body->bc_rows[i] - rstart] -= uv[body->bc_rows[i] - rstart];
+      PetscCall(VecRestoreArrayRead(body->u, &uv));
+      PetscCall(VecRestoreArray(body->g, &gv));
+      PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
+      PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
+
+      /* trapezoidal work of the external loads */
+      PetscCall(VecAXPY(body->fold, 1.0, body->f));
+      PetscCall(VecDot(body->fold, body->du, &work));
+      body->wext += 0.5 * PetscRealPart(work);
+      PetscCall(VecCopy(body->f, body->fold));
+
+      /* a_new = a0 du - a2 v - a3 a (in work2); v_new = v + a6 a + a7 a_new */
+      PetscCall(VecAXPBY(body->work2, a0, 0.0, body->du));
+      PetscCall(VecAXPY(body->work2, -a2, body->v));
+      PetscCall(VecAXPY(body->work2, -a3, body->a));
+      PetscCall(VecAXPBYPCZ(body->v, a6, a7, 1.0, body->a, body->work2)); /* v = v + a6 a + a7 a_new */
+      PetscCall(VecCopy(body->work2, body->a));
+      PetscCall(VecAXPY(body->u, 1.0, body->du));
+      /* damping dissipation with the mid-step velocity (v_n + v_n+1)/2 = du/dt for gamma = 1/2 */
+      if (body->cM != 0 || body->cK != 0) {
+        PetscCall(VecAXPBY(body->work2, 1.0 / dt, 0.0, body->du));
+        PetscCall(VecZeroEntries(body->rhs));
+        PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
+        PetscCall(VecDot(body->work2, body->rhs, &dv));
+        body->wdamp += dt * PetscRealPart(dv);
+      }
+    }
+    PetscCall(SolverMonitor(s));
+    PetscCall(MBCSolverOutputStep(s));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverSolve(MBCSolver s)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCSolverSetUp(s));
+  PetscCall(MBCSolverOutputOpen(s));
+  if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStatic(s));
+  else PetscCall(SolverDynamic(s));
+  PetscCall(MBCSolverOutputClose(s));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCSceneView(s->scene, viewer));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "%s analysis: dt %g, %" PetscInt_FMT " steps to t = %g\n", MBCAnalysisTypes[s->analysis], (double)s->dt, s->nsteps, (double)s->final_time));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscInt ndof = -1, nbc = 0;
+    if (s->bodies[b]) {
+      PetscCall(VecGetSize(s->bodies[b]->u, &ndof));
+      nbc = s->bodies[b]->nbc;
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_SUM, s->bodies[b]->comm));
+    }
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &ndof, 1, MPIU_INT, MPI_MAX, s->comm));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_MAX, s->comm));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  body %s: ranks %d-%d, %" PetscInt_FMT " DOFs, %" PetscInt_FMT " prescribed\n", s->scene->bodies[b].name, s->body_first_rank[b], s->body_first_rank[b] + s->body_nranks[b] - 1, ndof, nbc));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverGetNumBodies(MBCSolver s, PetscInt *n)
+{
+  PetscFunctionBegin;
+  *n = s->nbodies;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverGetBody(MBCSolver s, PetscInt b, MBCBody *body)
+{
+  PetscFunctionBegin;
+  PetscCheck(b >= 0 && b < s->nbodies, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Body %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ")", b, s->nbodies);
+  *body = s->bodies[b];
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
+{
+  MBCSolver s = *solver;
+
+  PetscFunctionBegin;
+  if (!s) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
+  PetscCall(PetscFree(s->bodies));
+  PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));
+  PetscCall(PetscFree(s->output_times));
+  PetscCall(PetscFree(s->points));
+  PetscCall(PetscFree(s->h5));
+  PetscCall(MBCSceneDestroy(&s->scene));
+  PetscCall(PetscFree(*solver));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,23 @@
+/* Package registration: log events so -log_view shows where the time goes. */
+#include <mbcontact.h>
+
+PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;
+
+static PetscBool MBCPackageInitialized = PETSC_FALSE;
+
+PetscErrorCode MBCInitializePackage(void)
+{
+  PetscClassId classid;
+
+  PetscFunctionBegin;
+  if (MBCPackageInitialized) PetscFunctionReturn(0);
+  MBCPackageInitialized = PETSC_TRUE;
+  PetscCall(PetscClassIdRegister("mbcontact", &classid));
+  PetscCall(PetscLogEventRegister("MBCSceneLoad", classid, &MBC_SceneLoad));
+  PetscCall(PetscLogEventRegister("MBCBodyLoad", classid, &MBC_BodyLoad));
+  PetscCall(PetscLogEventRegister("MBCBodyAssemble", classid, &MBC_BodyAssemble));
+  PetscCall(PetscLogEventRegister("MBCBodyFactor", classid, &MBC_BodyFactor));
+  PetscCall(PetscLogEventRegister("MBCBodySolve", classid, &MBC_BodySolve));
+  PetscCall(PetscLogEventRegister("MBCOutput", classid, &MBC_Output));
+  PetscFunctionReturn(0);
+}
