@@ -4,6 +4,24 @@ static const char help[] = "mbcontact: finite-element multibody contact with Cou
 
 #include <mbcontact.h>
 
+/* User errors print one line that names the input; -mbc_error_traceback keeps PETSc's full report. */
+static PetscErrorCode MBCErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
+{
+  PetscMPIInt rank = 0;
+
+  if (p == PETSC_ERROR_INITIAL) {
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    if (mess && mess[0]) fprintf(stderr, "[%d] mbcontact: error: %s\n", rank, mess);
+    else {
+      const char *text = NULL;
+      PetscErrorMessage(n, &text, NULL);
+      fprintf(stderr, "[%d] mbcontact: error: %s (in %s)\n", rank, text ? text : "unknown error", fun);
+    }
+    fflush(stderr);
+  }
+  return n;
+}
+
 static PetscErrorCode Run(void)
 {
   char      file[PETSC_MAX_PATH_LEN] = "";
@@ -28,7 +46,11 @@ int main(int argc, char **argv)
   PetscErrorCode ierr;
   PetscMPIInt    size;
 
+  PetscBool      traceback = PETSC_FALSE;
+
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PetscOptionsGetBool(NULL, NULL, "-mbc_error_traceback", &traceback, NULL));
+  if (!traceback) PetscCall(PetscPushErrorHandler(MBCErrorHandler, NULL));
   ierr = Run();
   if (ierr) {
     /* A user error may be found on some ranks only; the others must not wait in a collective. */

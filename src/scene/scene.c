@@ -140,7 +140,7 @@ static PetscErrorCode H5ReadEnum(H5Node *node, const char *name, const char *con
   PetscFunctionBegin;
   if (optional && H5Aexists(node->obj, name) <= 0) PetscFunctionReturn(0);
   PetscCall(H5ReadString(node, name, s, sizeof(s), NULL, PETSC_FALSE));
-  for (n = 0; list[n + 3]; n++) { /* PETSc enum lists end with type name, prefix, NULL */ }
+  for (n = 0; list[n + 2]; n++) { /* PETSc enum lists end with type name, prefix, NULL */ }
   for (PetscInt i = 0; i < n; i++) {
     PetscCall(PetscStrcmp(s, list[i], &found));
     if (found) {

@@ -65,9 +65,9 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Bodies onto ranks: with at least as many bodies as ranks, greedy by cell count onto the
+/* Bodies onto ranks: with at least as many bodies as ranks, greedy by vertex (DOF) count onto the
    least loaded rank; with fewer, each body gets a contiguous range of ranks in proportion to
-   its cells. (A METIS partition of the body graph weighted by contact comes with contact.) */
+   its vertices. (A METIS partition of the body graph weighted by contact comes with contact.) */
 static PetscErrorCode SolverDecompose(MBCSolver s)
 {
   MBCScene    scene = s->scene;
@@ -84,7 +84,7 @@ static PetscErrorCode SolverDecompose(MBCSolver s)
     PetscCall(PetscMalloc3(N, &order, N, &weight, P, &load));
     for (PetscInt b = 0; b < N; b++) {
       order[b]  = b;
-      weight[b] = -scene->bodies[b].num_cells;
+      weight[b] = -scene->bodies[b].num_vertices;
     }
     PetscCall(PetscSortIntWithArray(N, weight, order));
     for (PetscMPIInt r = 0; r < P; r++) load[r] = 0;
@@ -103,7 +103,7 @@ static PetscErrorCode SolverDecompose(MBCSolver s)
     for (PetscMPIInt extra = P - (PetscMPIInt)N; extra > 0; extra--) {
       PetscInt best = 0;
       for (PetscInt b = 1; b < N; b++)
-        if ((PetscReal)scene->bodies[b].num_cells / s->body_nranks[b] > (PetscReal)scene->bodies[best].num_cells / s->body_nranks[best]) best = b;
+        if ((PetscReal)scene->bodies[b].num_vertices / s->body_nranks[b] > (PetscReal)scene->bodies[best].num_vertices / s->body_nranks[best]) best = b;
       s->body_nranks[best]++;
     }
     for (PetscInt b = 0; b < N; b++) {

@@ -1,0 +1,51 @@
+"""Shared helpers: write a scene from a dict, run mbcontact-prep and the solver."""
+import os
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "python"))
+BUILD = os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build"))
+SOLVER = os.path.join(BUILD, "mbcontact")
+PREP = os.path.join(ROOT, "python", "mbcontact-prep")
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "PYTHONPATH": os.path.join(ROOT, "python")}
+
+
+def env():
+    e = dict(os.environ)
+    e.update(MPI_ENV)
+    return e
+
+
+def prep(tmp_path, scene, name="scene"):
+    """Writes scene (a dict) as YAML beside its meshes and runs mbcontact-prep; returns the .h5 path."""
+    yml = tmp_path / f"{name}.yaml"
+    yml.write_text(yaml.safe_dump(scene, sort_keys=False))
+    h5 = tmp_path / f"{name}.h5"
+    r = subprocess.run([PREP, str(yml), "-o", str(h5)], capture_output=True, text=True, env=env())
+    assert r.returncode == 0, r.stderr
+    return h5
+
+
+def solve(h5, *options, nproc=1, check=True, timeout=600):
+    """Runs the solver on nproc ranks; returns the CompletedProcess."""
+    cmd = [SOLVER, "-scene", str(h5), *options]
+    if nproc > 1:
+        cmd = ["mpirun", "-n", str(nproc), *cmd]
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env(), timeout=timeout)
+    if check:
+        assert r.returncode == 0, f"{' '.join(cmd)}\n{r.stdout}\n{r.stderr}"
+    return r
+
+
+def result(h5, suffix):
+    return str(h5)[:-3] + "_result" + suffix
+
+
+@pytest.fixture
+def run_dir(tmp_path):
+    return tmp_path
