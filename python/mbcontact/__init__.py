@@ -1,0 +1,3 @@
+"""mbcontact: preprocessing tools for the mbcontact multibody contact solver."""
+
+__version__ = "0.1.0"

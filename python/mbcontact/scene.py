@@ -1,0 +1,487 @@
+"""Read and validate the YAML scene description (format: docs/scene.md).
+
+Every user error raises InputError whose message starts with the key path of the
+offending entry, e.g. "bodies.block1.material.E: must be > 0, got -1".
+"""
+import math
+import os
+import re
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+import yaml
+
+
+class InputError(Exception):
+    """A user error in the scene or its meshes; the message names the input."""
+
+
+def warn(message):
+    print(f"mbcontact-prep: warning: {message}", file=sys.stderr)
+
+
+# ---------------------------------------------------------------- YAML loading
+
+class _StrictLoader(yaml.SafeLoader):
+    """SafeLoader that rejects duplicate keys (PyYAML silently keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        result = super().construct_mapping(node, deep)  # rejects unhashable keys
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise InputError(f"line {key_node.start_mark.line + 1}: duplicate key {key!r}")
+            seen.add(key)
+        return result
+
+
+def _yaml_position(err):
+    mark = getattr(err, "problem_mark", None)
+    return f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+
+
+def load_yaml(path):
+    try:
+        with open(path, encoding="utf-8") as f:
+            doc = yaml.load(f, Loader=_StrictLoader)
+    except OSError as err:
+        raise InputError(f"cannot read scene file: {err.strerror}") from None
+    except UnicodeDecodeError:
+        raise InputError("scene file is not UTF-8 text") from None
+    except yaml.YAMLError as err:
+        raise InputError(f"YAML syntax error{_yaml_position(err)}: "
+                         f"{getattr(err, 'problem', None) or err}") from None
+    if not isinstance(doc, dict):
+        raise InputError("the scene must be a YAML mapping (key: value lines)")
+    return doc
+
+
+# ---------------------------------------------------------------- value checks
+
+def _describe(value):
+    return f"{type(value).__name__} {value!r}"
+
+
+def mapping(value, where, allowed, required=()):
+    """Check that value is a mapping with only `allowed` keys and all `required` ones."""
+    if value is None and not required:
+        return {}
+    if not isinstance(value, dict):
+        raise InputError(f"{where}: expected a mapping, got {_describe(value)}")
+    for key in value:
+        if key not in allowed:
+            raise InputError(f"{_join(where, key)}: unknown key (allowed here: {', '.join(allowed)})")
+    for key in required:
+        if key not in value:
+            raise InputError(f"{where}: missing required key '{key}'")
+    return value
+
+
+def named(value, where):
+    """A mapping name -> entry (meshes, bodies, points), in file order."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise InputError(f"{where}: expected a mapping of names to entries, got {_describe(value)}")
+    for key in value:
+        if not isinstance(key, str):
+            raise InputError(f"{where}: names must be strings, got {_describe(key)}")
+    return value
+
+
+def _join(where, key):
+    return f"{where}.{key}" if where else str(key)
+
+
+def real(value, where, gt=None, ge=None, lt=None):
+    """A finite float; accepts ints and numeric strings such as "1e10"."""
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise InputError(f"{where}: expected a number, got {value!r}") from None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"{where}: expected a number, got {_describe(value)}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise InputError(f"{where}: must be a finite number, got {value}")
+    if gt is not None and not value > gt:
+        raise InputError(f"{where}: must be > {gt:g}, got {value:g}")
+    if ge is not None and not value >= ge:
+        raise InputError(f"{where}: must be >= {ge:g}, got {value:g}")
+    if lt is not None and not value < lt:
+        raise InputError(f"{where}: must be < {lt:g}, got {value:g}")
+    return value
+
+
+def integer(value, where, ge=None):
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise InputError(f"{where}: expected an integer, got {_describe(value)}")
+    if ge is not None and value < ge:
+        raise InputError(f"{where}: must be >= {ge}, got {value}")
+    return value
+
+
+def boolean(value, where):
+    if isinstance(value, bool) or value in (0, 1):
+        return bool(value)
+    raise InputError(f"{where}: expected true or false, got {_describe(value)}")
+
+
+def vector3(value, where):
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise InputError(f"{where}: expected 3 numbers [x, y, z], got {value!r}")
+    return np.array([real(v, f"{where}[{i}]") for i, v in enumerate(value)])
+
+
+def string(value, where, choices=None):
+    if not isinstance(value, str) or not value:
+        raise InputError(f"{where}: expected a non-empty string, got {_describe(value)}")
+    if not value.isascii():
+        raise InputError(f"{where}: must be ASCII, got {value!r}")
+    if choices is not None and value not in choices:
+        raise InputError(f"{where}: unknown value {value!r} (expected one of: {', '.join(choices)})")
+    return value
+
+
+def name_list(value, where):
+    """A name or a list of names (at least one); no commas (they join lists in the file)."""
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not names:
+        raise InputError(f"{where}: expected a name or a non-empty list of names, got {value!r}")
+    names = [string(n, f"{where}[{i}]") for i, n in enumerate(names)]
+    for n in names:
+        if "," in n:
+            raise InputError(f"{where}: name {n!r} must not contain ','")
+    return names
+
+
+def entries(value, where):
+    """A list of mappings (a missing section is an empty list)."""
+    if value is None:
+        return []
+    if not isinstance(value, list):
+        raise InputError(f"{where}: expected a list of entries (lines starting with '- '), "
+                         f"got {_describe(value)}")
+    return value
+
+
+# ---------------------------------------------------------------- time functions
+
+@dataclass
+class Time:
+    kind: str                 # "constant" | "sudden" | "table"
+    table: np.ndarray = None  # (n, 2) for "table"
+
+
+def time_spec(value, where, kinds):
+    """`constant`, `sudden` or {table: [[t, f], ...]} (t strictly increasing)."""
+    if value is None:
+        return Time("constant")
+    if isinstance(value, str):
+        if value not in kinds:
+            raise InputError(f"{where}: unknown time {value!r} (expected "
+                             f"{' | '.join(kinds)} | {{table: [[t, factor], ...]}})")
+        return Time(value)
+    spec = mapping(value, where, ("table",), required=("table",))
+    rows = spec["table"]
+    if not isinstance(rows, list) or not rows:
+        raise InputError(f"{where}.table: expected a non-empty list of [t, factor] pairs")
+    table = np.empty((len(rows), 2))
+    for i, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != 2:
+            raise InputError(f"{where}.table[{i}]: expected a pair [t, factor], got {row!r}")
+        table[i] = [real(row[0], f"{where}.table[{i}][0]"), real(row[1], f"{where}.table[{i}][1]")]
+        if i and table[i, 0] <= table[i - 1, 0]:
+            raise InputError(f"{where}.table[{i}]: t must be strictly increasing "
+                             f"(t={table[i, 0]:g} follows t={table[i - 1, 0]:g})")
+    return Time("table", table)
+
+
+# ---------------------------------------------------------------- scene entries
+
+MATERIAL_DEFAULTS = dict(nu=0.0, density=0.0, damping=0.0, rayleigh_alpha=0.0, rayleigh_beta=0.0)
+COMPONENTS = {"x": 0, "y": 1, "z": 2}
+LOAD_KINDS = ("gravity", "body_force", "pressure", "traction")
+FIELDS = ("displacement", "stress")
+IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+@dataclass
+class Body:
+    name: str
+    mesh: str
+    regions: list
+    material: dict
+
+
+@dataclass
+class Couple:
+    k: int
+    master: list
+    slave: list
+    mu: float
+
+
+@dataclass
+class Dirichlet:
+    surface: str
+    components: list
+    value: float
+    time: Time
+
+
+@dataclass
+class Load:
+    kind: str
+    vector: np.ndarray
+    value: float
+    surface: str
+    bodies: list
+    time: Time
+
+
+@dataclass
+class Analysis:
+    type: str = "static"
+    dt: float = 1.0
+    final_time: float = 1.0
+    newmark_beta: float = 0.25
+    newmark_gamma: float = 0.5
+    mass: str = "consistent"
+
+
+@dataclass
+class Point:
+    name: str
+    x: np.ndarray
+    body: str
+
+
+@dataclass
+class Output:
+    every: int = 1
+    fields: list = field(default_factory=lambda: list(FIELDS))
+    energy: bool = False
+    points: list = field(default_factory=list)
+
+
+@dataclass
+class Scene:
+    title: str
+    meshes: dict      # mesh name -> file path
+    bodies: list
+    couples: list
+    dirichlet: list
+    loads: list
+    analysis: Analysis
+    output: Output
+    surfaces: dict    # surface name -> list of places it is referenced, in id order
+
+
+TOP_KEYS = ("title", "meshes", "bodies", "couples", "dirichlet", "loads", "analysis", "output")
+
+
+def parse_scene(doc, base_dir):
+    """Validate the YAML document and return a Scene (mesh paths made absolute)."""
+    mapping(doc, "", TOP_KEYS, required=("meshes", "bodies"))
+    title = doc.get("title")
+    title = "" if title in (None, "") else string(str(title), "title")
+    meshes = _meshes(doc["meshes"], base_dir)
+    bodies = _bodies(doc["bodies"], meshes)
+    body_names = [b.name for b in bodies]
+    couples = _couples(doc.get("couples"))
+    dirichlet = [_dirichlet(e, f"dirichlet[{i}]") for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
+    loads = [_load(e, f"loads[{i}]", body_names) for i, e in enumerate(entries(doc.get("loads"), "loads"))]
+    analysis = _analysis(doc.get("analysis"))
+    output = _output(doc.get("output"), body_names)
+    if analysis.type == "dynamic":
+        for b in bodies:
+            if b.material["density"] == 0:
+                raise InputError(f"bodies.{b.name}.material.density: a dynamic analysis needs "
+                                 f"density > 0 for every body (body '{b.name}' has 0)")
+    surfaces = _surface_references(doc, couples, dirichlet, loads)
+    return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces)
+
+
+def _meshes(value, base_dir):
+    meshes = named(value, "meshes")
+    if not meshes:
+        raise InputError("meshes: at least one mesh is needed (name: file)")
+    return {name: os.path.join(base_dir, string(path, f"meshes.{name}"))
+            for name, path in meshes.items()}
+
+
+def _bodies(value, meshes):
+    bodies = named(value, "bodies")
+    if not bodies:
+        raise InputError("bodies: at least one body is needed")
+    return [_body(name, spec, meshes) for name, spec in bodies.items()]
+
+
+def _body(name, spec, meshes):
+    where = f"bodies.{name}"
+    if not IDENTIFIER.match(name):
+        raise InputError(f"{where}: body names must be identifiers ([A-Za-z_][A-Za-z0-9_]*), "
+                         f"got {name!r}")
+    spec = mapping(spec, where, ("mesh", "regions", "material"), required=("mesh", "regions", "material"))
+    mesh = string(spec["mesh"], f"{where}.mesh")
+    if mesh not in meshes:
+        raise InputError(f"{where}.mesh: unknown mesh {mesh!r} (meshes: {', '.join(meshes)})")
+    regions = name_list(spec["regions"], f"{where}.regions")
+    return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"))
+
+
+def _material(value, where):
+    spec = mapping(value, where, ("E",) + tuple(MATERIAL_DEFAULTS), required=("E",))
+    material = dict(E=real(spec["E"], f"{where}.E", gt=0))
+    for key, default in MATERIAL_DEFAULTS.items():
+        bounds = dict(gt=-1, lt=0.5) if key == "nu" else dict(ge=0)
+        material[key] = real(spec.get(key, default), f"{where}.{key}", **bounds)
+    return material
+
+
+def _couples(value):
+    couples, seen = [], {}
+    for i, spec in enumerate(entries(value, "couples")):
+        where = f"couples[{i}]"
+        spec = mapping(spec, where, ("k", "master", "slave", "mu"), required=("master", "slave"))
+        k = integer(spec.get("k", i + 1), f"{where}.k", ge=1)
+        if k in seen:
+            raise InputError(f"{where}.k: couple k={k} is already defined by couples[{seen[k]}]")
+        seen[k] = i
+        couples.append(Couple(k, name_list(spec["master"], f"{where}.master (couple k={k})"),
+                              name_list(spec["slave"], f"{where}.slave (couple k={k})"),
+                              real(spec.get("mu", 0.0), f"{where}.mu", ge=0)))
+    return couples
+
+
+def _dirichlet(spec, where):
+    spec = mapping(spec, where, ("surface", "components", "value", "time"), required=("surface",))
+    return Dirichlet(string(spec["surface"], f"{where}.surface"),
+                     _components(spec.get("components", "all"), f"{where}.components"),
+                     real(spec.get("value", 0.0), f"{where}.value"),
+                     time_spec(spec.get("time"), f"{where}.time", ("constant",)))
+
+
+def _components(value, where):
+    if value == "all":
+        return [0, 1, 2]
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not names:
+        raise InputError(f"{where}: expected 'all' or a list of x, y, z, got {value!r}")
+    components = []
+    for n in names:
+        if not isinstance(n, str) or n not in COMPONENTS:
+            raise InputError(f"{where}: unknown component {n!r} (expected x, y, z or all)")
+        if COMPONENTS[n] in components:
+            raise InputError(f"{where}: component {n!r} listed twice")
+        components.append(COMPONENTS[n])
+    return components
+
+
+_LOAD_KEYS = {  # kind -> (required keys, optional keys) besides kind and time
+    "gravity": (("vector",), ("bodies",)),
+    "body_force": (("vector",), ("bodies",)),
+    "pressure": (("surface", "value"), ()),
+    "traction": (("surface", "vector"), ()),
+}
+
+
+def _load(spec, where, body_names):
+    if not isinstance(spec, dict) or "kind" not in spec:
+        raise InputError(f"{where}: expected a mapping with a 'kind' ({', '.join(LOAD_KINDS)})")
+    kind = string(spec["kind"], f"{where}.kind", choices=LOAD_KINDS)
+    required, optional = _LOAD_KEYS[kind]
+    mapping(spec, where, ("kind", "time") + required + optional, required=required)
+    bodies = name_list(spec["bodies"], f"{where}.bodies") if "bodies" in spec else []
+    for b in bodies:
+        if b not in body_names:
+            raise InputError(f"{where}.bodies: unknown body {b!r} (bodies: {', '.join(body_names)})")
+    return Load(kind,
+                vector3(spec["vector"], f"{where}.vector") if "vector" in spec else np.zeros(3),
+                real(spec["value"], f"{where}.value") if "value" in spec else 0.0,
+                string(spec["surface"], f"{where}.surface") if "surface" in spec else "",
+                bodies,
+                time_spec(spec.get("time"), f"{where}.time", ("constant", "sudden")))
+
+
+def _analysis(value):
+    spec = mapping(value, "analysis", ("type", "dt", "final_time", "newmark", "mass"))
+    a = Analysis()
+    a.type = string(spec.get("type", a.type), "analysis.type", choices=("static", "dynamic"))
+    a.mass = string(spec.get("mass", a.mass), "analysis.mass", choices=("consistent", "lumped"))
+    if a.type == "dynamic":
+        for key in ("dt", "final_time"):
+            if key not in spec:
+                raise InputError(f"analysis.{key}: required for a dynamic analysis")
+    # Static: dt and final_time default to each other, both to 1 (one load step).
+    a.dt = real(spec.get("dt", spec.get("final_time", 1.0)), "analysis.dt", gt=0)
+    a.final_time = real(spec.get("final_time", a.dt), "analysis.final_time")
+    if a.final_time < a.dt:
+        raise InputError(f"analysis.final_time: must be >= dt = {a.dt:g}, got {a.final_time:g}")
+    newmark = mapping(spec.get("newmark"), "analysis.newmark", ("beta", "gamma"))
+    a.newmark_beta = real(newmark.get("beta", a.newmark_beta), "analysis.newmark.beta", gt=0)
+    a.newmark_gamma = real(newmark.get("gamma", a.newmark_gamma), "analysis.newmark.gamma", gt=0)
+    stable = a.newmark_gamma >= 0.5 and a.newmark_beta >= (a.newmark_gamma + 0.5) ** 2 / 4 * (1 - 1e-12)
+    if a.type == "dynamic" and not stable:
+        warn(f"analysis.newmark: beta={a.newmark_beta:g}, gamma={a.newmark_gamma:g} is not "
+             "unconditionally stable (needs gamma >= 0.5 and beta >= (gamma + 0.5)^2 / 4)")
+    return a
+
+
+def _output(value, body_names):
+    spec = mapping(value, "output", ("every", "fields", "energy", "points"))
+    out = Output()
+    out.every = integer(spec.get("every", out.every), "output.every", ge=1)
+    fields = spec.get("fields", out.fields)
+    fields = [fields] if isinstance(fields, str) else fields
+    if not isinstance(fields, list):
+        raise InputError(f"output.fields: expected a list of {', '.join(FIELDS)}, got {fields!r}")
+    out.fields = [string(f, "output.fields", choices=FIELDS) for f in fields]
+    out.fields = [f for f in FIELDS if f in out.fields]  # canonical order, no repeats
+    out.energy = boolean(spec.get("energy", out.energy), "output.energy")
+    points = named(spec.get("points"), "output.points")
+    out.points = [_point(name, p, f"output.points.{name}", body_names) for name, p in points.items()]
+    return out
+
+
+def _point(name, value, where, body_names):
+    """[x, y, z] or {x: [x, y, z], body: name}."""
+    string(name, where)
+    if not isinstance(value, dict):
+        return Point(name, vector3(value, where), "")
+    spec = mapping(value, where, ("x", "body"), required=("x",))
+    body = string(spec["body"], f"{where}.body") if "body" in spec else ""
+    if body and body not in body_names:
+        raise InputError(f"{where}.body: unknown body {body!r} (bodies: {', '.join(body_names)})")
+    return Point(name, vector3(spec["x"], f"{where}.x"), body)
+
+
+def _surface_references(doc, couples, dirichlet, loads):
+    """Referenced surface names in order of first appearance in the file.
+
+    Sections are visited in the order they appear in the YAML; within a couple
+    the master names come before the slave names.
+    """
+    refs = {}
+
+    def add(name, where):
+        refs.setdefault(name, []).append(where)
+
+    for section in doc:
+        if section == "couples":
+            for i, c in enumerate(couples):
+                for side in ("master", "slave"):
+                    for name in getattr(c, side):
+                        add(name, f"couples[{i}].{side} (couple k={c.k})")
+        elif section == "dirichlet":
+            for i, d in enumerate(dirichlet):
+                add(d.surface, f"dirichlet[{i}].surface")
+        elif section == "loads":
+            for i, load in enumerate(loads):
+                if load.surface:
+                    add(load.surface, f"loads[{i}].surface")
+    return refs
