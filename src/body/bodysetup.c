@@ -2,40 +2,23 @@
 #include <mbc/private/bodyimpl.h>
 #include <mbc/private/pointwise.h>
 
-static PetscErrorCode BodyAssembleStiffness(MBCBody body)
+/* K and, for a dynamic analysis, M: consistent (rho int N_i N_j) or lumped (its row sums). */
+static PetscErrorCode BodyAssembleOperators(MBCBody body, PetscBool mass, MBCMassType type)
 {
-  Vec zero;
-
   PetscFunctionBegin;
   PetscCall(DMCreateMatrix(body->dm, &body->K));
-  PetscCall(DMGetLocalVector(body->dm, &zero));
-  PetscCall(VecZeroEntries(zero));
-  PetscCall(DMPlexSNESComputeJacobianFEM(body->dm, zero, body->K, body->K, NULL));
-  PetscCall(DMRestoreLocalVector(body->dm, &zero));
+  if (mass) PetscCall(MatDuplicate(body->K, MAT_DO_NOT_COPY_VALUES, &body->M));
+  PetscCall(MBCBodyAssembleElasticity(body, body->K, body->M));
   PetscCall(MatSetOption(body->K, MAT_SYMMETRIC, PETSC_TRUE));
-  PetscFunctionReturn(0);
-}
-
-/* Consistent mass rho * int N_i N_j, or its row sums on the diagonal (lumped). */
-static PetscErrorCode BodyAssembleMass(MBCBody body, MBCMassType type)
-{
-  Mat M;
-  Vec diag;
-
-  PetscFunctionBegin;
-  PetscCall(DMCreateMassMatrix(body->dm, body->dm, &M));
-  PetscCall(MatScale(M, body->desc.density));
-  if (type == MBC_MASS_LUMPED) {
-    PetscCall(MatCreateVecs(M, &diag, NULL));
-    PetscCall(MatGetRowSum(M, diag));
-    PetscCall(MatDestroy(&M));
-    PetscCall(MatDuplicate(body->K, MAT_DO_NOT_COPY_VALUES, &M));
-    PetscCall(MatZeroEntries(M));
-    PetscCall(MatDiagonalSet(M, diag, INSERT_VALUES));
+  if (mass && type == MBC_MASS_LUMPED) {
+    Vec diag;
+    PetscCall(MatCreateVecs(body->M, &diag, NULL));
+    PetscCall(MatGetRowSum(body->M, diag));
+    PetscCall(MatZeroEntries(body->M));
+    PetscCall(MatDiagonalSet(body->M, diag, INSERT_VALUES));
     PetscCall(VecDestroy(&diag));
   }
-  PetscCall(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE));
-  body->M = M;
+  if (mass) PetscCall(MatSetOption(body->M, MAT_SYMMETRIC, PETSC_TRUE));
   PetscFunctionReturn(0);
 }
 
@@ -198,8 +181,7 @@ PetscErrorCode MBCBodySetUp(MBCBody body)
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_BodyAssemble, 0, 0, 0, 0));
-  PetscCall(BodyAssembleStiffness(body));
-  if (dynamic) PetscCall(BodyAssembleMass(body, scene->mass));
+  PetscCall(BodyAssembleOperators(body, dynamic, scene->mass));
   body->cM = body->desc.damping + body->desc.rayleigh_alpha;
   body->cK = body->desc.rayleigh_beta;
   PetscCall(MBCBodyAssembleLoads(body));

@@ -11,7 +11,6 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
   Mat            A;
   KSP            ksp;
   PC             pc;
-  PetscMPIInt    size;
   char           prefix[MBC_NAME_LEN + 16];
   PCFailedReason reason;
 
@@ -33,8 +32,8 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
   PetscCall(KSPSetType(ksp, KSPPREONLY));
   PetscCall(KSPGetPC(ksp, &pc));
   PetscCall(PCSetType(pc, PCCHOLESKY));
-  PetscCallMPI(MPI_Comm_size(body->comm, &size));
-  if (size > 1) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
+  PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
   PetscCall(KSPSetOptionsPrefix(ksp, "body_"));
   PetscCall(KSPSetFromOptions(ksp));
   PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
