@@ -5,7 +5,7 @@
 /* A = aK K + aM M with the constrained rows and columns zeroed and 1 on the diagonal
    (MatZeroRowsColumns: eliminating DOFs or a big diagonal number would make the contact
    flexibility matrix singular or ill-conditioned), factored once by a KSP with the options
-   prefixes body_ (all bodies) then body_<name>_ (this body). */
+   prefix body_<name>_ (MBCSolverSetUp copies the -body_ options of all bodies to it). */
 PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newksp, Mat *newA, const char purpose[])
 {
   Mat            A;
@@ -34,8 +34,6 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
   PetscCall(PCSetType(pc, PCCHOLESKY));
   /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
   PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-  PetscCall(KSPSetOptionsPrefix(ksp, "body_"));
-  PetscCall(KSPSetFromOptions(ksp));
   PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
   PetscCall(KSPSetOptionsPrefix(ksp, prefix));
   PetscCall(KSPSetFromOptions(ksp));

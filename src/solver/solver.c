@@ -1,5 +1,6 @@
 /* The solver: places bodies on sub-communicators, sets them up, steps in time. */
 #include <mbc/private/solverimpl.h>
+#include <ctype.h>
 
 PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
 {
@@ -114,6 +115,51 @@ static PetscErrorCode SolverDecompose(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* -body_X applies to every body: copy it to -body_<name>_X for each body that does not set
+   its own, so every body's KSP has one prefix and options read at solve time (-ksp_view,
+   -ksp_monitor) work too. */
+static PetscBool IsOptionValue(const char *tok)
+{
+  return (PetscBool)(tok && (tok[0] != '-' || isdigit((unsigned char)tok[1]) || tok[1] == '.'));
+}
+
+/* Does option name "-body_..." already belong to one body ("-body_<name>_...")? */
+static PetscBool IsBodyOption(MBCScene scene, const char *name)
+{
+  for (PetscInt c = 0; c < scene->nbodies; c++) {
+    size_t len = strlen(scene->bodies[c].name);
+    if (!strncmp(name + 6, scene->bodies[c].name, len) && name[6 + len] == '_') return PETSC_TRUE;
+  }
+  return PETSC_FALSE;
+}
+
+static PetscErrorCode SolverPropagateBodyOptions(MBCSolver s)
+{
+  char  *all, *save = NULL, **tok;
+  size_t len;
+  int    n = 0;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetAll(NULL, &all));
+  PetscCall(PetscStrlen(all, &len));
+  PetscCall(PetscMalloc1(len / 2 + 2, &tok));
+  for (char *t = strtok_r(all, " ", &save); t; t = strtok_r(NULL, " ", &save)) tok[n++] = t;
+  for (int i = 0; i < n; i++) {
+    const char *value = (i + 1 < n && IsOptionValue(tok[i + 1])) ? tok[i + 1] : NULL;
+    if (strncmp(tok[i], "-body_", 6) || IsOptionValue(tok[i]) || IsBodyOption(s->scene, tok[i])) continue;
+    for (PetscInt b = 0; b < s->scene->nbodies; b++) {
+      char      target[2 * MBC_NAME_LEN];
+      PetscBool has;
+      PetscCall(PetscSNPrintf(target, sizeof(target), "-body_%s_%s", s->scene->bodies[b].name, tok[i] + 6));
+      PetscCall(PetscOptionsHasName(NULL, NULL, target, &has));
+      if (!has) PetscCall(PetscOptionsSetValue(NULL, target, value));
+    }
+  }
+  PetscCall(PetscFree(tok));
+  PetscCall(PetscFree(all));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSolverSetUp(MBCSolver s)
 {
   MBCScene    scene = s->scene;
@@ -124,6 +170,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   PetscCheck(scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Call MBCSolverSetScene() first");
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(SolverDecompose(s));
+  PetscCall(SolverPropagateBodyOptions(s));
   s->nbodies = scene->nbodies;
   PetscCall(PetscCalloc1(s->nbodies, &s->bodies));
   for (PetscInt b = 0; b < s->nbodies; b++) {
