@@ -3,6 +3,7 @@
    3-component field (measured; 12x the scalar cost), i.e. minutes per matrix at a million DOFs;
    these kernels take microseconds. Loads, stress recovery and geometry checks stay with PetscFE. */
 #include <mbc/private/bodyimpl.h>
+#include <mbc/private/element.h>
 
 /* PETSc's reference hexahedron: the order in which a cell's closure lists its vertices. */
 static const PetscReal HexCorner[8][3] = {
@@ -49,7 +50,7 @@ static PetscReal Invert3(const PetscReal J[9], PetscReal Ji[9])
 }
 
 /* tet4: constant gradients; the mass integrand is quadratic, so use the 4-point rule of degree 2. */
-static void ElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
+void MBCElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
 {
   PetscReal       J[9], Ji[9], G[4][3], det, vol;
   const PetscReal a = 0.5854101966249685, b = 0.1381966011250105; /* (5 + 3 sqrt 5)/20, (5 - sqrt 5)/20 */
@@ -76,7 +77,7 @@ static void ElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, Pet
 }
 
 /* hex8: trilinear map, 2x2x2 Gauss points. */
-static void ElementHex8(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
+void MBCElementHex8(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
 {
   const PetscReal g = 1.0 / PetscSqrtReal(3.0);
 
@@ -141,8 +142,8 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
     PetscCheck(nv == 4 || nv == 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with %" PetscInt_FMT " vertices; only tet4 and hex8 are supported", body->name, nv);
     PetscCall(PetscArrayzero(Ke, 9 * nv * nv));
     if (M) PetscCall(PetscArrayzero(Me, 9 * nv * nv));
-    if (nv == 4) ElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
-    else ElementHex8(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
+    if (nv == 4) MBCElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
+    else MBCElementHex8(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     PetscCall(MatSetValuesLocal(K, 3 * nv, idx, 3 * nv, idx, Ke, ADD_VALUES));
     if (M) PetscCall(MatSetValuesLocal(M, 3 * nv, idx, 3 * nv, idx, Me, ADD_VALUES));
   }

@@ -1,0 +1,9 @@
+/* Private: element matrices of linear elasticity. X: vertex coordinates in closure order
+   (3 per vertex); Ke, Me: (3 nv)^2 row-major, DOF 3a + i = component i of vertex a; they are
+   added to, so zero them first; Me may be NULL. */
+#pragma once
+
+#include <petscsys.h>
+
+PETSC_EXTERN void MBCElementTet4(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
+PETSC_EXTERN void MBCElementHex8(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
