@@ -5,7 +5,8 @@
 /* A = aK K + aM M with the constrained rows and columns zeroed and 1 on the diagonal
    (MatZeroRowsColumns: eliminating DOFs or a big diagonal number would make the contact
    flexibility matrix singular or ill-conditioned), factored once by a KSP with the options
-   prefix body_<name>_ (MBCSolverSetUp copies the -body_ options of all bodies to it). */
+   prefix body_<name>_ (MBCSolverSetUp copies the -body_ options of all bodies to it).
+   The mass matrix alone (aK = 0) is solved by CG with the prefix body_<name>_mass_. */
 PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newksp, Mat *newA, const char purpose[])
 {
   Mat            A;
@@ -29,12 +30,20 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
 
   PetscCall(KSPCreate(body->comm, &ksp));
   PetscCall(KSPSetOperators(ksp, A, A));
-  PetscCall(KSPSetType(ksp, KSPPREONLY));
   PetscCall(KSPGetPC(ksp, &pc));
-  PetscCall(PCSetType(pc, PCCHOLESKY));
-  /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
-  PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-  PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
+  if (aK != 0) {
+    PetscCall(KSPSetType(ksp, KSPPREONLY));
+    PetscCall(PCSetType(pc, PCCHOLESKY));
+    /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
+    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
+  } else {
+    /* the mass matrix alone (initial acceleration): well conditioned, CG needs no factorization */
+    PetscCall(KSPSetType(ksp, KSPCG));
+    PetscCall(PCSetType(pc, PCJACOBI));
+    PetscCall(KSPSetTolerances(ksp, 1e-14, 0.0, PETSC_DEFAULT, 1000));
+    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_mass_", body->name));
+  }
   PetscCall(KSPSetOptionsPrefix(ksp, prefix));
   PetscCall(KSPSetFromOptions(ksp));
   PetscCall(KSPSetUp(ksp));
