@@ -32,6 +32,7 @@ PETSC_EXTERN PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_Bo
 PETSC_EXTERN PetscErrorCode MBCInitializePackage(void);
 
 PETSC_EXTERN PetscErrorCode MBCSceneLoad(MPI_Comm, const char[], MBCScene *);
+PETSC_EXTERN PetscErrorCode MBCSceneCreateEmpty(MBCScene *);
 PETSC_EXTERN PetscErrorCode MBCSceneView(MBCScene, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCSceneDestroy(MBCScene *);
 

@@ -25,12 +25,21 @@ static PetscErrorCode MBCErrorHandler(MPI_Comm comm, int line, const char *fun, 
 static PetscErrorCode Run(void)
 {
   char      file[PETSC_MAX_PATH_LEN] = "";
-  PetscBool set;
+  PetscBool set, help;
   MBCScene  scene;
   MBCSolver solver;
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsGetString(NULL, NULL, "-scene", file, sizeof(file), &set));
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  if (help && !set) { /* list the solver's options with the defaults of an empty scene */
+    PetscCall(MBCSceneCreateEmpty(&scene));
+    PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
+    PetscCall(MBCSolverSetScene(solver, scene));
+    PetscCall(MBCSolverSetFromOptions(solver));
+    PetscCall(MBCSolverDestroy(&solver));
+    PetscFunctionReturn(0);
+  }
   PetscCheck(set && file[0], PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "No scene file: give -scene SCENE.h5 (make one with mbcontact-prep)");
   PetscCall(MBCSceneLoad(PETSC_COMM_WORLD, file, &scene));
   PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));

@@ -435,6 +435,20 @@ PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scen
   PetscFunctionReturn(0);
 }
 
+/* A scene with no bodies and the default analysis settings (for -help). */
+PetscErrorCode MBCSceneCreateEmpty(MBCScene *scene)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscNew(scene));
+  (*scene)->dt            = 1.0;
+  (*scene)->final_time    = 1.0;
+  (*scene)->newmark_beta  = 0.25;
+  (*scene)->newmark_gamma = 0.5;
+  (*scene)->output_every  = 1;
+  PetscCall(PetscStrncpy((*scene)->filename, "scene.h5", sizeof((*scene)->filename)));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSceneDestroy(MBCScene *scene)
 {
   MBCScene s = *scene;

@@ -214,14 +214,19 @@ static PetscErrorCode XdmfAttributes(FILE *fp, hid_t file, const char *h5name, c
   g = H5Gopen2(file, group, H5P_DEFAULT);
   H5Gget_info(g, &info);
   for (hsize_t i = 0; i < info.nlinks; i++) {
-    char    name[256], path[512];
+    char    name[256], label[256], path[512];
     int     nd;
     hsize_t dims[3];
     H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof(name), H5P_DEFAULT);
     PetscCall(PetscSNPrintf(path, sizeof(path), "%s/%s", group, name));
+    PetscCall(PetscStrncpy(label, name, sizeof(label)));
     H5Shape(file, path, &nd, dims);
     if (nd != 3) continue;
-    fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"%s\">\n", name, dims[2] == 3 ? "Vector" : (dims[2] == 6 ? "Tensor6" : "Scalar"), center);
+    { /* PETSc names the dataset <vec>_<field>; both are the same word here: show it once */
+      size_t len = strlen(name);
+      if (len % 2 && name[len / 2] == '_' && !strncmp(name, name + len / 2 + 1, len / 2)) label[len / 2] = 0;
+    }
+    fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"%s\">\n", label, dims[2] == 3 ? "Vector" : (dims[2] == 6 ? "Tensor6" : "Scalar"), center);
     fprintf(fp, "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"1 %llu %llu\" Type=\"HyperSlab\">\n", (unsigned long long)dims[1], (unsigned long long)dims[2]);
     fprintf(fp, "            <DataItem Dimensions=\"3 3\" Format=\"XML\">%" PetscInt_FMT " 0 0 1 1 1 1 %llu %llu</DataItem>\n", k, (unsigned long long)dims[1], (unsigned long long)dims[2]);
     fprintf(fp, "            <DataItem Dimensions=\"%llu %llu %llu\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:%s</DataItem>\n", (unsigned long long)dims[0], (unsigned long long)dims[1], (unsigned long long)dims[2], h5name, path);

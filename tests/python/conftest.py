@@ -33,7 +33,7 @@ def prep(tmp_path, scene, name="scene"):
 
 def solve(h5, *options, nproc=1, check=True, timeout=600):
     """Runs the solver on nproc ranks; returns the CompletedProcess."""
-    cmd = [SOLVER, "-scene", str(h5), *options]
+    cmd = [SOLVER, *(["-scene", str(h5)] if str(h5) else []), *options]
     if nproc > 1:
         cmd = ["mpirun", "-n", str(nproc), *cmd]
     r = subprocess.run(cmd, capture_output=True, text=True, env=env(), timeout=timeout)

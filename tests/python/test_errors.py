@@ -130,3 +130,10 @@ def test_dynamic_without_density(tmp_path):
     h5 = good_scene(tmp_path)
     edit(h5, "mbcontact/bodies/0", "density", 0.0)
     expect_error(h5, "b1", "density", options=("-mbc_analysis", "dynamic"))
+
+
+def test_help_without_scene_lists_options():
+    r = solve("", "-help", check=False)
+    assert r.returncode == 0, r.stderr
+    for option in ("-mbc_analysis", "-mbc_dt", "-mbc_monitor", "-mbc_output"):
+        assert option in r.stdout
