@@ -50,6 +50,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsString("-mbc_output", "Prefix of the result files", "MBCSolverSetFromOptions", s->output, s->output, sizeof(s->output), NULL));
   PetscCall(PetscOptionsBool("-mbc_monitor", "Print a line per step", "MBCSolverSetFromOptions", s->monitor, &s->monitor, NULL));
   PetscCall(PetscOptionsBool("-mbc_view", "Print the scene and the decomposition", "MBCSolverSetFromOptions", s->view, &s->view, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_search_only", "Search contact on the undeformed bodies, report, stop", "MBCSolverSetFromOptions", s->search_only, &s->search_only, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
   s->mass     = (MBCMassType)mass;
@@ -180,8 +181,13 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCallMPI(MPI_Comm_split(s->comm, mine ? 0 : MPI_UNDEFINED, rank, &comm));
     if (mine) PetscCall(MBCBodyCreate(comm, scene, b, &s->bodies[b]));
   }
-  for (PetscInt b = 0; b < s->nbodies; b++)
-    if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));
+  if (!s->search_only)
+    for (PetscInt b = 0; b < s->nbodies; b++)
+      if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));
+  if (scene->ncouples) {
+    PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
+    PetscCall(MBCContactSetFromOptions(s->contact));
+  }
   s->setupcalled = PETSC_TRUE;
   if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
   PetscFunctionReturn(0);
@@ -238,6 +244,18 @@ PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[4])
   PetscFunctionReturn(0);
 }
 
+/* The contact search at the current displacements (forces come with the contact-force issue). */
+static PetscErrorCode SolverContact(MBCSolver s)
+{
+  PetscBool researched;
+
+  PetscFunctionBegin;
+  if (!s->contact) PetscFunctionReturn(0);
+  PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_FALSE, &researched));
+  if (researched && s->monitor && s->contact->nsearches > 1) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: re-search (global search %" PetscInt_FMT ")\n", s->step, (double)s->time, s->contact->nsearches));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode SolverMonitor(MBCSolver s)
 {
   PetscReal umax = 0, e[4];
@@ -278,6 +296,7 @@ static PetscErrorCode SolverStatic(MBCSolver s)
       PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->u));
       PetscCall(MBCBodyCheckFinite(body, body->u, "displacement", s->time));
     }
+    PetscCall(SolverContact(s));
     PetscCall(SolverMonitor(s));
     PetscCall(MBCSolverOutputStep(s));
   }
@@ -415,6 +434,7 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
         body->wdamp += dt * PetscRealPart(dv);
       }
     }
+    PetscCall(SolverContact(s));
     PetscCall(SolverMonitor(s));
     PetscCall(MBCSolverOutputStep(s));
   }
@@ -425,6 +445,11 @@ PetscErrorCode MBCSolverSolve(MBCSolver s)
 {
   PetscFunctionBegin;
   PetscCall(MBCSolverSetUp(s));
+  if (s->contact) {
+    PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_TRUE, NULL));
+    if (s->contact->view) PetscCall(MBCContactView(s->contact, PETSC_VIEWER_STDOUT_(s->comm)));
+  }
+  if (s->search_only) PetscFunctionReturn(0);
   PetscCall(MBCSolverOutputOpen(s));
   if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStatic(s));
   else PetscCall(SolverDynamic(s));
@@ -472,6 +497,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
+  PetscCall(MBCContactDestroy(&s->contact));
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));

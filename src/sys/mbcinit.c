@@ -1,5 +1,5 @@
 /* Package registration: log events so -log_view shows where the time goes. */
-#include <mbcontact.h>
+#include <mbc/private/contactimpl.h>
 
 PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;
 
@@ -19,5 +19,8 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCBodyFactor", classid, &MBC_BodyFactor));
   PetscCall(PetscLogEventRegister("MBCBodySolve", classid, &MBC_BodySolve));
   PetscCall(PetscLogEventRegister("MBCOutput", classid, &MBC_Output));
+  PetscCall(PetscLogEventRegister("MBCContactGather", classid, &MBC_ContactGather));
+  PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
+  PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
   PetscFunctionReturn(0);
 }

@@ -1,7 +1,7 @@
 /* Private: the solver, the bodies of a scene and their time stepping. */
 #pragma once
 
-#include <mbc/private/bodyimpl.h>
+#include <mbc/private/contactimpl.h>
 
 typedef struct {
   PetscInt  body;         /* body holding the nearest vertex */
@@ -33,6 +33,9 @@ struct _n_MBCSolver {
   FILE     *points_csv, *energy_csv;
   MBCPointLocation *points;
   PetscBool monitor, view;
+
+  MBCContact contact;     /* NULL when the scene has no couples */
+  PetscBool  search_only;
 
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;

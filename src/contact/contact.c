@@ -1,0 +1,428 @@
+/* Contact-face couples: gathered from the bodies (whatever ranks own them), searched, viewed. */
+#include <mbc/private/contactimpl.h>
+#include <petscbt.h>
+#include <petscsf.h>
+
+PetscLogEvent MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch;
+
+PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *contact)
+{
+  MBCContact c;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&c));
+  c->comm        = comm;
+  c->scene       = scene;
+  c->cell_factor = 1.0;
+  c->ncouples    = scene->ncouples;
+  PetscCall(PetscCalloc1(c->ncouples, &c->couples));
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    c->couples[i].k  = scene->couples[i].k;
+    c->couples[i].mu = scene->couples[i].mu;
+  }
+  PetscCall(PetscCalloc1(scene->nbodies, &c->usearch));
+  *contact = c;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCContactSetFromOptions(MBCContact c)
+{
+  PetscFunctionBegin;
+  PetscOptionsBegin(c->comm, NULL, "mbcontact contact search options", "MBCContact");
+  PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
+  PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
+  PetscCall(PetscOptionsString("-mbc_contact_dump", "Write PREFIX_pairs.csv and PREFIX_points.csv", "MBCContactSetFromOptions", c->dump, c->dump, sizeof(c->dump), NULL));
+  PetscOptionsEnd();
+  PetscCheck(c->cell_factor > 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_cell_factor %g must be positive", (double)c->cell_factor);
+  PetscCheck(c->margin >= 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_margin %g must not be negative", (double)c->margin);
+  PetscFunctionReturn(0);
+}
+
+/* Record of one face, packed in reals for one Allgatherv: couple index, side (0 master,
+   1 slave), body, nv, then per vertex: x0[3], x[3], row. */
+#define FACE_REC (4 + 7 * MBC_MAX_FACE_NODES)
+
+/* Faces of this rank's part of a body carrying a contact label, oriented outward. */
+static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscReal **buf, PetscInt *n, PetscInt *cap)
+{
+  DM                 dm = body->dm, cdm;
+  PetscSection       csec, gsec, lsec;
+  Vec                coords, uloc = NULL;
+  const PetscScalar *x, *ul = NULL;
+  PetscSF            sf;
+  PetscInt           nleaves, vStart, vEnd, cStart, cEnd;
+  const PetscInt    *leaves;
+  PetscBT            notmine;
+  const char        *labels[2] = {"contact_master", "contact_slave"};
+
+  PetscFunctionBegin;
+  PetscCall(DMGetCoordinateDM(dm, &cdm));
+  PetscCall(DMGetLocalSection(cdm, &csec));
+  PetscCall(DMGetGlobalSection(dm, &gsec));
+  PetscCall(DMGetLocalSection(dm, &lsec));
+  PetscCall(DMGetCoordinatesLocal(dm, &coords));
+  PetscCall(VecGetArrayRead(coords, &x));
+  if (u) {
+    PetscCall(DMGetLocalVector(dm, &uloc));
+    PetscCall(DMGlobalToLocal(dm, u, INSERT_VALUES, uloc));
+    PetscCall(VecGetArrayRead(uloc, &ul));
+  }
+  PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
+  PetscCall(DMPlexGetHeightStratum(dm, 0, &cStart, &cEnd));
+  { /* points this rank does not own are leaves of the point SF */
+    PetscInt pStart, pEnd;
+    PetscCall(DMPlexGetChart(dm, &pStart, &pEnd));
+    PetscCall(PetscBTCreate(pEnd, &notmine));
+    PetscCall(DMGetPointSF(dm, &sf));
+    PetscCall(PetscSFGetGraph(sf, NULL, &nleaves, &leaves, NULL));
+    for (PetscInt i = 0; i < nleaves && nleaves > 0; i++) PetscCall(PetscBTSet(notmine, leaves ? leaves[i] : i));
+  }
+  for (PetscInt side = 0; side < 2; side++) {
+    DMLabel label;
+    PetscCall(DMGetLabel(dm, labels[side], &label));
+    if (!label) continue;
+    for (PetscInt ci = 0; ci < c->ncouples; ci++) {
+      IS              faceIS;
+      const PetscInt *faces;
+      PetscInt        nfaces;
+      PetscCall(DMLabelGetStratumIS(label, c->couples[ci].k, &faceIS));
+      if (!faceIS) continue;
+      PetscCall(ISGetLocalSize(faceIS, &nfaces));
+      PetscCall(ISGetIndices(faceIS, &faces));
+      for (PetscInt fi = 0; fi < nfaces; fi++) {
+        const PetscInt f = faces[fi];
+        PetscInt      *closure = NULL, nclosure, nv = 0, vert[MBC_MAX_FACE_NODES], ns;
+        const PetscInt *support;
+        PetscReal     *r, fc[3] = {0, 0, 0}, cc[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
+
+        if (PetscBTLookup(notmine, f)) continue;
+        PetscCall(DMPlexGetTransitiveClosure(dm, f, PETSC_TRUE, &nclosure, &closure));
+        for (PetscInt p = 0; p < 2 * nclosure; p += 2)
+          if (closure[p] >= vStart && closure[p] < vEnd && nv < MBC_MAX_FACE_NODES) vert[nv++] = closure[p];
+        PetscCall(DMPlexRestoreTransitiveClosure(dm, f, PETSC_TRUE, &nclosure, &closure));
+        PetscCheck(nv == 3 || nv == 4, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': contact face with %" PetscInt_FMT " vertices", body->name, nv);
+        if (*n == *cap) {
+          *cap = 2 * (*cap) + 64;
+          PetscCall(PetscRealloc((size_t)(*cap) * FACE_REC * sizeof(PetscReal), buf));
+        }
+        r    = &(*buf)[(*n)++ * FACE_REC];
+        r[0] = ci;
+        r[1] = side;
+        r[2] = body->index;
+        r[3] = nv;
+        for (PetscInt i = 0; i < nv; i++) {
+          PetscInt coff, off, loff;
+          PetscCall(PetscSectionGetOffset(csec, vert[i], &coff));
+          PetscCall(PetscSectionGetOffset(gsec, vert[i], &off));
+          PetscCall(PetscSectionGetOffset(lsec, vert[i], &loff));
+          for (PetscInt d = 0; d < 3; d++) {
+            r[4 + 7 * i + d]     = PetscRealPart(x[coff + d]);
+            r[4 + 7 * i + 3 + d] = r[4 + 7 * i + d] + (ul ? PetscRealPart(ul[loff + d]) : 0);
+            fc[d] += r[4 + 7 * i + d] / nv;
+          }
+          r[4 + 7 * i + 6] = off < 0 ? -(off + 1) : off;
+        }
+        for (PetscInt i = 0; i < nv; i++) { /* Newell normal in reference coordinates */
+          const PetscReal *a = &r[4 + 7 * i], *b = &r[4 + 7 * ((i + 1) % nv)];
+          nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
+          nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
+          nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
+        }
+        PetscCall(DMPlexGetSupportSize(dm, f, &ns));
+        PetscCall(DMPlexGetSupport(dm, f, &support));
+        PetscCheck(ns == 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': contact face of couple %" PetscInt_FMT " is not on the boundary", body->name, c->couples[ci].k);
+        PetscCall(DMPlexGetTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
+        {
+          PetscInt ncv = 0;
+          for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+            PetscInt coff;
+            if (closure[p] < vStart || closure[p] >= vEnd) continue;
+            PetscCall(PetscSectionGetOffset(csec, closure[p], &coff));
+            for (PetscInt d = 0; d < 3; d++) cc[d] += PetscRealPart(x[coff + d]);
+            ncv++;
+          }
+          for (PetscInt d = 0; d < 3; d++) cc[d] /= ncv;
+        }
+        PetscCall(DMPlexRestoreTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
+        if (nrm[0] * (fc[0] - cc[0]) + nrm[1] * (fc[1] - cc[1]) + nrm[2] * (fc[2] - cc[2]) < 0) { /* reverse to point outward */
+          for (PetscInt i = 1, j = nv - 1; i < j; i++, j--)
+            for (PetscInt q = 0; q < 7; q++) {
+              PetscReal t          = r[4 + 7 * i + q];
+              r[4 + 7 * i + q]     = r[4 + 7 * j + q];
+              r[4 + 7 * j + q]     = t;
+            }
+        }
+      }
+      PetscCall(ISRestoreIndices(faceIS, &faces));
+      PetscCall(ISDestroy(&faceIS));
+    }
+  }
+  PetscCall(PetscBTDestroy(&notmine));
+  if (u) {
+    PetscCall(VecRestoreArrayRead(uloc, &ul));
+    PetscCall(DMRestoreLocalVector(dm, &uloc));
+  }
+  PetscCall(VecRestoreArrayRead(coords, &x));
+  PetscFunctionReturn(0);
+}
+
+typedef struct {
+  PetscInt         body;
+  const PetscReal *x0;
+  PetscInt         rec, slot;
+} NodeRef;
+
+static int CompareNodeRef(const void *a, const void *b)
+{
+  const NodeRef *p = (const NodeRef *)a, *q = (const NodeRef *)b;
+  if (p->body != q->body) return p->body < q->body ? -1 : 1;
+  for (int d = 0; d < 3; d++)
+    if (p->x0[d] != q->x0[d]) return p->x0[d] < q->x0[d] ? -1 : 1;
+  return 0;
+}
+
+/* Builds one side of a couple from the gathered records: nodes in canonical order (body, then
+   reference coordinates), faces in record order after sorting the records canonically. */
+static PetscErrorCode SurfaceFromRecords(MBCSurface *s, const PetscReal *rec, PetscInt nrec, PetscInt ci, PetscInt side)
+{
+  NodeRef *refs;
+  PetscInt nrefs = 0, nfaces = 0, *map, f = 0;
+
+  PetscFunctionBegin;
+  PetscCall(MBCSurfaceReset(s));
+  for (PetscInt i = 0; i < nrec; i++)
+    if ((PetscInt)rec[i * FACE_REC] == ci && (PetscInt)rec[i * FACE_REC + 1] == side) {
+      nfaces++;
+      nrefs += (PetscInt)rec[i * FACE_REC + 3];
+    }
+  PetscCall(PetscMalloc1(nrefs, &refs));
+  nrefs = 0;
+  for (PetscInt i = 0; i < nrec; i++) {
+    const PetscReal *r = &rec[i * FACE_REC];
+    if ((PetscInt)r[0] != ci || (PetscInt)r[1] != side) continue;
+    for (PetscInt j = 0; j < (PetscInt)r[3]; j++) refs[nrefs++] = (NodeRef){(PetscInt)r[2], &r[4 + 7 * j], i, j};
+  }
+  qsort(refs, (size_t)nrefs, sizeof(NodeRef), CompareNodeRef);
+  PetscCall(PetscMalloc1(nrec * MBC_MAX_FACE_NODES, &map)); /* (record, slot) -> node */
+  for (PetscInt i = 0; i < nrefs; i++) {
+    if (i == 0 || CompareNodeRef(&refs[i - 1], &refs[i])) s->nnodes++;
+  }
+  PetscCall(PetscMalloc4(s->nnodes, &s->nbody, s->nnodes, &s->nrow, 3 * s->nnodes, &s->x0, 3 * s->nnodes, &s->x));
+  for (PetscInt i = 0, v = -1; i < nrefs; i++) {
+    if (i == 0 || CompareNodeRef(&refs[i - 1], &refs[i])) {
+      const PetscReal *r = &rec[refs[i].rec * FACE_REC + 4 + 7 * refs[i].slot];
+      v++;
+      s->nbody[v] = refs[i].body;
+      s->nrow[v]  = (PetscInt)r[6];
+      for (PetscInt d = 0; d < 3; d++) {
+        s->x0[3 * v + d] = r[d];
+        s->x[3 * v + d]  = r[3 + d];
+      }
+    }
+    map[refs[i].rec * MBC_MAX_FACE_NODES + refs[i].slot] = v;
+  }
+  s->nfaces = nfaces;
+  PetscCall(PetscMalloc3(nfaces, &s->fnv, MBC_MAX_FACE_NODES * nfaces, &s->fnode, nfaces, &s->fbody));
+  for (PetscInt i = 0; i < nrec; i++) {
+    const PetscReal *r = &rec[i * FACE_REC];
+    if ((PetscInt)r[0] != ci || (PetscInt)r[1] != side) continue;
+    s->fnv[f]   = (PetscInt)r[3];
+    s->fbody[f] = (PetscInt)r[2];
+    for (PetscInt j = 0; j < MBC_MAX_FACE_NODES; j++) s->fnode[MBC_MAX_FACE_NODES * f + j] = j < s->fnv[f] ? map[i * MBC_MAX_FACE_NODES + j] : -1;
+    f++;
+  }
+  PetscCall(PetscFree(map));
+  PetscCall(PetscFree(refs));
+  PetscCall(MBCSurfaceSetUp(s));
+  PetscFunctionReturn(0);
+}
+
+typedef struct {
+  const PetscReal *r;
+  PetscReal        key[4]; /* body, then the smallest reference vertex (x, y, z) */
+} FaceKey;
+
+static int CompareFaceKey(const void *a, const void *b)
+{
+  const FaceKey *p = (const FaceKey *)a, *q = (const FaceKey *)b;
+  for (int i = 0; i < 2; i++)
+    if (p->r[i] != q->r[i]) return p->r[i] < q->r[i] ? -1 : 1;
+  for (int i = 0; i < 4; i++)
+    if (p->key[i] != q->key[i]) return p->key[i] < q->key[i] ? -1 : 1;
+  for (int i = 4; i < FACE_REC; i++) /* faces sharing that vertex: by their whole record */
+    if (p->r[i] != q->r[i]) return p->r[i] < q->r[i] ? -1 : 1;
+  return 0;
+}
+
+/* Gathers every couple's faces from all bodies to every rank, in canonical order. */
+static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodies[], PetscReal **all, PetscInt *nall)
+{
+  PetscReal   *mine = NULL, *sorted;
+  PetscInt     nmine = 0, cap = 0;
+  PetscMPIInt  size, *counts, *displs, count;
+  FaceKey     *keys;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_ContactGather, 0, 0, 0, 0));
+  for (PetscInt b = 0; b < nbodies; b++)
+    if (bodies[b]) PetscCall(BodyContactFaces(c, bodies[b], bodies[b]->u, &mine, &nmine, &cap));
+  PetscCallMPI(MPI_Comm_size(c->comm, &size));
+  PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
+  PetscCall(PetscMPIIntCast(nmine * FACE_REC, &count));
+  PetscCallMPI(MPI_Allgather(&count, 1, MPI_INT, counts, 1, MPI_INT, c->comm));
+  displs[0] = 0;
+  for (PetscMPIInt r = 0; r < size; r++) displs[r + 1] = displs[r] + counts[r];
+  *nall = displs[size] / FACE_REC;
+  PetscCall(PetscMalloc1(displs[size] + 1, all));
+  PetscCallMPI(MPI_Allgatherv(mine, count, MPIU_REAL, *all, counts, displs, MPIU_REAL, c->comm));
+  PetscCall(PetscFree(mine));
+  PetscCall(PetscFree2(counts, displs));
+  /* canonical face order: couple, side, body, smallest reference vertex, record */
+  PetscCall(PetscMalloc1(*nall, &keys));
+  for (PetscInt i = 0; i < *nall; i++) {
+    const PetscReal *r = &(*all)[i * FACE_REC];
+    keys[i].r          = r;
+    keys[i].key[0]     = r[2];
+    for (PetscInt d = 0; d < 3; d++) keys[i].key[1 + d] = r[4 + d];
+    for (PetscInt j = 1; j < (PetscInt)r[3]; j++) {
+      const PetscReal *v = &r[4 + 7 * j], *k = &keys[i].key[1];
+      if (v[0] < k[0] || (v[0] == k[0] && (v[1] < k[1] || (v[1] == k[1] && v[2] < k[2]))))
+        for (PetscInt d = 0; d < 3; d++) keys[i].key[1 + d] = v[d];
+    }
+  }
+  qsort(keys, (size_t)*nall, sizeof(FaceKey), CompareFaceKey);
+  PetscCall(PetscMalloc1(*nall * FACE_REC + 1, &sorted));
+  for (PetscInt i = 0; i < *nall; i++) PetscCall(PetscArraycpy(&sorted[i * FACE_REC], keys[i].r, FACE_REC));
+  PetscCall(PetscFree(keys));
+  PetscCall(PetscFree(*all));
+  *all = sorted;
+  PetscCall(PetscLogEventEnd(MBC_ContactGather, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* Gathers the couples' surfaces at the current displacements; a global search runs when asked,
+   the first time, or when a body moved more than half the margin since the last one; the local
+   search runs every time. */
+PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[], PetscBool force, PetscBool *researched)
+{
+  PetscReal *rec = NULL, moved = 0;
+  PetscInt   nrec = 0;
+  PetscBool  global = (PetscBool)(force || c->nsearches == 0);
+
+  PetscFunctionBegin;
+  PetscCall(ContactGather(c, nbodies, bodies, &rec, &nrec));
+  for (PetscInt b = 0; b < nbodies && !global; b++) { /* largest displacement since the last search */
+    PetscReal d = 0;
+    if (!bodies[b] || !bodies[b]->u || !c->usearch[b]) continue;
+    PetscCall(VecWAXPY(bodies[b]->work, -1.0, c->usearch[b], bodies[b]->u));
+    PetscCall(VecNorm(bodies[b]->work, NORM_INFINITY, &d));
+    moved = PetscMax(moved, PetscSqrtReal(3.0) * d);
+  }
+  if (!global) {
+    PetscReal margin = PETSC_MAX_REAL;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPIU_REAL, MPI_MAX, c->comm));
+    for (PetscInt i = 0; i < c->ncouples; i++) margin = PetscMin(margin, c->couples[i].margin);
+    global = (PetscBool)(moved > 0.5 * margin);
+  }
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    MBCCouple *cp = &c->couples[i];
+    PetscCall(SurfaceFromRecords(&cp->master, rec, nrec, i, 0));
+    PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
+    PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
+    if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
+    PetscCall(MBCCoupleLocalSearch(cp));
+  }
+  PetscCall(PetscFree(rec));
+  if (global) {
+    c->nsearches++;
+    for (PetscInt b = 0; b < nbodies; b++) {
+      if (!bodies[b] || !bodies[b]->u) continue;
+      if (!c->usearch[b]) PetscCall(VecDuplicate(bodies[b]->u, &c->usearch[b]));
+      PetscCall(VecCopy(bodies[b]->u, c->usearch[b]));
+    }
+  }
+  if (researched) *researched = global;
+  if (c->dump[0]) PetscCall(MBCContactDump(c));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCContactView(MBCContact c, PetscViewer viewer)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact search (%" PetscInt_FMT " global searches so far)\n", c->nsearches));
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    MBCCouple *cp = &c->couples[i];
+    PetscReal  gmin = PETSC_MAX_REAL, gmax = PETSC_MIN_REAL;
+    for (PetscInt j = 0; j < cp->npoints; j++) {
+      gmin = PetscMin(gmin, cp->points[j].gap);
+      gmax = PetscMax(gmax, cp->points[j].gap);
+    }
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  couple %" PetscInt_FMT ": %" PetscInt_FMT " master nodes, %" PetscInt_FMT " slave nodes, master/slave faces %" PetscInt_FMT "/%" PetscInt_FMT ", cell %g, margin %g\n", cp->k, cp->master.nnodes, cp->slave.nnodes, cp->master.nfaces, cp->slave.nfaces, (double)cp->h, (double)cp->margin));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "    test pairs %" PetscInt_FMT " (point-face tests %" PetscInt_FMT "), contact points %" PetscInt_FMT ", gap range [%g, %g]\n", cp->npairs, cp->ntests, cp->npoints, cp->npoints ? (double)gmin : 0.0, cp->npoints ? (double)gmax : 0.0));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Rank 0 writes the pairs and points of every couple (every rank holds the same results). */
+PetscErrorCode MBCContactDump(MBCContact c)
+{
+  PetscMPIInt rank;
+  char        file[PETSC_MAX_PATH_LEN + 16];
+  FILE       *fp, *fq;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(c->comm, &rank));
+  if (rank) PetscFunctionReturn(0);
+  PetscCall(PetscSNPrintf(file, sizeof(file), "%s_pairs.csv", c->dump));
+  fp = fopen(file, "w");
+  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+  PetscCall(PetscSNPrintf(file, sizeof(file), "%s_points.csv", c->dump));
+  fq = fopen(file, "w");
+  PetscCheck(fq, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+  fprintf(fp, "k,master_body,mx,my,mz,slave_body,sx,sy,sz,distance\n");
+  fprintf(fq, "k,master_body,mx,my,mz,slave_body,nv,v0x,v0y,v0z,v1x,v1y,v1z,v2x,v2y,v2z,v3x,v3y,v3z,w0,w1,w2,w3,px,py,pz,nx,ny,nz,t1x,t1y,t1z,t2x,t2y,t2z,gap\n");
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    MBCCouple *cp = &c->couples[i];
+    MBCSurface *m = &cp->master, *s = &cp->slave;
+    for (PetscInt j = 0; j < cp->npairs; j++) {
+      const PetscInt a = cp->pairs[j].master, b = cp->pairs[j].cand[0];
+      fprintf(fp, "%d,%d,%.17g,%.17g,%.17g,%d,%.17g,%.17g,%.17g,%.17g\n", (int)cp->k, (int)m->nbody[a], (double)m->x[3 * a], (double)m->x[3 * a + 1], (double)m->x[3 * a + 2], (int)s->nbody[b], (double)s->x[3 * b], (double)s->x[3 * b + 1], (double)s->x[3 * b + 2], (double)cp->pairs[j].distance);
+    }
+    for (PetscInt j = 0; j < cp->npoints; j++) {
+      const MBCContactPoint *p = &cp->points[j];
+      const PetscInt         a = p->master, *fv = &s->fnode[MBC_MAX_FACE_NODES * p->face];
+      fprintf(fq, "%d,%d,%.17g,%.17g,%.17g,%d,%d", (int)cp->k, (int)m->nbody[a], (double)m->x[3 * a], (double)m->x[3 * a + 1], (double)m->x[3 * a + 2], (int)s->fbody[p->face], (int)p->nv);
+      for (PetscInt v = 0; v < MBC_MAX_FACE_NODES; v++)
+        for (PetscInt d = 0; d < 3; d++) fprintf(fq, ",%.17g", v < p->nv ? (double)s->x[3 * fv[v] + d] : 0.0);
+      for (PetscInt v = 0; v < MBC_MAX_FACE_NODES; v++) fprintf(fq, ",%.17g", (double)p->w[v]);
+      for (PetscInt d = 0; d < 3; d++) fprintf(fq, ",%.17g", (double)p->p[d]);
+      for (PetscInt d = 0; d < 3; d++) fprintf(fq, ",%.17g", (double)p->n[d]);
+      for (PetscInt d = 0; d < 3; d++) fprintf(fq, ",%.17g", (double)p->t1[d]);
+      for (PetscInt d = 0; d < 3; d++) fprintf(fq, ",%.17g", (double)p->t2[d]);
+      fprintf(fq, ",%.17g\n", (double)p->gap);
+    }
+  }
+  fclose(fp);
+  fclose(fq);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCContactDestroy(MBCContact *contact)
+{
+  MBCContact c = *contact;
+
+  PetscFunctionBegin;
+  if (!c) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    PetscCall(MBCSurfaceReset(&c->couples[i].master));
+    PetscCall(MBCSurfaceReset(&c->couples[i].slave));
+    PetscCall(PetscFree(c->couples[i].pairs));
+    PetscCall(PetscFree(c->couples[i].points));
+  }
+  for (PetscInt b = 0; b < c->scene->nbodies; b++) PetscCall(VecDestroy(&c->usearch[b]));
+  PetscCall(PetscFree(c->usearch));
+  PetscCall(PetscFree(c->couples));
+  PetscCall(PetscFree(*contact));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,310 @@
+/* The contact search of the paper on gathered surfaces: averaged nodal normals, a cell grid
+   with a 1D key for the global search, projection along the nodal normal with an inside/outside
+   test and area coordinates for the local search. No nonlinear projection is solved. */
+#include <mbc/private/contactimpl.h>
+
+static inline void Sub(const PetscReal a[], const PetscReal b[], PetscReal c[])
+{
+  c[0] = a[0] - b[0];
+  c[1] = a[1] - b[1];
+  c[2] = a[2] - b[2];
+}
+static inline void Cross(const PetscReal a[], const PetscReal b[], PetscReal c[])
+{
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+static inline PetscReal Dot(const PetscReal a[], const PetscReal b[])
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline PetscReal Normalize(PetscReal a[])
+{
+  PetscReal n = PetscSqrtReal(Dot(a, a));
+  if (n > 0) a[0] /= n, a[1] /= n, a[2] /= n;
+  return n;
+}
+/* signed area of triangle (a, b, c) seen along the unit normal n */
+static inline PetscReal Area(const PetscReal a[], const PetscReal b[], const PetscReal c[], const PetscReal n[])
+{
+  PetscReal u[3], v[3], w[3];
+  Sub(b, a, u);
+  Sub(c, a, v);
+  Cross(u, v, w);
+  return 0.5 * Dot(w, n);
+}
+
+PetscErrorCode MBCSurfaceReset(MBCSurface *s)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree4(s->nbody, s->nrow, s->x0, s->x));
+  PetscCall(PetscFree(s->nnormal));
+  PetscCall(PetscFree3(s->fnv, s->fnode, s->fbody));
+  PetscCall(PetscFree2(s->fnormal, s->fcenter));
+  PetscCall(PetscFree2(s->n2foff, s->n2f));
+  PetscCall(PetscMemzero(s, sizeof(*s)));
+  PetscFunctionReturn(0);
+}
+
+/* Face normals (Newell), centres, node -> face map and averaged nodal normals (mean of the
+   unit normals of the faces around the node), from the current coordinates. */
+PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
+{
+  PetscInt *count;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree2(s->fnormal, s->fcenter));
+  PetscCall(PetscFree(s->nnormal));
+  PetscCall(PetscFree2(s->n2foff, s->n2f));
+  PetscCall(PetscCalloc2(3 * s->nfaces, &s->fnormal, 3 * s->nfaces, &s->fcenter));
+  PetscCall(PetscCalloc1(3 * s->nnodes, &s->nnormal));
+  for (PetscInt f = 0; f < s->nfaces; f++) {
+    const PetscInt  nv = s->fnv[f], *v = &s->fnode[MBC_MAX_FACE_NODES * f];
+    PetscReal      *n = &s->fnormal[3 * f], *c = &s->fcenter[3 * f];
+    for (PetscInt i = 0; i < nv; i++) {
+      const PetscReal *a = &s->x[3 * v[i]], *b = &s->x[3 * v[(i + 1) % nv]];
+      n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+      n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+      n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+      for (PetscInt d = 0; d < 3; d++) c[d] += a[d] / nv;
+    }
+    PetscCheck(Normalize(n) > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Contact face %" PetscInt_FMT " of body %" PetscInt_FMT " has zero area", f, s->fbody[f]);
+  }
+  PetscCall(PetscCalloc2(s->nnodes + 1, &s->n2foff, MBC_MAX_FACE_NODES * s->nfaces, &s->n2f));
+  for (PetscInt f = 0; f < s->nfaces; f++)
+    for (PetscInt i = 0; i < s->fnv[f]; i++) s->n2foff[s->fnode[MBC_MAX_FACE_NODES * f + i] + 1]++;
+  for (PetscInt v = 0; v < s->nnodes; v++) s->n2foff[v + 1] += s->n2foff[v];
+  PetscCall(PetscCalloc1(s->nnodes, &count));
+  for (PetscInt f = 0; f < s->nfaces; f++) {
+    for (PetscInt i = 0; i < s->fnv[f]; i++) {
+      const PetscInt v = s->fnode[MBC_MAX_FACE_NODES * f + i];
+      s->n2f[s->n2foff[v] + count[v]++] = f;
+      for (PetscInt d = 0; d < 3; d++) s->nnormal[3 * v + d] += s->fnormal[3 * f + d];
+    }
+  }
+  PetscCall(PetscFree(count));
+  for (PetscInt v = 0; v < s->nnodes; v++) Normalize(&s->nnormal[3 * v]);
+  PetscFunctionReturn(0);
+}
+
+typedef struct {
+  PetscInt64 key;
+  PetscInt   node;
+} KeyNode;
+
+static int CompareKeyNode(const void *a, const void *b)
+{
+  const KeyNode *x = (const KeyNode *)a, *y = (const KeyNode *)b;
+  if (x->key != y->key) return x->key < y->key ? -1 : 1;
+  return x->node < y->node ? -1 : (x->node > y->node);
+}
+
+/* first index in sorted keys with key >= k */
+static PetscInt LowerBound(const KeyNode *a, PetscInt n, PetscInt64 k)
+{
+  PetscInt lo = 0, hi = n;
+  while (lo < hi) {
+    PetscInt mid = (lo + hi) / 2;
+    if (a[mid].key < k) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+/* Global search: box of the couple enlarged by the margin, cubic cells of edge h numbered x
+   first, then y, then z; every master node takes the nearest slave nodes within h from its own
+   and the 26 neighbouring cells. Sorting the slave nodes by key costs N log N; the rest is linear. */
+PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscReal margin)
+{
+  MBCSurface *m = &c->master, *s = &c->slave;
+  PetscReal   hi[3], edges = 0;
+  PetscInt    nedges = 0;
+  PetscInt64  ncell[3];
+  KeyNode    *sk;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_GlobalSearch, 0, 0, 0, 0));
+  for (PetscInt side = 0; side < 2; side++) { /* mean edge length of the couple's faces */
+    MBCSurface *t = side ? s : m;
+    for (PetscInt f = 0; f < t->nfaces; f++)
+      for (PetscInt i = 0; i < t->fnv[f]; i++) {
+        PetscReal e[3];
+        Sub(&t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + i]], &t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + (i + 1) % t->fnv[f]]], e);
+        edges += PetscSqrtReal(Dot(e, e));
+        nedges++;
+      }
+  }
+  c->h      = cell_factor * edges / PetscMax(nedges, 1);
+  c->margin = margin > 0 ? margin : c->h;
+  for (PetscInt d = 0; d < 3; d++) {
+    c->lo[d] = PETSC_MAX_REAL;
+    hi[d]    = PETSC_MIN_REAL;
+  }
+  for (PetscInt side = 0; side < 2; side++) {
+    MBCSurface *t = side ? s : m;
+    for (PetscInt v = 0; v < t->nnodes; v++)
+      for (PetscInt d = 0; d < 3; d++) {
+        c->lo[d] = PetscMin(c->lo[d], t->x[3 * v + d]);
+        hi[d]    = PetscMax(hi[d], t->x[3 * v + d]);
+      }
+  }
+  for (PetscInt d = 0; d < 3; d++) {
+    c->lo[d] -= c->margin;
+    hi[d] += c->margin;
+    ncell[d] = (PetscInt64)PetscCeilReal((hi[d] - c->lo[d]) / c->h) + 1;
+  }
+#define CELL(x, d) ((PetscInt64)PetscFloorReal(((x) - c->lo[d]) / c->h))
+#define KEY(i, j, l) ((i) + ncell[0] * ((j) + ncell[1] * (l)))
+  PetscCall(PetscMalloc1(s->nnodes, &sk));
+  for (PetscInt v = 0; v < s->nnodes; v++) {
+    const PetscReal *x = &s->x[3 * v];
+    sk[v].key  = KEY(CELL(x[0], 0), CELL(x[1], 1), CELL(x[2], 2));
+    sk[v].node = v;
+  }
+  qsort(sk, (size_t)s->nnodes, sizeof(KeyNode), CompareKeyNode);
+  PetscCall(PetscFree(c->pairs));
+  PetscCall(PetscMalloc1(m->nnodes, &c->pairs));
+  c->npairs = 0;
+  for (PetscInt v = 0; v < m->nnodes; v++) {
+    const PetscReal *x = &m->x[3 * v];
+    const PetscInt64 ci = CELL(x[0], 0), cj = CELL(x[1], 1), cl = CELL(x[2], 2);
+    MBCTestPair     *p = &c->pairs[c->npairs];
+    PetscReal        dist[MBC_SEARCH_CANDIDATES];
+
+    p->master = v;
+    p->ncand  = 0;
+    for (PetscInt64 dl = -1; dl <= 1; dl++)
+      for (PetscInt64 dj = -1; dj <= 1; dj++) {
+        /* cells (ci-1..ci+1, cj+dj, cl+dl) are consecutive keys */
+        const PetscInt64 k0 = KEY(ci - 1, cj + dj, cl + dl);
+        if (cj + dj < 0 || cl + dl < 0) continue;
+        for (PetscInt i = LowerBound(sk, s->nnodes, k0); i < s->nnodes && sk[i].key <= k0 + 2; i++) {
+          PetscReal e[3], d;
+          PetscInt  at;
+          Sub(&s->x[3 * sk[i].node], x, e);
+          d = PetscSqrtReal(Dot(e, e));
+          if (d > c->h) continue;
+          /* insert into the sorted candidate list (distance, then canonical index) */
+          for (at = p->ncand; at > 0 && (dist[at - 1] > d || (dist[at - 1] == d && p->cand[at - 1] > sk[i].node)); at--) { }
+          if (at >= MBC_SEARCH_CANDIDATES) continue;
+          for (PetscInt j = PetscMin(p->ncand, MBC_SEARCH_CANDIDATES - 1); j > at; j--) {
+            dist[j]    = dist[j - 1];
+            p->cand[j] = p->cand[j - 1];
+          }
+          dist[at]    = d;
+          p->cand[at] = sk[i].node;
+          p->ncand    = PetscMin(p->ncand + 1, MBC_SEARCH_CANDIDATES);
+        }
+      }
+    if (p->ncand) {
+      p->distance = dist[0];
+      c->npairs++;
+    }
+  }
+#undef KEY
+#undef CELL
+  PetscCall(PetscFree(sk));
+  PetscCall(PetscLogEventEnd(MBC_GlobalSearch, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* Projects master node v along its averaged normal onto slave face f; returns PETSC_TRUE and
+   the contact point when the face opposes the node and the projection falls inside it. */
+static PetscBool ProjectOnFace(MBCCouple *c, PetscInt v, PetscInt f, MBCContactPoint *cp, PetscReal *quality)
+{
+  MBCSurface      *m = &c->master, *s = &c->slave;
+  const PetscReal *xm = &m->x[3 * v], *nm = &m->nnormal[3 * v], *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
+  const PetscInt   nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
+  const PetscReal  cosang = Dot(nm, nf);
+  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wsum = 0, wmin = PETSC_MAX_REAL;
+
+  if (!(cosang < 0)) return PETSC_FALSE; /* the face must face the node */
+  Sub(cf, xm, e);
+  t = Dot(e, nf) / cosang;
+  for (PetscInt d = 0; d < 3; d++) p[d] = xm[d] + t * nm[d];
+  /* inside/outside: the sub-triangles (p, x_i, x_i+1) all turn like the face */
+  for (PetscInt i = 0; i < nv; i++) {
+    const PetscReal *a = &s->x[3 * fv[i]], *b = &s->x[3 * fv[(i + 1) % nv]];
+    PetscReal        ab[3];
+    sub[i] = Area(p, a, b, nf);
+    Sub(b, a, ab);
+    if (sub[i] < -1e-10 * Dot(ab, ab)) return PETSC_FALSE;
+  }
+  cp->nv = nv;
+  if (nv == 3) { /* area coordinates */
+    for (PetscInt i = 0; i < 3; i++) area += sub[i];
+    for (PetscInt i = 0; i < 3; i++) cp->w[i] = sub[(i + 1) % 3] / area;
+    cp->w[3] = 0;
+  } else { /* Wachspress coordinates from the four sub-areas: bilinear on parallelograms */
+    for (PetscInt i = 0; i < 4; i++) {
+      const PetscReal Ci = Area(&s->x[3 * fv[(i + 3) % 4]], &s->x[3 * fv[i]], &s->x[3 * fv[(i + 1) % 4]], nf);
+      cp->w[i]           = Ci * PetscMax(sub[(i + 1) % 4], 0) * PetscMax(sub[(i + 2) % 4], 0);
+      wsum += cp->w[i];
+    }
+    if (!(wsum > 0)) return PETSC_FALSE;
+    for (PetscInt i = 0; i < 4; i++) cp->w[i] /= wsum;
+  }
+  for (PetscInt i = 0; i < nv; i++) wmin = PetscMin(wmin, cp->w[i]);
+  cp->master = v;
+  cp->face   = f;
+  for (PetscInt d = 0; d < 3; d++) {
+    cp->p[d] = p[d];
+    cp->n[d] = nf[d];
+  }
+  Sub(xm, p, e);
+  cp->gap  = Dot(e, nf);
+  *quality = wmin;
+  return PETSC_TRUE;
+}
+
+/* Tangents: t1 = e x n with e the axis least aligned with n, t2 = n x t1. */
+static void Frame(MBCContactPoint *cp)
+{
+  PetscReal e[3] = {0, 0, 0};
+  PetscInt  a    = 0;
+  for (PetscInt d = 1; d < 3; d++)
+    if (PetscAbsReal(cp->n[d]) < PetscAbsReal(cp->n[a])) a = d;
+  e[a] = 1;
+  Cross(e, cp->n, cp->t1);
+  Normalize(cp->t1);
+  Cross(cp->n, cp->t1, cp->t2);
+}
+
+/* Local search: for every test pair, the faces around the partner slave node (then around the
+   next candidates while none accepts); the accepting face with the largest smallest weight wins,
+   so a point on a shared edge or vertex is assigned once. */
+PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
+{
+  MBCSurface *s = &c->slave;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_LocalSearch, 0, 0, 0, 0));
+  PetscCall(PetscFree(c->points));
+  PetscCall(PetscMalloc1(c->npairs, &c->points));
+  c->npoints = 0;
+  c->ntests  = 0;
+  for (PetscInt i = 0; i < c->npairs; i++) {
+    const MBCTestPair *pair = &c->pairs[i];
+    MBCContactPoint    best, cp;
+    PetscReal          bestq = -PETSC_MAX_REAL, q;
+    PetscBool          found = PETSC_FALSE;
+
+    for (PetscInt j = 0; j < pair->ncand && !found; j++) {
+      const PetscInt node = pair->cand[j];
+      for (PetscInt k = s->n2foff[node]; k < s->n2foff[node + 1]; k++) {
+        c->ntests++;
+        if (ProjectOnFace(c, pair->master, s->n2f[k], &cp, &q) && (q > bestq || (q == bestq && cp.face < best.face))) {
+          best  = cp;
+          bestq = q;
+          found = PETSC_TRUE;
+        }
+      }
+    }
+    if (!found || best.gap < -c->h) continue;
+    Frame(&best);
+    c->points[c->npoints++] = best;
+  }
+  PetscCall(PetscLogEventEnd(MBC_LocalSearch, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
