@@ -137,3 +137,18 @@ def test_help_without_scene_lists_options():
     assert r.returncode == 0, r.stderr
     for option in ("-mbc_analysis", "-mbc_dt", "-mbc_monitor", "-mbc_output"):
         assert option in r.stdout
+
+
+def test_couple_without_faces_in_the_meshes(tmp_path):
+    """A couple whose real constant matches no labelled face (a hand-edited scene file): the
+    solver names k and the surfaces instead of searching nothing."""
+    meshgen.boxes(tmp_path / "m.msh", [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(1, 1, 1), cell="hex8", name="b1"),
+                                       dict(lo=(0, 0, 1), hi=(1, 1, 2), n=(1, 1, 1), cell="hex8", name="b2")])
+    scene = {
+        "meshes": {"m": "m.msh"},
+        "bodies": {b: {"mesh": "m", "regions": [b], "material": {"E": 1e9, "nu": 0.2}} for b in ("b1", "b2")},
+        "couples": [{"k": 1, "master": "b2_zmin", "slave": "b1_zmax", "mu": 0.5}],
+    }
+    h5 = prep(tmp_path, scene)
+    edit(h5, "mbcontact/couples/0", "k", 7)
+    expect_error(h5, "k = 7", "b2_zmin", options=("-mbc_contact_search_only",))
