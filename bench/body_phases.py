@@ -21,6 +21,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 from mbcontact import meshgen  # noqa: E402
 
+import plot  # noqa: E402  (bench/plot.py)
+
 EVENTS = ("MBCBodyLoad", "MBCBodyAssemble", "MBCBodyFactor", "MBCBodySolve", "MBCOutput")
 
 
@@ -70,25 +72,10 @@ def main():
             rows.append((dofs, wall, peak, t))
             print(f"{dofs:9d} {t.get('MBCBodyLoad', 0):9.3f} {t.get('MBCBodyAssemble', 0):9.3f} {t.get('MBCBodyFactor', 0):9.3f} "
                   f"{t.get('MBCBodySolve', 0) / (a.steps + 1):11.5f} {t.get('MBCOutput', 0):9.3f} {wall:8.2f} {peak:13.0f}", flush=True)
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        dofs = [r[0] for r in rows]
-        fig, ax = plt.subplots(figsize=(6, 4))
-        for ev, label in (("MBCBodyAssemble", "assembly"), ("MBCBodyFactor", "factorization + mass CG"), ("MBCBodySolve", "all solves")):
-            ax.loglog(dofs, [r[3].get(ev, 0) for r in rows], "o-", label=label)
-        ax.set_xlabel("DOFs")
-        ax.set_ylabel("time [s]")
-        ax.set_title(f"one body, {a.cell}, {a.steps} steps, {a.solver}")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend()
-        fig.tight_layout()
-        fig.savefig(a.plot, dpi=100)
-        print(f"\nplot: {a.plot}")
-    except ImportError:
-        pass
-
+    dofs = [r[0] for r in rows]
+    plot.loglog(a.plot, f"one body, {a.cell}, {a.steps} steps, {a.solver}", "DOFs",
+                [(dofs, [r[3].get(ev, 0) for r in rows], "o-", label)
+                 for ev, label in (("MBCBodyAssemble", "assembly"), ("MBCBodyFactor", "factorization + mass CG"), ("MBCBodySolve", "all solves"))])
 
 if __name__ == "__main__":
     main()

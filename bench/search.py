@@ -16,6 +16,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import plot  # noqa: E402  (bench/plot.py)
 
 
 def brute_force(master, slave, chunk=2000):
@@ -64,28 +66,13 @@ def main():
         print(f"{n:9d} {g:11.4f} {l:10.4f} {t:10.4f} {n / t:10.3e} {k:12.4f} {b:10.4f} {p:9d}")
     print("\nmbcontact = global + local search (the local search projects onto faces: the KD-tree and the")
     print("brute force only find the nearest node). Brute force only up to --brute-max nodes (O(N M)).")
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        n = np.array([r[0] for r in rows])
-        fig, ax = plt.subplots(figsize=(6, 4))
-        ax.loglog(n, [r[3] for r in rows], "o-", label="mbcontact global + local")
-        ax.loglog(n, [r[4] for r in rows], "s-", label="cKDTree (nearest node only)")
-        bf = [(r[0], r[5]) for r in rows if r[5] == r[5]]
-        if bf:
-            ax.loglog(*zip(*bf), "^-", label="brute force O(N M)")
-        ax.loglog(n, n / 2e6, "k:", label="linear, 2e6 nodes/s")
-        ax.set_xlabel("surface nodes")
-        ax.set_ylabel("time [s]")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend()
-        fig.tight_layout()
-        fig.savefig(a.plot, dpi=100)
-        print(f"plot: {a.plot}")
-    except ImportError:
-        pass
-
+    n = np.array([r[0] for r in rows])
+    bf = [(r[0], r[5]) for r in rows if r[5] == r[5]]
+    plot.loglog(a.plot, None, "surface nodes",
+                [(n, [r[3] for r in rows], "o-", "mbcontact global + local"),
+                 (n, [r[4] for r in rows], "s-", "cKDTree (nearest node only)"),
+                 (*zip(*bf), "^-", "brute force O(N M)"),
+                 (n, n / 2e6, "k:", "linear, 2e6 nodes/s")])
 
 if __name__ == "__main__":
     sys.exit(main())

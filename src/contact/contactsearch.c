@@ -112,13 +112,14 @@ static PetscInt LowerBound(const KeyNode *a, PetscInt n, PetscInt64 k)
   return lo;
 }
 
-/* Global search: box of the couple enlarged by the margin, cubic cells of edge h numbered x
+/* Global search: box of the couple enlarged by the margin, cubic cells of edge h (the cell factor
+   times the larger of the mean face edge and the longest slave face edge) numbered x
    first, then y, then z; every master node takes the nearest slave nodes within h from its own
    and the 26 neighbouring cells. Sorting the slave nodes by key costs N log N; the rest is linear. */
 PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscReal margin)
 {
   MBCSurface *m = &c->master, *s = &c->slave;
-  PetscReal   hi[3], edges = 0;
+  PetscReal   hi[3], edges = 0, longest = 0;
   PetscInt    nedges = 0;
   PetscInt64  ncell[3];
   KeyNode    *sk;
@@ -133,9 +134,12 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
         Sub(&t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + i]], &t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + (i + 1) % t->fnv[f]]], e);
         edges += PetscSqrtReal(Dot(e, e));
         nedges++;
+        if (side) longest = PetscMax(longest, PetscSqrtReal(Dot(e, e)));
       }
   }
-  c->h      = cell_factor * edges / PetscMax(nedges, 1);
+  /* every point of a slave face lies within its longest edge of one of its vertices: with
+     cells at least that big, a master node over a large slave face always finds a partner */
+  c->h      = cell_factor * PetscMax(edges / PetscMax(nedges, 1), longest);
   c->margin = margin > 0 ? margin : c->h;
   for (PetscInt d = 0; d < 3; d++) {
     c->lo[d] = PETSC_MAX_REAL;

@@ -463,13 +463,12 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
   PetscCall(MBCSceneView(s->scene, viewer));
   PetscCall(PetscViewerASCIIPrintf(viewer, "%s analysis: dt %g, %" PetscInt_FMT " steps to t = %g\n", MBCAnalysisTypes[s->analysis], (double)s->dt, s->nsteps, (double)s->final_time));
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    PetscInt ndof = -1, nbc = 0;
+    const PetscInt ndof = 3 * s->scene->bodies[b].num_vertices; /* P1/Q1 displacement */
+    PetscInt       nbc  = 0;
     if (s->bodies[b]) {
-      PetscCall(VecGetSize(s->bodies[b]->u, &ndof));
       nbc = s->bodies[b]->nbc;
       PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_SUM, s->bodies[b]->comm));
     }
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &ndof, 1, MPIU_INT, MPI_MAX, s->comm));
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_MAX, s->comm));
     PetscCall(PetscViewerASCIIPrintf(viewer, "  body %s: ranks %d-%d, %" PetscInt_FMT " DOFs, %" PetscInt_FMT " prescribed\n", s->scene->bodies[b].name, s->body_first_rank[b], s->body_first_rank[b] + s->body_nranks[b] - 1, ndof, nbc));
   }
