@@ -1,5 +1,6 @@
 /* Package registration: log events so -log_view shows where the time goes. */
 #include <mbc/private/contactimpl.h>
+#include <mbc/private/pgsimpl.h>
 
 PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;
 
@@ -22,5 +23,6 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCContactGather", classid, &MBC_ContactGather));
   PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
+  PetscCall(PetscLogEventRegister("MBCPGSSolve", classid, &MBC_PGSSolve));
   PetscFunctionReturn(0);
 }

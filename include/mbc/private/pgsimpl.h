@@ -1,0 +1,40 @@
+/* Private: the frictional contact problem u = W r + q (FCLIB "local" form, contacts as 3-blocks
+   normal, tangent 1, tangent 2; in mbcontact W = D, q = -Q) and its projected Gauss-Seidel. */
+#pragma once
+
+#include <mbcontact.h>
+
+typedef struct {
+  PetscInt   nc;   /* contacts */
+  Mat        W;    /* 3nc x 3nc, SeqAIJ */
+  Vec        q;
+  PetscReal *mu;
+  char       title[256];
+} MBCFrictionProblem;
+
+typedef enum {
+  MBC_PGS_ITERATING       = 0,
+  MBC_PGS_CONVERGED_RTOL  = 1,
+  MBC_PGS_DIVERGED_ITS    = -1,
+  MBC_PGS_DIVERGED_NANORINF = -2
+} MBCPGSReason;
+
+typedef struct {
+  PetscReal    rtol, omega;
+  PetscInt     max_it, its;
+  PetscBool    monitor;
+  MBCPGSReason reason;
+  PetscReal    error;          /* FCLIB merit at exit */
+  PetscLogDouble time;
+} MBCPGS;
+
+PETSC_EXTERN PetscLogEvent MBC_PGSSolve;
+
+PETSC_EXTERN PetscErrorCode MBCPGSSetFromOptions(MBCPGS *);
+PETSC_EXTERN PetscErrorCode MBCPGSSolve(MBCPGS *, MBCFrictionProblem *, Vec, Vec);
+PETSC_EXTERN PetscErrorCode MBCFrictionError(MBCFrictionProblem *, Vec, Vec, PetscReal *);
+PETSC_EXTERN PetscErrorCode MBCContactLocalSolve(const PetscReal[9], const PetscReal[3], PetscReal, PetscReal[3]);
+PETSC_EXTERN PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *);
+PETSC_EXTERN PetscErrorCode MBCFclibRead(const char[], MBCFrictionProblem *, PetscBool *);
+PETSC_EXTERN PetscErrorCode MBCFclibWriteLocal(const char[], MBCFrictionProblem *, Vec, Vec);
+PETSC_EXTERN const char *MBCPGSReasonName(MBCPGSReason);

@@ -1,0 +1,243 @@
+/* Projected Gauss-Seidel for u = W r + q, r in the Coulomb cone K (|r_t| <= mu r_n), with the
+   De Saxce complementarity K* ∋ u + mu |u_t| e_n ⟂ r. Each contact's 3x3 problem, with the
+   other contacts' current r on the right side, is solved exactly (separation, stick, or slip
+   found by a 1D root search over the slip direction), so normal-tangent coupling of the
+   diagonal block is honoured: no solve-then-clamp. */
+#include <mbc/private/pgsimpl.h>
+#include <petscblaslapack.h>
+
+PetscLogEvent MBC_PGSSolve;
+
+const char *MBCPGSReasonName(MBCPGSReason r)
+{
+  switch (r) {
+  case MBC_PGS_CONVERGED_RTOL:
+    return "CONVERGED_RTOL";
+  case MBC_PGS_DIVERGED_ITS:
+    return "DIVERGED_ITS";
+  case MBC_PGS_DIVERGED_NANORINF:
+    return "DIVERGED_NANORINF";
+  default:
+    return "ITERATING";
+  }
+}
+
+/* Projection onto K_mu = {|x_t| <= mu x_n}. */
+static void ProjectCone(const PetscReal x[3], PetscReal mu, PetscReal p[3])
+{
+  const PetscReal t = PetscSqrtReal(x[1] * x[1] + x[2] * x[2]);
+  if (t <= mu * x[0]) {
+    p[0] = x[0], p[1] = x[1], p[2] = x[2];
+  } else if (mu * t <= -x[0]) {
+    p[0] = p[1] = p[2] = 0;
+  } else {
+    const PetscReal a = (x[0] + mu * t) / (1 + mu * mu);
+    p[0] = a;
+    p[1] = mu * a * x[1] / t;
+    p[2] = mu * a * x[2] / t;
+  }
+}
+
+/* Natural-map residual of one contact with De Saxce's modified velocity. */
+static PetscReal ContactResidual2(const PetscReal r[3], const PetscReal u[3], PetscReal mu)
+{
+  const PetscReal ut = PetscSqrtReal(u[1] * u[1] + u[2] * u[2]);
+  PetscReal       x[3], p[3], e = 0;
+  x[0] = r[0] - (u[0] + mu * ut);
+  x[1] = r[1] - u[1];
+  x[2] = r[2] - u[2];
+  ProjectCone(x, mu, p);
+  for (int d = 0; d < 3; d++) e += (r[d] - p[d]) * (r[d] - p[d]);
+  return e;
+}
+
+/* FCLIB merit: sqrt(sum over contacts of |r - proj_K(r - (u + mu |u_t| e_n))|^2) / (1 + |q|). */
+PetscErrorCode MBCFrictionError(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal *error)
+{
+  const PetscScalar *rv, *uv;
+  PetscReal          e = 0, qn;
+
+  PetscFunctionBegin;
+  PetscCall(MatMult(fp->W, r, u));
+  PetscCall(VecAXPY(u, 1.0, fp->q));
+  PetscCall(VecGetArrayRead(r, &rv));
+  PetscCall(VecGetArrayRead(u, &uv));
+  for (PetscInt i = 0; i < fp->nc; i++) e += ContactResidual2(&rv[3 * i], &uv[3 * i], fp->mu[i]);
+  PetscCall(VecRestoreArrayRead(u, &uv));
+  PetscCall(VecRestoreArrayRead(r, &rv));
+  PetscCall(VecNorm(fp->q, NORM_2, &qn));
+  *error = PetscSqrtReal(e) / (1 + qn);
+  PetscFunctionReturn(0);
+}
+
+/* Slip: r = rn (1, mu cos f, mu sin f) with u_n = 0 gives rn(f) = -b_n / den(f); the tangential
+   velocity must point against the friction direction d(f): u_t(f) x d(f) = 0, u_t . d <= 0.
+   Multiplied by den, G(f) = den u_t x d = ((-b_n A_tn + A_nn b_t) + M d) x d is a trigonometric
+   polynomial of degree 2 (at most 4 roots) without the poles of rn: sign changes bracket them. */
+static PetscReal SlipResidual(const PetscReal A[9], const PetscReal b[3], PetscReal mu, PetscReal f, PetscReal r[3], PetscReal *along, PetscReal *den)
+{
+  const PetscReal c = PetscCosReal(f), s = PetscSinReal(f);
+  PetscReal       w[2]; /* den * u_t */
+  *den = A[0] + mu * (A[1] * c + A[2] * s);
+  w[0] = -b[0] * (A[3] + mu * (A[4] * c + A[5] * s)) + *den * b[1];
+  w[1] = -b[0] * (A[6] + mu * (A[7] * c + A[8] * s)) + *den * b[2];
+  r[0] = -b[0] / *den, r[1] = mu * r[0] * c, r[2] = mu * r[0] * s;
+  *along = (w[0] * c + w[1] * s) / *den; /* u_t . d */
+  return w[0] * s - w[1] * c;
+}
+
+/* Exact solution of one contact: u = A r + b (A row-major 3x3, the diagonal block of W). */
+PetscErrorCode MBCContactLocalSolve(const PetscReal A[9], const PetscReal b[3], PetscReal mu, PetscReal r[3])
+{
+  PetscReal Ai[9], det;
+
+  PetscFunctionBegin;
+  if (b[0] >= 0) { /* separation */
+    r[0] = r[1] = r[2] = 0;
+    PetscFunctionReturn(0);
+  }
+  if (mu == 0) { /* frictionless: only the normal component */
+    r[0] = -b[0] / A[0];
+    r[1] = r[2] = 0;
+    PetscFunctionReturn(0);
+  }
+  r[0] = r[1] = r[2] = 0;
+  det = A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) + A[2] * (A[3] * A[7] - A[4] * A[6]);
+  if (det != 0) { /* stick: u = 0 */
+    Ai[0] = (A[4] * A[8] - A[5] * A[7]) / det, Ai[1] = (A[2] * A[7] - A[1] * A[8]) / det, Ai[2] = (A[1] * A[5] - A[2] * A[4]) / det;
+    Ai[3] = (A[5] * A[6] - A[3] * A[8]) / det, Ai[4] = (A[0] * A[8] - A[2] * A[6]) / det, Ai[5] = (A[2] * A[3] - A[0] * A[5]) / det;
+    Ai[6] = (A[3] * A[7] - A[4] * A[6]) / det, Ai[7] = (A[1] * A[6] - A[0] * A[7]) / det, Ai[8] = (A[0] * A[4] - A[1] * A[3]) / det;
+    for (int i = 0; i < 3; i++) r[i] = -(Ai[3 * i] * b[0] + Ai[3 * i + 1] * b[1] + Ai[3 * i + 2] * b[2]);
+    if (r[0] >= 0 && PetscSqrtReal(r[1] * r[1] + r[2] * r[2]) <= mu * r[0] * (1 + 1e-14)) PetscFunctionReturn(0);
+  }
+  { /* slip: sample G over the direction, bisect its sign changes, keep valid roots (den > 0,
+       u_t . d <= 0); among several, the one whose friction force is closest to the stick trial's */
+    const int N = 72;
+    PetscReal best[3] = {0, 0, 0}, bestScore = PETSC_MAX_REAL, f0 = 0, G0, along, den, rr[3];
+    G0 = SlipResidual(A, b, mu, f0, rr, &along, &den);
+    for (int k = 1; k <= N; k++) {
+      PetscReal f1 = 2 * PETSC_PI * k / N, G1 = SlipResidual(A, b, mu, f1, rr, &along, &den);
+      if ((G0 <= 0 && G1 >= 0) || (G0 >= 0 && G1 <= 0)) {
+        PetscReal lo = f0, hi = f1, Glo = G0, fm = f0;
+        for (int it = 0; it < 200 && hi - lo > 4 * PETSC_MACHINE_EPSILON; it++) {
+          PetscReal Gm;
+          fm = 0.5 * (lo + hi);
+          Gm = SlipResidual(A, b, mu, fm, rr, &along, &den);
+          if ((Glo <= 0 && Gm <= 0) || (Glo >= 0 && Gm >= 0)) lo = fm, Glo = Gm;
+          else hi = fm;
+        }
+        (void)SlipResidual(A, b, mu, fm, rr, &along, &den);
+        if (den > 0 && along <= 0) {
+          const PetscReal score = PetscSqr(rr[1] - r[1]) + PetscSqr(rr[2] - r[2]);
+          if (score < bestScore) {
+            bestScore = score;
+            best[0] = rr[0], best[1] = rr[1], best[2] = rr[2];
+          }
+        }
+      }
+      f0 = f1, G0 = G1;
+    }
+    if (bestScore < PETSC_MAX_REAL) {
+      r[0] = best[0], r[1] = best[1], r[2] = best[2];
+      PetscFunctionReturn(0);
+    }
+  }
+  /* no exact slip state (a singular or strongly non-symmetric block): projected fixed point */
+  {
+    PetscReal rho = 1.0 / PetscMax(PetscMax(A[0], A[4]), A[8]), x[3], u[3];
+    for (int it = 0; it < 200; it++) {
+      for (int i = 0; i < 3; i++) u[i] = A[3 * i] * r[0] + A[3 * i + 1] * r[1] + A[3 * i + 2] * r[2] + b[i];
+      x[0] = r[0] - rho * (u[0] + mu * PetscSqrtReal(u[1] * u[1] + u[2] * u[2]));
+      x[1] = r[1] - rho * u[1];
+      x[2] = r[2] - rho * u[2];
+      ProjectCone(x, mu, r);
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
+{
+  PetscFunctionBegin;
+  pgs->rtol   = 1e-8;
+  pgs->omega  = 1.0;
+  pgs->max_it = 1000;
+  PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Projected Gauss-Seidel for the contact multipliers", "MBCPGS");
+  PetscCall(PetscOptionsReal("-mbc_pgs_rtol", "Tolerance on the FCLIB merit", "MBCPGSSetFromOptions", pgs->rtol, &pgs->rtol, NULL));
+  PetscCall(PetscOptionsInt("-mbc_pgs_max_it", "Maximum sweeps", "MBCPGSSetFromOptions", pgs->max_it, &pgs->max_it, NULL));
+  PetscCall(PetscOptionsReal("-mbc_pgs_omega", "Relaxation factor (0, 2)", "MBCPGSSetFromOptions", pgs->omega, &pgs->omega, NULL));
+  PetscCall(PetscOptionsBool("-mbc_pgs_monitor", "Print the merit every sweep", "MBCPGSSetFromOptions", pgs->monitor, &pgs->monitor, NULL));
+  PetscOptionsEnd();
+  PetscCheck(pgs->rtol > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_rtol %g must be positive", (double)pgs->rtol);
+  PetscCheck(pgs->max_it > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_max_it %" PetscInt_FMT " must be positive", pgs->max_it);
+  PetscCheck(pgs->omega > 0 && pgs->omega < 2, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_omega %g must lie in (0, 2)", (double)pgs->omega);
+  PetscFunctionReturn(0);
+}
+
+/* Sweeps over the contacts in order; r holds the warm start on entry, the solution on exit;
+   u = W r + q. Stops when the merit falls below rtol. */
+PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
+{
+  PetscReal     *diag, *rv;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_PGSSolve, 0, 0, 0, 0));
+  PetscCall(PetscTime(&t0));
+  PetscCall(PetscMalloc1(9 * fp->nc, &diag));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt idx[3] = {3 * i, 3 * i + 1, 3 * i + 2};
+    PetscScalar    v[9];
+    PetscCall(MatGetValues(fp->W, 3, idx, 3, idx, v));
+    for (int k = 0; k < 9; k++) diag[9 * i + k] = PetscRealPart(v[k]);
+  }
+  pgs->reason = MBC_PGS_ITERATING;
+  for (pgs->its = 0; pgs->reason == MBC_PGS_ITERATING; pgs->its++) {
+    const PetscScalar *qv;
+    PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
+    if (pgs->monitor) PetscCall(PetscPrintf(PETSC_COMM_SELF, "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
+    if (PetscIsInfOrNanReal(pgs->error)) pgs->reason = MBC_PGS_DIVERGED_NANORINF;
+    else if (pgs->error < pgs->rtol) pgs->reason = MBC_PGS_CONVERGED_RTOL;
+    else if (pgs->its >= pgs->max_it) pgs->reason = MBC_PGS_DIVERGED_ITS;
+    if (pgs->reason != MBC_PGS_ITERATING) break;
+    PetscCall(VecGetArray(r, &rv));
+    PetscCall(VecGetArrayRead(fp->q, &qv));
+    for (PetscInt i = 0; i < fp->nc; i++) {
+      PetscReal b[3], rnew[3];
+      for (int d = 0; d < 3; d++) { /* b = q_i + (W r)_i - W_ii r_i */
+        const PetscInt     row = 3 * i + d;
+        PetscInt           ncols;
+        const PetscInt    *cols;
+        const PetscScalar *vals;
+        b[d] = PetscRealPart(qv[row]);
+        PetscCall(MatGetRow(fp->W, row, &ncols, &cols, &vals));
+        for (PetscInt k = 0; k < ncols; k++) b[d] += PetscRealPart(vals[k]) * rv[cols[k]];
+        PetscCall(MatRestoreRow(fp->W, row, &ncols, &cols, &vals));
+        for (int e = 0; e < 3; e++) b[d] -= diag[9 * i + 3 * d + e] * rv[3 * i + e];
+      }
+      PetscCall(MBCContactLocalSolve(&diag[9 * i], b, fp->mu[i], rnew));
+      if (pgs->omega != 1) { /* over-relaxation may leave the cone: project back */
+        PetscReal x[3];
+        for (int d = 0; d < 3; d++) x[d] = pgs->omega * rnew[d] + (1 - pgs->omega) * rv[3 * i + d];
+        ProjectCone(x, fp->mu[i], rnew);
+      }
+      for (int d = 0; d < 3; d++) rv[3 * i + d] = rnew[d];
+    }
+    PetscCall(VecRestoreArrayRead(fp->q, &qv));
+    PetscCall(VecRestoreArray(r, &rv));
+  }
+  PetscCall(PetscFree(diag));
+  PetscCall(PetscTime(&t1));
+  pgs->time = t1 - t0;
+  PetscCall(PetscLogEventEnd(MBC_PGSSolve, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *fp)
+{
+  PetscFunctionBegin;
+  PetscCall(MatDestroy(&fp->W));
+  PetscCall(VecDestroy(&fp->q));
+  PetscCall(PetscFree(fp->mu));
+  PetscFunctionReturn(0);
+}
