@@ -40,6 +40,8 @@ static PetscErrorCode RunFclib(const char *file, PetscBool *converged)
   PetscCall(VecDuplicate(fp.q, &r));
   PetscCall(VecDuplicate(fp.q, &u));
   PetscCall(VecZeroEntries(r));
+  PetscCall(PetscOptionsHasName(NULL, NULL, "-fclib_warm_start", &set));
+  if (set) PetscCall(MBCFclibReadSolution(file, r));
   PetscCall(MBCPGSSolve(&pgs, &fp, r, u));
   PetscCall(PetscPrintf(PETSC_COMM_SELF, "FCLIB %s: %s problem, %" PetscInt_FMT " contacts\n", file, global ? "global (condensed to local)" : "local", fp.nc));
   PetscCall(PetscPrintf(PETSC_COMM_SELF, "PGS %s in %" PetscInt_FMT " sweeps, %.4g s, FCLIB error %.6e (rtol %.1e)\n", MBCPGSReasonName(pgs.reason), pgs.its, (double)pgs.time, (double)pgs.error, (double)pgs.rtol));

@@ -282,3 +282,24 @@ PetscErrorCode MBCFclibWriteLocal(const char file[], MBCFrictionProblem *fp, Vec
   PetscCall(PetscFree3(p, ix, x));
   PetscFunctionReturn(0);
 }
+
+/* r from /solution/r of an FCLIB file (a warm start). */
+PetscErrorCode MBCFclibReadSolution(const char file[], Vec r)
+{
+  hid_t        h5;
+  hsize_t      n;
+  PetscInt     len;
+  PetscScalar *a;
+
+  PetscFunctionBegin;
+  h5 = H5Fopen(file, H5F_ACC_RDONLY, H5P_DEFAULT);
+  PetscCheck(h5 >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot open FCLIB file %s", file);
+  PetscCall(H5ReadArray(h5, file, "solution/r", H5T_NATIVE_DOUBLE, NULL, &n));
+  PetscCall(VecGetSize(r, &len));
+  PetscCheck((PetscInt)n == len, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: solution/r has %llu entries, expected %" PetscInt_FMT, file, (unsigned long long)n, len);
+  PetscCall(VecGetArray(r, &a));
+  PetscCall(H5ReadArray(h5, file, "solution/r", H5T_NATIVE_DOUBLE, a, &n));
+  PetscCall(VecRestoreArray(r, &a));
+  H5Fclose(h5);
+  PetscFunctionReturn(0);
+}

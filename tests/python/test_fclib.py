@@ -86,11 +86,18 @@ def test_round_trip_and_independent_merit(tmp_path, name):
         r, u = f["solution/r"][...], f["solution/u"][...]
     assert np.abs(W1 @ r + q1 - u).max() <= 1e-12 * (1 + np.abs(u).max())
     e = merit(W1, q1, mu1, r)
-    assert e == pytest.approx(reported_error(res.stdout), rel=1e-6, abs=1e-15)
+    # r - proj_K(...) cancels: the merit is only known to ~ eps |r|_max per contact (|r| reaches
+    # 6e4 against a residual of 4e-9 on the LMGC problem), so compare within that bound
+    rounding = 100 * np.finfo(float).eps * np.abs(r).max() * np.sqrt(len(mu1)) / (1 + np.linalg.norm(q1))
+    assert abs(e - reported_error(res.stdout)) <= max(rounding, 1e-6 * e)
     # reading the written file back: the same problem, the same iterations and error
     again = subprocess.run([SOLVER, "-fclib", str(out), "-mbc_pgs_max_it", "3000"], capture_output=True, text=True, env=env())
     assert again.returncode == res.returncode
-    assert reported_error(again.stdout) == pytest.approx(reported_error(res.stdout), rel=1e-8, abs=1e-15)
+    assert reported_error(again.stdout) == pytest.approx(reported_error(res.stdout), rel=1e-6, abs=1e-15)
+    # warm-started from its own solution, a converged problem needs no sweep
+    if res.returncode == 0:
+        warm = run("-fclib", out, "-fclib_warm_start")
+        assert "in 0 sweeps" in warm.stdout
 
 
 def test_converges_on_capsules(tmp_path):

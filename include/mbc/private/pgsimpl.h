@@ -36,5 +36,6 @@ PETSC_EXTERN PetscErrorCode MBCFrictionError(MBCFrictionProblem *, Vec, Vec, Pet
 PETSC_EXTERN PetscErrorCode MBCContactLocalSolve(const PetscReal[9], const PetscReal[3], PetscReal, PetscReal[3]);
 PETSC_EXTERN PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *);
 PETSC_EXTERN PetscErrorCode MBCFclibRead(const char[], MBCFrictionProblem *, PetscBool *);
+PETSC_EXTERN PetscErrorCode MBCFclibReadSolution(const char[], Vec);
 PETSC_EXTERN PetscErrorCode MBCFclibWriteLocal(const char[], MBCFrictionProblem *, Vec, Vec);
 PETSC_EXTERN const char *MBCPGSReasonName(MBCPGSReason);
