@@ -233,7 +233,7 @@ static PetscBool ProjectOnFace(MBCCouple *c, PetscInt v, PetscInt f, MBCContactP
     PetscReal        ab[3];
     sub[i] = Area(p, a, b, nf);
     Sub(b, a, ab);
-    if (sub[i] < -1e-10 * Dot(ab, ab)) return PETSC_FALSE;
+    if (sub[i] < -1e-6 * Dot(ab, ab)) return PETSC_FALSE; /* outside by more than 2e-6 of the edge */
   }
   cp->nv = nv;
   if (nv == 3) { /* area coordinates */
@@ -298,7 +298,9 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
       const PetscInt node = pair->cand[j];
       for (PetscInt k = s->n2foff[node]; k < s->n2foff[node + 1]; k++) {
         c->ntests++;
-        if (ProjectOnFace(c, pair->master, s->n2f[k], &cp, &q) && (q > bestq || (q == bestq && cp.face < best.face))) {
+        /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order
+           wins, so rounding does not move the point between faces from one step to the next */
+        if (ProjectOnFace(c, pair->master, s->n2f[k], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
           best  = cp;
           bestq = q;
           found = PETSC_TRUE;

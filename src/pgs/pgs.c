@@ -6,7 +6,7 @@
 #include <mbc/private/pgsimpl.h>
 #include <petscblaslapack.h>
 
-PetscLogEvent MBC_PGSSolve;
+PetscLogEvent MBC_PGSSolve, MBC_FlexibilityAssemble;
 
 const char *MBCPGSReasonName(MBCPGSReason r)
 {
@@ -92,7 +92,7 @@ PetscErrorCode MBCContactLocalSolve(const PetscReal A[9], const PetscReal b[3], 
   PetscReal Ai[9], det;
 
   PetscFunctionBegin;
-  if (b[0] >= 0) { /* separation */
+  if (b[0] >= 0 || !(A[0] > 0)) { /* separation, or no free DOF along the normal (all prescribed) */
     r[0] = r[1] = r[2] = 0;
     PetscFunctionReturn(0);
   }

@@ -187,6 +187,8 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact));
+    PetscCall(MBCPGSSetFromOptions(&s->pgs));
+    PetscCall(PetscCalloc2(s->nbodies, &s->H, s->nbodies, &s->X));
   }
   s->setupcalled = PETSC_TRUE;
   if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
@@ -253,6 +255,50 @@ static PetscErrorCode SolverContact(MBCSolver s)
   if (!s->contact) PetscFunctionReturn(0);
   PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_FALSE, &researched));
   if (researched && s->monitor && s->contact->nsearches > 1) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: re-search (global search %" PetscInt_FMT ")\n", s->step, (double)s->time, s->contact->nsearches));
+  PetscFunctionReturn(0);
+}
+
+/* (couple, master node, slave face) of every contact point: D is rebuilt when this changes. */
+static PetscErrorCode SolverContactForces(MBCSolver s)
+{
+  MBCContact c = s->contact;
+  PetscInt   n = 0, k = 0, *pairs;
+  PetscBool  same;
+
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
+  PetscCall(PetscMalloc1(3 * n + 1, &pairs));
+  for (PetscInt i = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      pairs[3 * k]     = i;
+      pairs[3 * k + 1] = c->couples[i].points[j].master;
+      pairs[3 * k + 2] = c->couples[i].points[j].face;
+    }
+  same = (PetscBool)(s->pairs_built && n == s->npairs_built);
+  if (same) PetscCall(PetscArraycmp(pairs, s->pairs_built, 3 * n, &same));
+  if (!same) {
+    PetscCall(PetscFree(s->pairs_built));
+    s->pairs_built  = pairs;
+    s->npairs_built = n;
+    PetscCall(MBCSolverContactSetUp(s));
+    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, flexibility matrix rebuilt\n", s->step, (double)s->time, n));
+  } else PetscCall(PetscFree(pairs));
+  PetscCall(MBCSolverContactSolve(s));
+  if (s->monitor && s->fp.nc) {
+    const PetscScalar *l, *u;
+    PetscInt           sep = 0, stick = 0, slip = 0;
+    PetscCall(VecGetArrayRead(s->lambda, &l));
+    PetscCall(VecGetArrayRead(s->ucontact, &u));
+    for (PetscInt i = 0; i < s->fp.nc; i++) {
+      const PetscReal rt = PetscSqrtReal(PetscSqr(PetscRealPart(l[3 * i + 1])) + PetscSqr(PetscRealPart(l[3 * i + 2])));
+      if (!(PetscRealPart(l[3 * i]) > 0)) sep++;
+      else if (rt < s->fp.mu[i] * PetscRealPart(l[3 * i]) * (1 - 1e-8)) stick++;
+      else slip++;
+    }
+    PetscCall(VecRestoreArrayRead(s->ucontact, &u));
+    PetscCall(VecRestoreArrayRead(s->lambda, &l));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: PGS %s in %" PetscInt_FMT " sweeps (error %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, sep, stick, slip));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -383,7 +429,6 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
     s->time = s->step * dt;
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody     body = s->bodies[b];
-      PetscScalar work, dv;
       PetscInt    rstart;
       PetscScalar *gv;
       const PetscScalar *uv;
@@ -410,6 +455,12 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
       PetscCall(VecRestoreArrayRead(body->u, &uv));
       PetscCall(VecRestoreArray(body->g, &gv));
       PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
+    }
+    if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda */
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody     body = s->bodies[b];
+      PetscScalar work, dv;
+      if (!body) continue;
       PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
 
       /* trapezoidal work of the external loads */
@@ -496,6 +547,15 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
+  for (PetscInt b = 0; s->H && b < s->nbodies; b++) {
+    PetscCall(MatDestroy(&s->H[b]));
+    PetscCall(MatDestroy(&s->X[b]));
+  }
+  PetscCall(PetscFree2(s->H, s->X));
+  PetscCall(MBCFrictionProblemDestroy(&s->fp));
+  PetscCall(VecDestroy(&s->lambda));
+  PetscCall(VecDestroy(&s->ucontact));
+  PetscCall(PetscFree(s->pairs_built));
   PetscCall(MBCContactDestroy(&s->contact));
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));

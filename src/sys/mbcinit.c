@@ -23,6 +23,7 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCContactGather", classid, &MBC_ContactGather));
   PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
+  PetscCall(PetscLogEventRegister("MBCFlexibilityAssemble", classid, &MBC_FlexibilityAssemble));
   PetscCall(PetscLogEventRegister("MBCPGSSolve", classid, &MBC_PGSSolve));
   PetscFunctionReturn(0);
 }

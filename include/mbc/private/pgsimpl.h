@@ -28,7 +28,7 @@ typedef struct {
   PetscLogDouble time;
 } MBCPGS;
 
-PETSC_EXTERN PetscLogEvent MBC_PGSSolve;
+PETSC_EXTERN PetscLogEvent MBC_PGSSolve, MBC_FlexibilityAssemble;
 
 PETSC_EXTERN PetscErrorCode MBCPGSSetFromOptions(MBCPGS *);
 PETSC_EXTERN PetscErrorCode MBCPGSSolve(MBCPGS *, MBCFrictionProblem *, Vec, Vec);

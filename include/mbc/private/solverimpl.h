@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mbc/private/contactimpl.h>
+#include <mbc/private/pgsimpl.h>
 
 typedef struct {
   PetscInt  body;         /* body holding the nearest vertex */
@@ -35,6 +36,12 @@ struct _n_MBCSolver {
   PetscBool monitor, view;
 
   MBCContact contact;     /* NULL when the scene has no couples */
+  Mat       *H, *X;       /* per body: contact matrix and A^-1 H (NULL off the body) */
+  MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem, replicated on every rank */
+  MBCPGS     pgs;
+  PetscReal  dscale;      /* D is scaled by 1/dscale for the PGS: lambda = r / dscale */
+  Vec        lambda, ucontact;
+  PetscInt   npairs_built, *pairs_built; /* (couple, master, face) of each point when D was built */
   PetscBool  search_only;
 
   /* energy bookkeeping (dynamic) */
@@ -45,3 +52,5 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
