@@ -162,15 +162,86 @@ PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
   pgs->rtol   = 1e-8;
   pgs->omega  = 1.0;
   pgs->max_it = 1000;
+  pgs->active_set = 20;
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Projected Gauss-Seidel for the contact multipliers", "MBCPGS");
   PetscCall(PetscOptionsReal("-mbc_pgs_rtol", "Tolerance on the FCLIB merit", "MBCPGSSetFromOptions", pgs->rtol, &pgs->rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_pgs_max_it", "Maximum sweeps", "MBCPGSSetFromOptions", pgs->max_it, &pgs->max_it, NULL));
   PetscCall(PetscOptionsReal("-mbc_pgs_omega", "Relaxation factor (0, 2)", "MBCPGSSetFromOptions", pgs->omega, &pgs->omega, NULL));
+  PetscCall(PetscOptionsInt("-mbc_pgs_active_set", "Every this many sweeps, try the direct solve on the sticking contacts (0: never)", "MBCPGSSetFromOptions", pgs->active_set, &pgs->active_set, NULL));
   PetscCall(PetscOptionsBool("-mbc_pgs_monitor", "Print the merit every sweep", "MBCPGSSetFromOptions", pgs->monitor, &pgs->monitor, NULL));
   PetscOptionsEnd();
   PetscCheck(pgs->rtol > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_rtol %g must be positive", (double)pgs->rtol);
   PetscCheck(pgs->max_it > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_max_it %" PetscInt_FMT " must be positive", pgs->max_it);
   PetscCheck(pgs->omega > 0 && pgs->omega < 2, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_omega %g must lie in (0, 2)", (double)pgs->omega);
+  PetscFunctionReturn(0);
+}
+
+/* Active-set step: when no contact slips, the problem restricted to the sticking contacts S is
+   linear, W_SS r_S = -q_S (the others separated, r = 0). One dense LU (LAPACK) gives it; it is
+   kept only if it lowers the merit, so a wrong guess of S costs a factorization, never accuracy.
+   Gauss-Seidel alone creeps on the strongly coupled D of large time steps (thousands of sweeps). */
+static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal *error)
+{
+  PetscInt          *S, ns = 0, nslip = 0;
+  PetscScalar       *rv, *A, *x;
+  const PetscScalar *qv;
+  PetscBLASInt       n, one = 1, info, *piv;
+  Vec                rtry;
+  PetscReal          etry;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(3 * fp->nc, &S));
+  PetscCall(VecGetArray(r, &rv));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscReal rn = PetscRealPart(rv[3 * i]), rt = PetscSqrtReal(PetscSqr(PetscRealPart(rv[3 * i + 1])) + PetscSqr(PetscRealPart(rv[3 * i + 2])));
+    if (!(rn > 0)) continue;
+    if (rt >= fp->mu[i] * rn * (1 - 1e-6)) nslip++;
+    for (PetscInt d = 0; d < 3; d++) S[ns++] = 3 * i + d;
+  }
+  PetscCall(VecRestoreArray(r, &rv));
+  if (nslip || !ns) {
+    PetscCall(PetscFree(S));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscBLASIntCast(ns, &n));
+  PetscCall(PetscCalloc3((size_t)ns * ns, &A, ns, &x, ns, &piv));
+  for (PetscInt a = 0; a < ns; a++) { /* column-major W_SS */
+    PetscInt           ncols;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscInt           b = 0;
+    PetscCall(MatGetRow(fp->W, S[a], &ncols, &cols, &vals));
+    for (PetscInt k = 0; k < ncols; k++) {
+      while (b < ns && S[b] < cols[k]) b++;
+      if (b < ns && S[b] == cols[k]) A[a + (size_t)b * ns] = vals[k];
+    }
+    PetscCall(MatRestoreRow(fp->W, S[a], &ncols, &cols, &vals));
+  }
+  PetscCall(VecGetArrayRead(fp->q, &qv));
+  for (PetscInt a = 0; a < ns; a++) x[a] = -qv[S[a]];
+  PetscCall(VecRestoreArrayRead(fp->q, &qv));
+  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&n, &n, A, &n, piv, &info));
+  if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &n, &one, A, &n, piv, x, &n, &info));
+  if (!info) {
+    PetscCall(VecDuplicate(r, &rtry));
+    PetscCall(VecZeroEntries(rtry));
+    PetscCall(VecGetArray(rtry, &rv));
+    for (PetscInt a = 0; a < ns; a++) rv[S[a]] = x[a];
+    for (PetscInt i = 0; i < fp->nc; i++) { /* keep it in the cone */
+      PetscReal y[3] = {PetscRealPart(rv[3 * i]), PetscRealPart(rv[3 * i + 1]), PetscRealPart(rv[3 * i + 2])}, p[3];
+      ProjectCone(y, fp->mu[i], p);
+      for (PetscInt d = 0; d < 3; d++) rv[3 * i + d] = p[d];
+    }
+    PetscCall(VecRestoreArray(rtry, &rv));
+    PetscCall(MBCFrictionError(fp, rtry, u, &etry));
+    if (etry < *error) {
+      PetscCall(VecCopy(rtry, r));
+      *error = etry;
+    } else PetscCall(MBCFrictionError(fp, r, u, &etry)); /* u back to the kept r */
+    PetscCall(VecDestroy(&rtry));
+  }
+  PetscCall(PetscFree3(A, x, piv));
+  PetscCall(PetscFree(S));
   PetscFunctionReturn(0);
 }
 
@@ -195,6 +266,7 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
   for (pgs->its = 0; pgs->reason == MBC_PGS_ITERATING; pgs->its++) {
     const PetscScalar *qv;
     PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
+    if (pgs->active_set && pgs->its > 0 && pgs->its % pgs->active_set == 0 && pgs->error >= pgs->rtol) PetscCall(ActiveSetStep(fp, r, u, &pgs->error));
     if (pgs->monitor) PetscCall(PetscPrintf(PETSC_COMM_SELF, "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
     if (PetscIsInfOrNanReal(pgs->error)) pgs->reason = MBC_PGS_DIVERGED_NANORINF;
     else if (pgs->error < pgs->rtol) pgs->reason = MBC_PGS_CONVERGED_RTOL;

@@ -21,7 +21,7 @@ typedef enum {
 
 typedef struct {
   PetscReal    rtol, omega;
-  PetscInt     max_it, its;
+  PetscInt     max_it, its, active_set;
   PetscBool    monitor;
   MBCPGSReason reason;
   PetscReal    error;          /* FCLIB merit at exit */
