@@ -30,6 +30,7 @@ PETSC_EXTERN const char *const MBCMassTypes[];
 
 PETSC_EXTERN PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;
 PETSC_EXTERN PetscErrorCode MBCInitializePackage(void);
+PETSC_EXTERN PetscErrorCode MBCFileOpenWrite(const char[], FILE **);
 
 PETSC_EXTERN PetscErrorCode MBCSceneLoad(MPI_Comm, const char[], MBCScene *);
 PETSC_EXTERN PetscErrorCode MBCSceneCreateEmpty(MBCScene *);

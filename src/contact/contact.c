@@ -375,11 +375,9 @@ PetscErrorCode MBCContactDump(MBCContact c)
   PetscCallMPI(MPI_Comm_rank(c->comm, &rank));
   if (rank) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_pairs.csv", c->dump));
-  fp = fopen(file, "w");
-  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+  PetscCall(MBCFileOpenWrite(file, &fp));
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_points.csv", c->dump));
-  fq = fopen(file, "w");
-  PetscCheck(fq, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+  PetscCall(MBCFileOpenWrite(file, &fq));
   fprintf(fp, "k,master_body,mx,my,mz,slave_body,sx,sy,sz,distance\n");
   fprintf(fq, "k,master_body,mx,my,mz,slave_body,nv,v0x,v0y,v0z,v1x,v1y,v1z,v2x,v2y,v2z,v3x,v3y,v3z,w0,w1,w2,w3,px,py,pz,nx,ny,nz,t1x,t1y,t1z,t2x,t2y,t2z,gap\n");
   for (PetscInt i = 0; i < c->ncouples; i++) {

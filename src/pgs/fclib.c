@@ -35,6 +35,19 @@ static PetscErrorCode H5ReadInt1(hid_t loc, const char *file, const char *path, 
   PetscFunctionReturn(0);
 }
 
+/* Allocates and reads a dataset "<group>/<name>" (n entries of size elem). */
+static PetscErrorCode H5ReadAlloc(hid_t loc, const char *file, const char *group, const char *name, hid_t type, size_t elem, void **buf, hsize_t *n)
+{
+  char path[256];
+
+  PetscFunctionBegin;
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/%s", group, name));
+  PetscCall(H5ReadArray(loc, file, path, type, NULL, n));
+  PetscCall(PetscMalloc(PetscMax(*n, 1) * elem, buf));
+  PetscCall(H5ReadArray(loc, file, path, type, *buf, n));
+  PetscFunctionReturn(0);
+}
+
 /* A FCLIB matrix group (m, n, nz, p, i, x): nz = -2 compressed rows, -1 compressed columns,
    >= 0 triplets (i row, p column; duplicates add). */
 static PetscErrorCode ReadMatrix(hid_t loc, const char *file, const char *name, Mat *A)
@@ -53,19 +66,9 @@ static PetscErrorCode ReadMatrix(hid_t loc, const char *file, const char *name, 
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/nz", name));
   PetscCall(H5ReadInt1(loc, file, path, &nz));
   PetscCheck(m >= 0 && n >= 0 && nz >= -2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: matrix %s has m = %" PetscInt_FMT ", n = %" PetscInt_FMT ", nz = %" PetscInt_FMT, file, name, m, n, nz);
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/p", name));
-  PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_LLONG, NULL, &np));
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/i", name));
-  PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_LLONG, NULL, &ni));
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/x", name));
-  PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_DOUBLE, NULL, &nx));
-  PetscCall(PetscMalloc3(np, &p, ni, &ix, nx, &x));
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/p", name));
-  PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_LLONG, p, &np));
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/i", name));
-  PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_LLONG, ix, &ni));
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/x", name));
-  PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_DOUBLE, x, &nx));
+  PetscCall(H5ReadAlloc(loc, file, name, "p", H5T_NATIVE_LLONG, sizeof(long long), (void **)&p, &np));
+  PetscCall(H5ReadAlloc(loc, file, name, "i", H5T_NATIVE_LLONG, sizeof(long long), (void **)&ix, &ni));
+  PetscCall(H5ReadAlloc(loc, file, name, "x", H5T_NATIVE_DOUBLE, sizeof(double), (void **)&x, &nx));
   cnt = nz >= 0 ? nz : (PetscInt)(nz == -2 ? p[m] : p[n]);
   PetscCheck((hsize_t)cnt <= nx && (hsize_t)cnt <= ni && (nz >= 0 ? (hsize_t)cnt <= np : np >= (hsize_t)((nz == -2 ? m : n) + 1)), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: matrix %s has inconsistent sizes", file, name);
   PetscCall(PetscMalloc2(cnt, &row, cnt, &col));
@@ -90,7 +93,9 @@ static PetscErrorCode ReadMatrix(hid_t loc, const char *file, const char *name, 
   PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscFree(nnz));
   PetscCall(PetscFree2(row, col));
-  PetscCall(PetscFree3(p, ix, x));
+  PetscCall(PetscFree(p));
+  PetscCall(PetscFree(ix));
+  PetscCall(PetscFree(x));
   PetscFunctionReturn(0);
 }
 

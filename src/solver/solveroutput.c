@@ -110,8 +110,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
     PetscCall(SolverLocatePoints(s));
     if (!rank) {
       PetscCall(PetscSNPrintf(file, sizeof(file), "%s_points.csv", s->output));
-      s->points_csv = fopen(file, "w");
-      PetscCheck(s->points_csv, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+      PetscCall(MBCFileOpenWrite(file, &s->points_csv));
       fprintf(s->points_csv, "t");
       for (PetscInt p = 0; p < scene->npoints; p++) fprintf(s->points_csv, ",%s_ux,%s_uy,%s_uz", scene->points[p].name, scene->points[p].name, scene->points[p].name);
       fprintf(s->points_csv, "\n");
@@ -119,8 +118,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   }
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC && !rank) {
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
-    s->energy_csv = fopen(file, "w");
-    PetscCheck(s->energy_csv, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+    PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,total\n");
   }
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
@@ -244,8 +242,7 @@ static PetscErrorCode SolverWriteXdmf(MBCSolver s)
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s.xmf", s->output));
-  fp = fopen(file, "w");
-  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", file);
+  PetscCall(MBCFileOpenWrite(file, &fp));
   fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n  <Domain>\n");
   fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
   for (PetscInt k = 0; k < s->noutputs; k++) {

@@ -27,3 +27,12 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCPGSSolve", classid, &MBC_PGSSolve));
   PetscFunctionReturn(0);
 }
+
+/* Opens a result file for writing; an unwritable path is an error naming it. */
+PetscErrorCode MBCFileOpenWrite(const char path[], FILE **fp)
+{
+  PetscFunctionBegin;
+  *fp = fopen(path, "w");
+  PetscCheck(*fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s (does its folder exist?)", path);
+  PetscFunctionReturn(0);
+}
