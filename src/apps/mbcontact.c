@@ -108,6 +108,7 @@ int main(int argc, char **argv)
     PetscFinalize();
     return 1;
   }
+  if (!traceback) PetscCall(PetscPopErrorHandler());
   PetscCall(PetscFinalize());
   return (int)status;
 }
