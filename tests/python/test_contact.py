@@ -5,7 +5,8 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import ROOT, solve
+from conftest import ROOT, prep, solve
+import yaml
 from mbcontact.results import read_csv
 
 sys.path.insert(0, os.path.join(ROOT, "meshes", "blocks"))
@@ -48,3 +49,21 @@ def test_two_blocks_steady_state(tmp_path, dt, newmark, final_time):
     ax.legend()
     fig.savefig(tmp_path / "blocks_histories.png", dpi=80)
     assert (tmp_path / "blocks_histories.png").stat().st_size > 1000
+
+
+def test_prescribed_dofs_on_the_contact_surface(tmp_path):
+    """Block 1's top face, the slave surface of the couple, is prescribed in all components (a
+    rigid foundation): their rows of H are zero, D comes from block 2 alone and stays regular.
+    Block 2 settles on it: contact face at 0, top at -rho g L^2 / (2E) = -5e-5 m (0.1 %)."""
+    h5 = blocks.build(tmp_path, dt=0.04, final_time=4.0)
+    with open(tmp_path / "blocks.yaml") as f:
+        scene = yaml.safe_load(f)
+    scene["dirichlet"] = [{"surface": "block1_zmin", "components": "all"}, {"surface": "block1_zmax", "components": "all"}]
+    h5 = prep(tmp_path, scene, name="fixed")
+    r = solve(h5, "-mbc_monitor", "-mbc_newmark_beta", "0.3025", "-mbc_newmark_gamma", "0.6")
+    p = read_csv(str(h5)[:-3] + "_result_points.csv")
+    late = p["t"] >= 3.5 - 1e-9
+    assert np.abs(p["top_uz"][late] / -5e-5 - 1).max() < 1e-3
+    assert np.abs(p["face_uz"][late]).max() < 1e-3 * 5e-5
+    last = [l for l in r.stdout.splitlines() if "contact: PGS" in l][-1]
+    assert "CONVERGED" in last and "stick 441" in last
