@@ -297,7 +297,7 @@ static PetscErrorCode ReadOutput(H5Node *root, MBCScene s)
   PetscFunctionReturn(0);
 }
 
-/* Opens list group `name` under root, reads its count, allocates `size`-byte entries. */
+/* Opens list group `name` under root (if present) and reads its count (0 when absent). */
 static PetscErrorCode ReadList(H5Node *root, const char *name, H5Node *list, PetscInt *count)
 {
   PetscFunctionBegin;

@@ -285,17 +285,15 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
   } else PetscCall(PetscFree(pairs));
   PetscCall(MBCSolverContactSolve(s));
   if (s->monitor && s->fp.nc) {
-    const PetscScalar *l, *u;
+    const PetscScalar *l;
     PetscInt           sep = 0, stick = 0, slip = 0;
     PetscCall(VecGetArrayRead(s->lambda, &l));
-    PetscCall(VecGetArrayRead(s->ucontact, &u));
     for (PetscInt i = 0; i < s->fp.nc; i++) {
       const PetscReal rt = PetscSqrtReal(PetscSqr(PetscRealPart(l[3 * i + 1])) + PetscSqr(PetscRealPart(l[3 * i + 2])));
       if (!(PetscRealPart(l[3 * i]) > 0)) sep++;
       else if (rt < s->fp.mu[i] * PetscRealPart(l[3 * i]) * (1 - 1e-8)) stick++;
       else slip++;
     }
-    PetscCall(VecRestoreArrayRead(s->ucontact, &u));
     PetscCall(VecRestoreArrayRead(s->lambda, &l));
     PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: PGS %s in %" PetscInt_FMT " sweeps (error %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, sep, stick, slip));
   }

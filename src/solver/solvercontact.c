@@ -53,15 +53,6 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, PetscInt nc, 
   PetscFunctionReturn(0);
 }
 
-/* A dense parallel matrix (or vector) of the body gathered to a sequential array on every rank
-   of the world, summed over bodies: only rank 0 of each body contributes. */
-static PetscErrorCode SumOverBodies(MBCSolver s, PetscInt n, PetscScalar *local, PetscScalar *sum)
-{
-  PetscFunctionBegin;
-  PetscCallMPI(MPI_Allreduce(local, sum, (PetscMPIInt)n, MPIU_SCALAR, MPIU_SUM, s->comm));
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode MBCSolverContactSetUp(MBCSolver s)
 {
   MBCContact  c  = s->contact;
@@ -111,7 +102,7 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s)
     PetscCall(MatDestroy(&D));
     PetscCall(MatDestroy(&Hd));
   }
-  PetscCall(SumOverBodies(s, 9 * nc * nc, Dl, Dg));
+  PetscCallMPI(MPI_Allreduce(Dl, Dg, (PetscMPIInt)(9 * nc * nc), MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
   { /* W = D / dbar as SeqAIJ, dbar the mean diagonal: r = dbar lambda has the units of u, so the
        FCLIB merit weighs forces and displacements alike; the same on every rank (the PGS runs
        redundantly, deterministically) */
@@ -176,7 +167,7 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     PetscCall(VecDestroy(&Hus));
     PetscCall(VecDestroy(&Hu));
   }
-  PetscCall(SumOverBodies(s, 3 * nc, ql, qg));
+  PetscCallMPI(MPI_Allreduce(ql, qg, (PetscMPIInt)(3 * nc), MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
   PetscCall(VecGetArray(s->fp.q, &q));
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
@@ -193,15 +184,16 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     Vec     lam;
     if (!body) continue;
     PetscCall(MatCreateVecs(s->X[b], &lam, NULL));
-    { /* lambda (sequential, replicated) into the X column layout */
+    { /* physical lambda = r / dscale (replicated) into the owned part of X's column layout */
       const PetscScalar *l;
+      PetscScalar       *la;
       PetscInt           lo, hi;
       PetscCall(VecGetOwnershipRange(lam, &lo, &hi));
       PetscCall(VecGetArrayRead(s->lambda, &l));
-      for (PetscInt i = lo; i < hi; i++) PetscCall(VecSetValue(lam, i, l[i] / s->dscale, INSERT_VALUES));
+      PetscCall(VecGetArray(lam, &la));
+      for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i] / s->dscale;
+      PetscCall(VecRestoreArray(lam, &la));
       PetscCall(VecRestoreArrayRead(s->lambda, &l));
-      PetscCall(VecAssemblyBegin(lam));
-      PetscCall(VecAssemblyEnd(lam));
     }
     PetscCall(MatMultAdd(s->X[b], lam, body->du, body->du));
     PetscCall(VecDestroy(&lam));
