@@ -130,6 +130,7 @@ static PetscErrorCode CondenseGlobal(hid_t g, const char *file, MBCFrictionProbl
   PetscCall(MatGetSize(H, &m, &n));
   PetscCheck(n % 3 == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: H has %" PetscInt_FMT " columns, not 3 per contact", file, n);
   fp->nc = n / 3;
+  PetscCall(MBCFrictionProblemSetBlocks(fp, NULL));
   PetscCall(ReadVector(g, file, "vectors/f", m, &f));
   PetscCall(ReadVector(g, file, "vectors/w", n, &w));
   PetscCall(MatGetFactor(M, MATSOLVERMUMPS, MAT_FACTOR_LU, &F));
@@ -191,6 +192,7 @@ PetscErrorCode MBCFclibRead(const char file[], MBCFrictionProblem *fp, PetscBool
     PetscCall(MatGetSize(fp->W, &n, NULL));
     PetscCheck(n % 3 == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: W has %" PetscInt_FMT " rows, not 3 per contact", file, n);
     fp->nc = n / 3;
+    PetscCall(MBCFrictionProblemSetBlocks(fp, NULL));
     PetscCall(ReadVector(g, file, "vectors/q", n, &fp->q));
   }
   PetscCall(H5ReadArray(g, file, "vectors/mu", H5T_NATIVE_DOUBLE, NULL, &nmu));
@@ -217,74 +219,97 @@ static PetscErrorCode H5Write(hid_t loc, const char *name, hid_t type, hsize_t n
 }
 
 /* Writes u = W r + q as an FCLIB local problem (W in compressed rows), with r, u (when given)
-   as /solution/r and /solution/u. */
+   as /solution/r and /solution/u. FCLIB contacts are 3-blocks: a frictionless 1-block is written
+   as a 3-block with mu = 0, q_t = 0 and W_tt = W_nn I (so r_t = u_t = 0 solve it: the same problem). */
 PetscErrorCode MBCFclibWriteLocal(const char file[], MBCFrictionProblem *fp, Vec r, Vec u)
 {
   hid_t              h5, g, gw, gv, gs;
-  PetscInt           n, nnz = 0, spacedim = 3;
+  PetscInt           n = 3 * fp->nc, m = fp->off[fp->nc], nnz = 0, *map;
   int               *p, *ix, dims[4];
-  double            *x;
+  double            *x, *vec;
   const PetscScalar *a;
 
   PetscFunctionBegin;
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
   h5 = H5Fcreate(file, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   PetscCheck(h5 >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot create FCLIB file %s", file);
-  PetscCall(MatGetSize(fp->W, &n, NULL));
-  for (PetscInt row = 0; row < n; row++) {
+  PetscCall(PetscMalloc1(m, &map)); /* row of fp -> row of the 3-block layout */
+  for (PetscInt i = 0; i < fp->nc; i++)
+    for (PetscInt d = 0; d < fp->off[i + 1] - fp->off[i]; d++) map[fp->off[i] + d] = 3 * i + d;
+  for (PetscInt row = 0; row < m; row++) {
     PetscInt ncols;
     PetscCall(MatGetRow(fp->W, row, &ncols, NULL, NULL));
     nnz += ncols;
     PetscCall(MatRestoreRow(fp->W, row, &ncols, NULL, NULL));
   }
+  nnz += n - m; /* the two tangential diagonal entries of each frictionless contact */
   PetscCall(PetscMalloc3(n + 1, &p, nnz, &ix, nnz, &x));
+  PetscCall(PetscCalloc1(n, &vec));
   p[0] = 0;
-  for (PetscInt row = 0; row < n; row++) {
-    PetscInt           ncols;
-    const PetscInt    *cols;
-    const PetscScalar *vals;
-    PetscCall(MatGetRow(fp->W, row, &ncols, &cols, &vals));
-    for (PetscInt k = 0; k < ncols; k++) {
-      ix[p[row] + k] = (int)cols[k];
-      x[p[row] + k]  = PetscRealPart(vals[k]);
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    PetscScalar    wnn;
+    PetscCall(MatGetValue(fp->W, o, o, &wnn));
+    for (PetscInt d = 0; d < 3; d++) {
+      const PetscInt R = 3 * i + d;
+      if (d < dim) { /* columns stay sorted: map is increasing */
+        PetscInt           ncols;
+        const PetscInt    *cols;
+        const PetscScalar *vals;
+        PetscCall(MatGetRow(fp->W, o + d, &ncols, &cols, &vals));
+        for (PetscInt k = 0; k < ncols; k++) {
+          ix[p[R] + k] = (int)map[cols[k]];
+          x[p[R] + k]  = PetscRealPart(vals[k]);
+        }
+        p[R + 1] = p[R] + (int)ncols;
+        PetscCall(MatRestoreRow(fp->W, o + d, &ncols, &cols, &vals));
+      } else {
+        ix[p[R]] = (int)R;
+        x[p[R]]  = PetscRealPart(wnn);
+        p[R + 1] = p[R] + 1;
+      }
     }
-    p[row + 1] = p[row] + (int)ncols;
-    PetscCall(MatRestoreRow(fp->W, row, &ncols, &cols, &vals));
   }
   g  = H5Gcreate2(h5, "fclib_local", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   gw = H5Gcreate2(g, "W", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  dims[0] = (int)n, dims[1] = (int)n, dims[2] = -2, dims[3] = (int)nnz;
+  dims[0] = (int)n, dims[1] = (int)n, dims[2] = -2, dims[3] = p[n];
   PetscCall(H5Write(gw, "m", H5T_NATIVE_INT, 1, &dims[0]));
   PetscCall(H5Write(gw, "n", H5T_NATIVE_INT, 1, &dims[1]));
   PetscCall(H5Write(gw, "nz", H5T_NATIVE_INT, 1, &dims[2]));
   PetscCall(H5Write(gw, "nzmax", H5T_NATIVE_INT, 1, &dims[3]));
   PetscCall(H5Write(gw, "p", H5T_NATIVE_INT, (hsize_t)n + 1, p));
-  PetscCall(H5Write(gw, "i", H5T_NATIVE_INT, (hsize_t)nnz, ix));
-  PetscCall(H5Write(gw, "x", H5T_NATIVE_DOUBLE, (hsize_t)nnz, x));
+  PetscCall(H5Write(gw, "i", H5T_NATIVE_INT, (hsize_t)p[n], ix));
+  PetscCall(H5Write(gw, "x", H5T_NATIVE_DOUBLE, (hsize_t)p[n], x));
   H5Gclose(gw);
   gv = H5Gcreate2(g, "vectors", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   PetscCall(VecGetArrayRead(fp->q, &a));
-  PetscCall(H5Write(gv, "q", H5T_NATIVE_DOUBLE, (hsize_t)n, a));
+  for (PetscInt row = 0; row < m; row++) vec[map[row]] = PetscRealPart(a[row]);
   PetscCall(VecRestoreArrayRead(fp->q, &a));
+  PetscCall(H5Write(gv, "q", H5T_NATIVE_DOUBLE, (hsize_t)n, vec));
   PetscCall(H5Write(gv, "mu", H5T_NATIVE_DOUBLE, (hsize_t)fp->nc, fp->mu));
   H5Gclose(gv);
   {
-    int sd = (int)spacedim;
+    int sd = 3;
     PetscCall(H5Write(g, "spacedim", H5T_NATIVE_INT, 1, &sd));
   }
   H5Gclose(g);
   if (r && u) {
+    const char *names[2] = {"r", "u"};
+    Vec         vs[2]    = {r, u};
     gs = H5Gcreate2(h5, "solution", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    PetscCall(VecGetArrayRead(r, &a));
-    PetscCall(H5Write(gs, "r", H5T_NATIVE_DOUBLE, (hsize_t)n, a));
-    PetscCall(VecRestoreArrayRead(r, &a));
-    PetscCall(VecGetArrayRead(u, &a));
-    PetscCall(H5Write(gs, "u", H5T_NATIVE_DOUBLE, (hsize_t)n, a));
-    PetscCall(VecRestoreArrayRead(u, &a));
+    for (int k = 0; k < 2; k++) {
+      PetscCall(PetscArrayzero(vec, n));
+      PetscCall(VecGetArrayRead(vs[k], &a));
+      for (PetscInt row = 0; row < m; row++) vec[map[row]] = PetscRealPart(a[row]);
+      PetscCall(VecRestoreArrayRead(vs[k], &a));
+      PetscCall(H5Write(gs, names[k], H5T_NATIVE_DOUBLE, (hsize_t)n, vec));
+    }
     H5Gclose(gs);
   }
   H5Fclose(h5);
   PetscCall(PetscFree3(p, ix, x));
+  PetscCall(PetscFree(vec));
+  PetscCall(PetscFree(map));
   PetscFunctionReturn(0);
 }
 

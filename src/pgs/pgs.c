@@ -51,7 +51,9 @@ static PetscReal ContactResidual2(const PetscReal r[3], const PetscReal u[3], Pe
   return e;
 }
 
-/* FCLIB merit: sqrt(sum over contacts of |r - proj_K(r - (u + mu |u_t| e_n))|^2) / (1 + |q|). */
+/* FCLIB merit: sqrt(sum over contacts of |r - proj_K(r - (u + mu |u_t| e_n))|^2) / (1 + |q|);
+   a frictionless 1-block contributes (r_n - max(0, r_n - u_n))^2, the same value its 3-block
+   with mu = 0 and r_t = 0 would. */
 PetscErrorCode MBCFrictionError(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal *error)
 {
   const PetscScalar *rv, *uv;
@@ -62,7 +64,13 @@ PetscErrorCode MBCFrictionError(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal 
   PetscCall(VecAXPY(u, 1.0, fp->q));
   PetscCall(VecGetArrayRead(r, &rv));
   PetscCall(VecGetArrayRead(u, &uv));
-  for (PetscInt i = 0; i < fp->nc; i++) e += ContactResidual2(&rv[3 * i], &uv[3 * i], fp->mu[i]);
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i];
+    if (fp->off[i + 1] - o == 1) { /* frictionless: r_n - max(0, r_n - u_n) */
+      const PetscReal p = PetscMax(0, PetscRealPart(rv[o] - uv[o]));
+      e += PetscSqr(PetscRealPart(rv[o]) - p);
+    } else e += ContactResidual2(&rv[o], &uv[o], fp->mu[i]);
+  }
   PetscCall(VecRestoreArrayRead(u, &uv));
   PetscCall(VecRestoreArrayRead(r, &rv));
   PetscCall(VecNorm(fp->q, NORM_2, &qn));
@@ -176,64 +184,116 @@ PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
   PetscFunctionReturn(0);
 }
 
-/* Active-set step: when no contact slips, the problem restricted to the sticking contacts S is
-   linear, W_SS r_S = -q_S (the others separated, r = 0). One dense LU (LAPACK) gives it; it is
-   kept only if it lowers the merit, so a wrong guess of S costs a factorization, never accuracy.
-   Gauss-Seidel alone creeps on the strongly coupled D of large time steps (thousands of sweeps). */
-static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal *error)
+/* Active-set step: with the contacts split by the current iterate (and q) into separated (r = 0),
+   sticking (u = 0: all components unknown) and slipping (u_n = 0, r_t = mu r_n d with the
+   friction direction d frozen: r_n unknown), the problem is linear. One dense LU (LAPACK) solves
+   it; the result, projected onto the cones, is kept only if it lowers the merit, so a wrong
+   guess costs a factorization, never accuracy. Gauss-Seidel alone creeps on strongly coupled D
+   (large time steps; bodies held only by contact in a static analysis): thousands of sweeps. */
+static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
 {
-  PetscInt          *S, ns = 0, nslip = 0;
-  PetscScalar       *rv, *A, *x;
-  const PetscScalar *qv;
-  PetscBLASInt       n, one = 1, info, *piv;
+  PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0;
+  PetscReal         *dir;
+  PetscScalar       *rv, *Wc, *A, *x;
+  const PetscScalar *qv, *uv;
+  PetscBLASInt       bn, one = 1, info, *piv;
   Vec                rtry;
   PetscReal          etry;
 
   PetscFunctionBegin;
-  PetscCall(PetscMalloc1(3 * fp->nc, &S));
+  PetscCall(PetscMalloc4(fp->off[fp->nc], &S, fp->nc, &first, fp->nc, &contact, 2 * fp->nc, &dir));
   PetscCall(VecGetArray(r, &rv));
-  for (PetscInt i = 0; i < fp->nc; i++) {
-    const PetscReal rn = PetscRealPart(rv[3 * i]), rt = PetscSqrtReal(PetscSqr(PetscRealPart(rv[3 * i + 1])) + PetscSqr(PetscRealPart(rv[3 * i + 2])));
-    if (!(rn > 0)) continue;
-    if (rt >= fp->mu[i] * rn * (1 - 1e-6)) nslip++;
-    for (PetscInt d = 0; d < 3; d++) S[ns++] = 3 * i + d;
+  PetscCall(VecGetArrayRead(u, &uv));
+  PetscCall(VecGetArrayRead(fp->q, &qv));
+  for (PetscInt i = 0; i < fp->nc; i++) { /* in contact (r_n - u_n > 0: pressed, or penetrating; with closed, also q_n < 0, and all sticking): S lists their rows; dir != 0 marks slip */
+    const PetscInt  o = fp->off[i], dim = fp->off[i + 1] - o;
+    const PetscReal rn = PetscRealPart(rv[o]);
+    PetscReal       rt = 0;
+    if (!(rn - PetscRealPart(uv[o]) > 0) && !(closed && PetscRealPart(qv[o]) < 0)) continue;
+    if (dim == 3) rt = PetscSqrtReal(PetscSqr(PetscRealPart(rv[o + 1])) + PetscSqr(PetscRealPart(rv[o + 2])));
+    contact[nin] = i;
+    first[nin]   = ns;
+    if (!closed && dim == 3 && fp->mu[i] > 0 && rn > 0 && rt >= fp->mu[i] * rn * (1 - 1e-6)) {
+      dir[2 * nin]     = PetscRealPart(rv[o + 1]) / rt;
+      dir[2 * nin + 1] = PetscRealPart(rv[o + 2]) / rt;
+      n += 1;
+    } else {
+      dir[2 * nin] = dir[2 * nin + 1] = 0;
+      n += dim;
+    }
+    for (PetscInt d = 0; d < dim; d++) S[ns++] = o + d;
+    nin++;
   }
+  PetscCall(VecRestoreArrayRead(fp->q, &qv));
+  PetscCall(VecRestoreArrayRead(u, &uv));
   PetscCall(VecRestoreArray(r, &rv));
-  if (nslip || !ns) {
-    PetscCall(PetscFree(S));
+  if (!nin) {
+    PetscCall(PetscFree4(S, first, contact, dir));
     PetscFunctionReturn(0);
   }
-  PetscCall(PetscBLASIntCast(ns, &n));
-  PetscCall(PetscCalloc3((size_t)ns * ns, &A, ns, &x, ns, &piv));
-  for (PetscInt a = 0; a < ns; a++) { /* column-major W_SS */
-    PetscInt           ncols;
+  PetscCall(PetscCalloc1((size_t)ns * ns, &Wc));
+  for (PetscInt a = 0; a < ns; a++) { /* W on the rows of the contacts in contact, column-major */
+    PetscInt           ncols, b = 0;
     const PetscInt    *cols;
     const PetscScalar *vals;
-    PetscInt           b = 0;
     PetscCall(MatGetRow(fp->W, S[a], &ncols, &cols, &vals));
     for (PetscInt k = 0; k < ncols; k++) {
       while (b < ns && S[b] < cols[k]) b++;
-      if (b < ns && S[b] == cols[k]) A[a + (size_t)b * ns] = vals[k];
+      if (b < ns && S[b] == cols[k]) Wc[a + (size_t)b * ns] = vals[k];
     }
     PetscCall(MatRestoreRow(fp->W, S[a], &ncols, &cols, &vals));
   }
+  PetscCall(PetscBLASIntCast(n, &bn));
+  PetscCall(PetscCalloc3((size_t)n * n, &A, n, &x, n, &piv));
   PetscCall(VecGetArrayRead(fp->q, &qv));
-  for (PetscInt a = 0; a < ns; a++) x[a] = -qv[S[a]];
+  for (PetscInt j = 0, e = 0; j < nin; j++) { /* equations: u = 0 (stick), u_n = 0 (slip) */
+    const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
+    for (PetscInt d = 0; d < neq; d++, e++) {
+      const PetscInt row = first[j] + d;
+      x[e] = -qv[S[row]];
+      for (PetscInt k = 0, c = 0; k < nin; k++) { /* unknowns: r (stick), r_n (slip) */
+        const PetscInt   i = contact[k], col = first[k];
+        const PetscReal  mu = fp->mu[i];
+        if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
+          A[e + (size_t)c * n] = Wc[row + (size_t)col * ns] + mu * (dir[2 * k] * Wc[row + (size_t)(col + 1) * ns] + dir[2 * k + 1] * Wc[row + (size_t)(col + 2) * ns]);
+          c++;
+        } else
+          for (PetscInt dd = 0; dd < fp->off[i + 1] - fp->off[i]; dd++, c++) A[e + (size_t)c * n] = Wc[row + (size_t)(col + dd) * ns];
+      }
+    }
+  }
   PetscCall(VecRestoreArrayRead(fp->q, &qv));
-  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&n, &n, A, &n, piv, &info));
-  if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &n, &one, A, &n, piv, x, &n, &info));
+  { /* W_SS may be singular: tangential forces along directions prescribed on both sides (a
+       roller under a roller) have no flexibility. A shift of 1e-10 of the largest diagonal picks
+       the solution with those forces near zero and leaves the others to 1e-10. */
+    PetscReal dmax = 0;
+    for (PetscInt a = 0; a < n; a++) dmax = PetscMax(dmax, PetscAbsScalar(A[a + (size_t)a * n]));
+    for (PetscInt a = 0; a < n; a++) A[a + (size_t)a * n] += 1e-10 * dmax;
+  }
+  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&bn, &bn, A, &bn, piv, &info));
+  if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &bn, &one, A, &bn, piv, x, &bn, &info));
   if (!info) {
     PetscCall(VecDuplicate(r, &rtry));
     PetscCall(VecZeroEntries(rtry));
     PetscCall(VecGetArray(rtry, &rv));
-    for (PetscInt a = 0; a < ns; a++) rv[S[a]] = x[a];
-    for (PetscInt i = 0; i < fp->nc; i++) { /* keep it in the cone */
-      PetscReal y[3] = {PetscRealPart(rv[3 * i]), PetscRealPart(rv[3 * i + 1]), PetscRealPart(rv[3 * i + 2])}, p[3];
-      ProjectCone(y, fp->mu[i], p);
-      for (PetscInt d = 0; d < 3; d++) rv[3 * i + d] = p[d];
+    for (PetscInt k = 0, c = 0; k < nin; k++) {
+      const PetscInt i = contact[k], o = fp->off[i], dim = fp->off[i + 1] - o;
+      PetscReal      y[3], p[3];
+      if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
+        y[0] = PetscRealPart(x[c++]);
+        y[1] = fp->mu[i] * y[0] * dir[2 * k];
+        y[2] = fp->mu[i] * y[0] * dir[2 * k + 1];
+      } else
+        for (PetscInt d = 0; d < dim; d++) y[d] = PetscRealPart(x[c++]);
+      if (dim == 1) rv[o] = PetscMax(0, y[0]); /* keep it in the cone */
+      else {
+        ProjectCone(y, fp->mu[i], p);
+        for (PetscInt d = 0; d < 3; d++) rv[o + d] = p[d];
+      }
     }
     PetscCall(VecRestoreArray(rtry, &rv));
     PetscCall(MBCFrictionError(fp, rtry, u, &etry));
+    PetscCall(PetscInfo(NULL, "active set: %" PetscInt_FMT " in contact, %" PetscInt_FMT " unknowns, merit %g -> %g\n", nin, n, (double)*error, (double)etry));
     if (etry < *error) {
       PetscCall(VecCopy(rtry, r));
       *error = etry;
@@ -241,7 +301,8 @@ static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscR
     PetscCall(VecDestroy(&rtry));
   }
   PetscCall(PetscFree3(A, x, piv));
-  PetscCall(PetscFree(S));
+  PetscCall(PetscFree(Wc));
+  PetscCall(PetscFree4(S, first, contact, dir));
   PetscFunctionReturn(0);
 }
 
@@ -256,17 +317,26 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
   PetscCall(PetscLogEventBegin(MBC_PGSSolve, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(PetscMalloc1(9 * fp->nc, &diag));
-  for (PetscInt i = 0; i < fp->nc; i++) {
-    const PetscInt idx[3] = {3 * i, 3 * i + 1, 3 * i + 2};
+  for (PetscInt i = 0; i < fp->nc; i++) { /* diagonal blocks, row-major dim x dim */
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o, idx[3] = {o, o + 1, o + 2};
     PetscScalar    v[9];
-    PetscCall(MatGetValues(fp->W, 3, idx, 3, idx, v));
-    for (int k = 0; k < 9; k++) diag[9 * i + k] = PetscRealPart(v[k]);
+    PetscCall(MatGetValues(fp->W, dim, idx, dim, idx, v));
+    for (PetscInt k = 0; k < dim * dim; k++) diag[9 * i + k] = PetscRealPart(v[k]);
   }
   pgs->reason = MBC_PGS_ITERATING;
   for (pgs->its = 0; pgs->reason == MBC_PGS_ITERATING; pgs->its++) {
     const PetscScalar *qv;
     PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
-    if (pgs->active_set && pgs->its > 0 && pgs->its % pgs->active_set == 0 && pgs->error >= pgs->rtol) PetscCall(ActiveSetStep(fp, r, u, &pgs->error));
+    if (pgs->active_set && pgs->its > 0 && pgs->its % pgs->active_set == 0 && pgs->error >= pgs->rtol) {
+      /* a few active-set (semismooth Newton) steps while they pay; the first also counts the
+         contacts closed in q as active: with a body held only by contact (static), D has a huge
+         rigid-mode part and the Gauss-Seidel iterate leaves most of them unloaded */
+      for (PetscInt k = 0; k < 10 && pgs->error >= pgs->rtol; k++) {
+        const PetscReal before = pgs->error;
+        PetscCall(ActiveSetStep(fp, r, u, (PetscBool)(k == 0), &pgs->error));
+        if (!(pgs->error < 0.5 * before)) break;
+      }
+    }
     if (pgs->monitor) PetscCall(PetscPrintf(PETSC_COMM_SELF, "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
     if (PetscIsInfOrNanReal(pgs->error)) pgs->reason = MBC_PGS_DIVERGED_NANORINF;
     else if (pgs->error < pgs->rtol) pgs->reason = MBC_PGS_CONVERGED_RTOL;
@@ -275,9 +345,10 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
     PetscCall(VecGetArray(r, &rv));
     PetscCall(VecGetArrayRead(fp->q, &qv));
     for (PetscInt i = 0; i < fp->nc; i++) {
-      PetscReal b[3], rnew[3];
-      for (int d = 0; d < 3; d++) { /* b = q_i + (W r)_i - W_ii r_i */
-        const PetscInt     row = 3 * i + d;
+      const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+      PetscReal      b[3], rnew[3];
+      for (PetscInt d = 0; d < dim; d++) { /* b = q_i + (W r)_i - W_ii r_i */
+        const PetscInt     row = o + d;
         PetscInt           ncols;
         const PetscInt    *cols;
         const PetscScalar *vals;
@@ -285,15 +356,17 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
         PetscCall(MatGetRow(fp->W, row, &ncols, &cols, &vals));
         for (PetscInt k = 0; k < ncols; k++) b[d] += PetscRealPart(vals[k]) * rv[cols[k]];
         PetscCall(MatRestoreRow(fp->W, row, &ncols, &cols, &vals));
-        for (int e = 0; e < 3; e++) b[d] -= diag[9 * i + 3 * d + e] * rv[3 * i + e];
+        for (PetscInt e = 0; e < dim; e++) b[d] -= diag[9 * i + dim * d + e] * rv[o + e];
       }
-      PetscCall(MBCContactLocalSolve(&diag[9 * i], b, fp->mu[i], rnew));
+      if (dim == 1) rnew[0] = (b[0] >= 0 || !(diag[9 * i] > 0)) ? 0 : -b[0] / diag[9 * i];
+      else PetscCall(MBCContactLocalSolve(&diag[9 * i], b, fp->mu[i], rnew));
       if (pgs->omega != 1) { /* over-relaxation may leave the cone: project back */
         PetscReal x[3];
-        for (int d = 0; d < 3; d++) x[d] = pgs->omega * rnew[d] + (1 - pgs->omega) * rv[3 * i + d];
-        ProjectCone(x, fp->mu[i], rnew);
+        for (PetscInt d = 0; d < dim; d++) x[d] = pgs->omega * rnew[d] + (1 - pgs->omega) * rv[o + d];
+        if (dim == 1) rnew[0] = PetscMax(0, x[0]);
+        else ProjectCone(x, fp->mu[i], rnew);
       }
-      for (int d = 0; d < 3; d++) rv[3 * i + d] = rnew[d];
+      for (PetscInt d = 0; d < dim; d++) rv[o + d] = rnew[d];
     }
     PetscCall(VecRestoreArrayRead(fp->q, &qv));
     PetscCall(VecRestoreArray(r, &rv));
@@ -305,9 +378,21 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
   PetscFunctionReturn(0);
 }
 
+/* Block layout: dims[i] rows (1 or 3) for contact i, or 3 each when dims is NULL. */
+PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *fp, const PetscInt dims[])
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(fp->off));
+  PetscCall(PetscMalloc1(fp->nc + 1, &fp->off));
+  fp->off[0] = 0;
+  for (PetscInt i = 0; i < fp->nc; i++) fp->off[i + 1] = fp->off[i] + (dims ? dims[i] : 3);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *fp)
 {
   PetscFunctionBegin;
+  PetscCall(PetscFree(fp->off));
   PetscCall(MatDestroy(&fp->W));
   PetscCall(VecDestroy(&fp->q));
   PetscCall(PetscFree(fp->mu));

@@ -1,12 +1,14 @@
-/* Private: the frictional contact problem u = W r + q (FCLIB "local" form, contacts as 3-blocks
-   normal, tangent 1, tangent 2; in mbcontact W = D, q = -Q) and its projected Gauss-Seidel. */
+/* Private: the frictional contact problem u = W r + q (FCLIB "local" form; a contact is a 3-block
+   normal, tangent 1, tangent 2, or a 1-block (normal only) when frictionless; in mbcontact
+   W = D, q = -Q) and its projected Gauss-Seidel. */
 #pragma once
 
 #include <mbcontact.h>
 
 typedef struct {
   PetscInt   nc;   /* contacts */
-  Mat        W;    /* 3nc x 3nc, SeqAIJ */
+  PetscInt  *off;  /* nc + 1: first row of each contact; off[i+1] - off[i] is 3, or 1 (frictionless) */
+  Mat        W;    /* off[nc] x off[nc], SeqAIJ */
   Vec        q;
   PetscReal *mu;
   char       title[256];
@@ -34,6 +36,7 @@ PETSC_EXTERN PetscErrorCode MBCPGSSetFromOptions(MBCPGS *);
 PETSC_EXTERN PetscErrorCode MBCPGSSolve(MBCPGS *, MBCFrictionProblem *, Vec, Vec);
 PETSC_EXTERN PetscErrorCode MBCFrictionError(MBCFrictionProblem *, Vec, Vec, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCContactLocalSolve(const PetscReal[9], const PetscReal[3], PetscReal, PetscReal[3]);
+PETSC_EXTERN PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *, const PetscInt[]);
 PETSC_EXTERN PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *);
 PETSC_EXTERN PetscErrorCode MBCFclibRead(const char[], MBCFrictionProblem *, PetscBool *);
 PETSC_EXTERN PetscErrorCode MBCFclibReadSolution(const char[], Vec);
