@@ -14,6 +14,8 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->comm        = comm;
   c->scene       = scene;
   c->cell_factor = 1.0;
+  c->integrate   = PETSC_TRUE;
+  c->nquad       = 4;
   c->ncouples    = scene->ncouples;
   PetscCall(PetscCalloc1(c->ncouples, &c->couples));
   for (PetscInt i = 0; i < c->ncouples; i++) {
@@ -31,9 +33,12 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c)
   PetscOptionsBegin(c->comm, NULL, "mbcontact contact search options", "MBCContact");
   PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
+  PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
   PetscCall(PetscOptionsString("-mbc_contact_dump", "Write PREFIX_pairs.csv and PREFIX_points.csv", "MBCContactSetFromOptions", c->dump, c->dump, sizeof(c->dump), NULL));
   PetscOptionsEnd();
+  PetscCheck(c->nquad >= 1 && c->nquad <= 16, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_quadrature %" PetscInt_FMT " must lie in [1, 16]", c->nquad);
   PetscCheck(c->cell_factor > 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_cell_factor %g must be positive", (double)c->cell_factor);
   PetscCheck(c->margin >= 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_margin %g must not be negative", (double)c->margin);
   PetscFunctionReturn(0);
@@ -332,6 +337,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
+    PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
   }
   PetscCall(PetscFree(rec));
   if (global) {
@@ -417,6 +423,7 @@ PetscErrorCode MBCContactDestroy(MBCContact *contact)
     PetscCall(MBCSurfaceReset(&c->couples[i].slave));
     PetscCall(PetscFree(c->couples[i].pairs));
     PetscCall(PetscFree(c->couples[i].points));
+    PetscCall(MBCCoupleIntegrateReset(&c->couples[i]));
   }
   for (PetscInt b = 0; b < c->scene->nbodies; b++) PetscCall(VecDestroy(&c->usearch[b]));
   PetscCall(PetscFree(c->usearch));

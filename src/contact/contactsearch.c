@@ -3,38 +3,6 @@
    test and area coordinates for the local search. No nonlinear projection is solved. */
 #include <mbc/private/contactimpl.h>
 
-static inline void Sub(const PetscReal a[], const PetscReal b[], PetscReal c[])
-{
-  c[0] = a[0] - b[0];
-  c[1] = a[1] - b[1];
-  c[2] = a[2] - b[2];
-}
-static inline void Cross(const PetscReal a[], const PetscReal b[], PetscReal c[])
-{
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-static inline PetscReal Dot(const PetscReal a[], const PetscReal b[])
-{
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static inline PetscReal Normalize(PetscReal a[])
-{
-  PetscReal n = PetscSqrtReal(Dot(a, a));
-  if (n > 0) a[0] /= n, a[1] /= n, a[2] /= n;
-  return n;
-}
-/* signed area of triangle (a, b, c) seen along the unit normal n */
-static inline PetscReal Area(const PetscReal a[], const PetscReal b[], const PetscReal c[], const PetscReal n[])
-{
-  PetscReal u[3], v[3], w[3];
-  Sub(b, a, u);
-  Sub(c, a, v);
-  Cross(u, v, w);
-  return 0.5 * Dot(w, n);
-}
-
 PetscErrorCode MBCSurfaceReset(MBCSurface *s)
 {
   PetscFunctionBegin;
@@ -69,7 +37,7 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
       n[2] += (a[0] - b[0]) * (a[1] + b[1]);
       for (PetscInt d = 0; d < 3; d++) c[d] += a[d] / nv;
     }
-    PetscCheck(Normalize(n) > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Contact face %" PetscInt_FMT " of body %" PetscInt_FMT " has zero area", f, s->fbody[f]);
+    PetscCheck(MBCNormalize(n) > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Contact face %" PetscInt_FMT " of body %" PetscInt_FMT " has zero area", f, s->fbody[f]);
   }
   PetscCall(PetscCalloc2(s->nnodes + 1, &s->n2foff, MBC_MAX_FACE_NODES * s->nfaces, &s->n2f));
   for (PetscInt f = 0; f < s->nfaces; f++)
@@ -84,7 +52,7 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
     }
   }
   PetscCall(PetscFree(count));
-  for (PetscInt v = 0; v < s->nnodes; v++) Normalize(&s->nnormal[3 * v]);
+  for (PetscInt v = 0; v < s->nnodes; v++) MBCNormalize(&s->nnormal[3 * v]);
   PetscFunctionReturn(0);
 }
 
@@ -131,10 +99,10 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
     for (PetscInt f = 0; f < t->nfaces; f++)
       for (PetscInt i = 0; i < t->fnv[f]; i++) {
         PetscReal e[3];
-        Sub(&t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + i]], &t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + (i + 1) % t->fnv[f]]], e);
-        edges += PetscSqrtReal(Dot(e, e));
+        MBCSub(&t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + i]], &t->x[3 * t->fnode[MBC_MAX_FACE_NODES * f + (i + 1) % t->fnv[f]]], e);
+        edges += PetscSqrtReal(MBCDot(e, e));
         nedges++;
-        if (side) longest = PetscMax(longest, PetscSqrtReal(Dot(e, e)));
+        if (side) longest = PetscMax(longest, PetscSqrtReal(MBCDot(e, e)));
       }
   }
   /* every point of a slave face lies within its longest edge of one of its vertices: with
@@ -186,8 +154,8 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
         for (PetscInt i = LowerBound(sk, s->nnodes, k0); i < s->nnodes && sk[i].key <= k0 + 2; i++) {
           PetscReal e[3], d;
           PetscInt  at;
-          Sub(&s->x[3 * sk[i].node], x, e);
-          d = PetscSqrtReal(Dot(e, e));
+          MBCSub(&s->x[3 * sk[i].node], x, e);
+          d = PetscSqrtReal(MBCDot(e, e));
           if (d > c->h) continue;
           /* insert into the sorted candidate list (distance, then canonical index) */
           for (at = p->ncand; at > 0 && (dist[at - 1] > d || (dist[at - 1] == d && p->cand[at - 1] > sk[i].node)); at--) { }
@@ -213,27 +181,28 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
   PetscFunctionReturn(0);
 }
 
-/* Projects master node v along its averaged normal onto slave face f; returns PETSC_TRUE and
-   the contact point when the face opposes the node and the projection falls inside it. */
-static PetscBool ProjectOnFace(MBCCouple *c, PetscInt v, PetscInt f, MBCContactPoint *cp, PetscReal *quality)
+/* Projects the point xm along the unit direction nm (a master node's averaged normal, or its
+   interpolation) onto slave face f; returns PETSC_TRUE and the contact point (slave weights,
+   projection, gap, normal) when the face opposes nm and the projection falls inside it. */
+PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, MBCContactPoint *cp, PetscReal *quality)
 {
-  MBCSurface      *m = &c->master, *s = &c->slave;
-  const PetscReal *xm = &m->x[3 * v], *nm = &m->nnormal[3 * v], *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
+  MBCSurface      *s = &c->slave;
+  const PetscReal *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
   const PetscInt   nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
-  const PetscReal  cosang = Dot(nm, nf);
+  const PetscReal  cosang = MBCDot(nm, nf);
   PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wsum = 0, wmin = PETSC_MAX_REAL;
 
   if (!(cosang < 0)) return PETSC_FALSE; /* the face must face the node */
-  Sub(cf, xm, e);
-  t = Dot(e, nf) / cosang;
+  MBCSub(cf, xm, e);
+  t = MBCDot(e, nf) / cosang;
   for (PetscInt d = 0; d < 3; d++) p[d] = xm[d] + t * nm[d];
   /* inside/outside: the sub-triangles (p, x_i, x_i+1) all turn like the face */
   for (PetscInt i = 0; i < nv; i++) {
     const PetscReal *a = &s->x[3 * fv[i]], *b = &s->x[3 * fv[(i + 1) % nv]];
     PetscReal        ab[3];
-    sub[i] = Area(p, a, b, nf);
-    Sub(b, a, ab);
-    if (sub[i] < -1e-6 * Dot(ab, ab)) return PETSC_FALSE; /* outside by more than 2e-6 of the edge */
+    sub[i] = MBCArea(p, a, b, nf);
+    MBCSub(b, a, ab);
+    if (sub[i] < -1e-6 * MBCDot(ab, ab)) return PETSC_FALSE; /* outside by more than 2e-6 of the edge */
   }
   cp->nv = nv;
   if (nv == 3) { /* area coordinates */
@@ -242,7 +211,7 @@ static PetscBool ProjectOnFace(MBCCouple *c, PetscInt v, PetscInt f, MBCContactP
     cp->w[3] = 0;
   } else { /* Wachspress coordinates from the four sub-areas: bilinear on parallelograms */
     for (PetscInt i = 0; i < 4; i++) {
-      const PetscReal Ci = Area(&s->x[3 * fv[(i + 3) % 4]], &s->x[3 * fv[i]], &s->x[3 * fv[(i + 1) % 4]], nf);
+      const PetscReal Ci = MBCArea(&s->x[3 * fv[(i + 3) % 4]], &s->x[3 * fv[i]], &s->x[3 * fv[(i + 1) % 4]], nf);
       cp->w[i]           = Ci * PetscMax(sub[(i + 1) % 4], 0) * PetscMax(sub[(i + 2) % 4], 0);
       wsum += cp->w[i];
     }
@@ -250,14 +219,13 @@ static PetscBool ProjectOnFace(MBCCouple *c, PetscInt v, PetscInt f, MBCContactP
     for (PetscInt i = 0; i < 4; i++) cp->w[i] /= wsum;
   }
   for (PetscInt i = 0; i < nv; i++) wmin = PetscMin(wmin, cp->w[i]);
-  cp->master = v;
-  cp->face   = f;
+  cp->face = f;
   for (PetscInt d = 0; d < 3; d++) {
     cp->p[d] = p[d];
     cp->n[d] = nf[d];
   }
-  Sub(xm, p, e);
-  cp->gap  = Dot(e, nf);
+  MBCSub(xm, p, e);
+  cp->gap  = MBCDot(e, nf);
   *quality = wmin;
   return PETSC_TRUE;
 }
@@ -270,9 +238,9 @@ static void Frame(MBCContactPoint *cp)
   for (PetscInt d = 1; d < 3; d++)
     if (PetscAbsReal(cp->n[d]) < PetscAbsReal(cp->n[a])) a = d;
   e[a] = 1;
-  Cross(e, cp->n, cp->t1);
-  Normalize(cp->t1);
-  Cross(cp->n, cp->t1, cp->t2);
+  MBCCross(e, cp->n, cp->t1);
+  MBCNormalize(cp->t1);
+  MBCCross(cp->n, cp->t1, cp->t2);
 }
 
 /* Local search: for every test pair, the faces around the partner slave node (then around the
@@ -300,7 +268,7 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
         c->ntests++;
         /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order
            wins, so rounding does not move the point between faces from one step to the next */
-        if (ProjectOnFace(c, pair->master, s->n2f[k], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
+        if (MBCCoupleProjectOnFace(c, &c->master.x[3 * pair->master], &c->master.nnormal[3 * pair->master], s->n2f[k], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
           best  = cp;
           bestq = q;
           found = PETSC_TRUE;
@@ -308,6 +276,7 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
       }
     }
     if (!found || best.gap < -c->h) continue;
+    best.master = pair->master;
     Frame(&best);
     c->points[c->npoints++] = best;
   }

@@ -30,6 +30,7 @@ typedef struct {
 typedef struct {
   PetscInt  master, face, nv;
   PetscReal w[MBC_MAX_FACE_NODES], p[3], n[3], t1[3], t2[3], gap;
+  PetscReal area;   /* the master node's share of the contact surface (integrated: the part that projects onto slave faces) */
 } MBCContactPoint;
 
 typedef struct {
@@ -41,6 +42,10 @@ typedef struct {
   MBCTestPair *pairs;
   PetscInt   npoints;
   MBCContactPoint *points;
+  /* the constraint of each point (MBCCoupleIntegrate): its gap is sum_j mw_j x_j - sum_j sw_j x_j
+     along n over master nodes mnode[moff[k]..] and slave nodes snode[soff[k]..]; igap its value */
+  PetscInt  *moff, *mnode, *soff, *snode;
+  PetscReal *mw, *sw, *igap;
 } MBCCouple;
 
 typedef struct _n_MBCContact *MBCContact;
@@ -50,6 +55,8 @@ struct _n_MBCContact {
   PetscInt   ncouples;
   MBCCouple *couples;
   PetscReal  cell_factor, margin;   /* margin <= 0: one cell edge */
+  PetscBool  integrate;     /* constraints averaged over each master node's share of the surface (else at the node) */
+  PetscInt   nquad;         /* Gauss points per direction on a master face */
   PetscBool  view;
   char       dump[PETSC_MAX_PATH_LEN];
   PetscInt   nsearches;     /* global searches so far */
@@ -70,3 +77,39 @@ PETSC_EXTERN PetscErrorCode MBCSurfaceSetUp(MBCSurface *);
 PETSC_EXTERN PetscErrorCode MBCSurfaceReset(MBCSurface *);
 PETSC_EXTERN PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *, PetscReal, PetscReal);
 PETSC_EXTERN PetscErrorCode MBCCoupleLocalSearch(MBCCouple *);
+PETSC_EXTERN PetscErrorCode MBCCoupleIntegrate(MBCCouple *, PetscBool, PetscInt);
+PETSC_EXTERN PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *);
+PETSC_INTERN PetscBool      MBCCoupleProjectOnFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, MBCContactPoint *, PetscReal *);
+
+static inline void MBCSub(const PetscReal a[], const PetscReal b[], PetscReal c[])
+{
+  c[0] = a[0] - b[0];
+  c[1] = a[1] - b[1];
+  c[2] = a[2] - b[2];
+}
+static inline void MBCCross(const PetscReal a[], const PetscReal b[], PetscReal c[])
+{
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+static inline PetscReal MBCDot(const PetscReal a[], const PetscReal b[])
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline PetscReal MBCNormalize(PetscReal a[])
+{
+  PetscReal n = PetscSqrtReal(MBCDot(a, a));
+  if (n > 0) a[0] /= n, a[1] /= n, a[2] /= n;
+  return n;
+}
+/* signed area of triangle (a, b, c) seen along the unit normal n */
+static inline PetscReal MBCArea(const PetscReal a[], const PetscReal b[], const PetscReal c[], const PetscReal n[])
+{
+  PetscReal u[3], v[3], w[3];
+  MBCSub(b, a, u);
+  MBCSub(c, a, v);
+  MBCCross(u, v, w);
+  return 0.5 * MBCDot(w, n);
+}
+
