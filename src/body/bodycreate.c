@@ -124,6 +124,9 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(MatDestroy(&b->M));
   PetscCall(MatDestroy(&b->A));
   PetscCall(KSPDestroy(&b->ksp));
+  PetscCall(MatDestroy(&b->Mc));
+  PetscCall(KSPDestroy(&b->kspM));
+  PetscCall(VecDestroy(&b->fcontact));
   PetscCall(VecDestroy(&b->u));
   PetscCall(VecDestroy(&b->v));
   PetscCall(VecDestroy(&b->a));

@@ -200,9 +200,10 @@ PetscErrorCode MBCBodySetUp(MBCBody body)
     PetscCall(VecDuplicate(body->u, &body->work2));
   }
   PetscCall(PetscLogEventEnd(MBC_BodyAssemble, 0, 0, 0, 0));
-  if (!dynamic) {
-    /* K alone: without inertia, every component needs a prescribed DOF somewhere. */
-    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
+  if (!dynamic && !scene->ncouples) {
+    /* K alone: without inertia or contact, every component needs a prescribed DOF somewhere
+       (with contact, the static solver stabilises such bodies: -mbc_static_stabilize). */
+    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface, hold it by contact, or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
   }
   PetscFunctionReturn(0);
 }

@@ -25,6 +25,14 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
     PetscCall(MatDuplicate(body->M, MAT_COPY_VALUES, &A));
     if (aM != 1) PetscCall(MatScale(A, aM));
   }
+  if (aK != 0 && body->stab > 0) { /* static stabilisation: a spring stab K_ii on every DOF */
+    Vec d;
+    PetscCall(MatCreateVecs(A, &d, NULL));
+    PetscCall(MatGetDiagonal(body->K, d));
+    PetscCall(VecScale(d, aK * body->stab));
+    PetscCall(MatDiagonalSet(A, d, ADD_VALUES));
+    PetscCall(VecDestroy(&d));
+  }
   PetscCall(MatZeroRowsColumns(A, body->nbc, body->bc_rows, 1.0, NULL, NULL));
   PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
 
@@ -49,7 +57,7 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
   PetscCall(KSPSetUp(ksp));
   PetscCall(PCGetFailedReasonRank(pc, &reason));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &reason, 1, MPI_INT, MPI_MAX, body->comm));
-  PetscCheck(reason == PC_NOERROR, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': factorization of the %s operator failed (%s); is the body held against rigid-body motion?", body->name, purpose, PCFailedReasons[reason]);
+  PetscCheck(reason == PC_NOERROR, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': factorization of the %s operator failed (%s); is the body held against rigid-body motion? (static: see -mbc_static_stabilize)", body->name, purpose, PCFailedReasons[reason]);
   PetscCall(PetscLogEventEnd(MBC_BodyFactor, 0, 0, 0, 0));
   *newksp = ksp;
   *newA   = A;

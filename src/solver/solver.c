@@ -9,7 +9,12 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   PetscFunctionBegin;
   PetscCall(MBCInitializePackage());
   PetscCall(PetscNew(&s));
-  s->comm = comm;
+  s->comm             = comm;
+  s->contact_h5       = -1;
+  s->fclib_step       = -1;
+  s->static_stabilize = -1;
+  s->static_rtol      = 1e-6;
+  s->static_max_it    = 50;
   *solver = s;
   PetscFunctionReturn(0);
 }
@@ -51,6 +56,11 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsBool("-mbc_monitor", "Print a line per step", "MBCSolverSetFromOptions", s->monitor, &s->monitor, NULL));
   PetscCall(PetscOptionsBool("-mbc_view", "Print the scene and the decomposition", "MBCSolverSetFromOptions", s->view, &s->view, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_search_only", "Search contact on the undeformed bodies, report, stop", "MBCSolverSetFromOptions", s->search_only, &s->search_only, NULL));
+  PetscCall(PetscOptionsString("-mbc_fclib_write", "Write the contact multiplier problem of step -mbc_fclib_write_step to this FCLIB file", "MBCSolverSetFromOptions", s->fclib_file, s->fclib_file, sizeof(s->fclib_file), NULL));
+  PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, NULL));
+  PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: epsilon of the spring epsilon diag(K) to the last iterate (< 0: 1e-6 for bodies free in some direction, 0 elsewhere)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
+  PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
+  PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
   s->mass     = (MBCMassType)mass;
@@ -64,6 +74,10 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
     for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
   s->nsteps = (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9);
+  if (s->fclib_step < 0) s->fclib_step = s->nsteps;
+  PetscCheck(!s->fclib_file[0] || (s->fclib_step >= 1 && s->fclib_step <= s->nsteps), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT " is not a step of this run (1 to %" PetscInt_FMT ")", s->fclib_step, s->nsteps);
+  PetscCheck(s->static_rtol > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_rtol %g must be positive", (double)s->static_rtol);
+  PetscCheck(s->static_max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_max_it %" PetscInt_FMT " must be at least 1", s->static_max_it);
   PetscFunctionReturn(0);
 }
 
@@ -188,7 +202,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact));
     PetscCall(MBCPGSSetFromOptions(&s->pgs));
-    PetscCall(PetscCalloc2(s->nbodies, &s->H, s->nbodies, &s->X));
+    PetscCall(PetscCalloc6(s->nbodies, &s->H, s->nbodies, &s->X, s->nbodies, &s->Hu, s->nbodies, &s->Hus, s->nbodies, &s->lam, s->nbodies, &s->hsc));
   }
   s->setupcalled = PETSC_TRUE;
   if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
@@ -246,56 +260,49 @@ PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[4])
   PetscFunctionReturn(0);
 }
 
-/* The contact search at the current displacements (forces come with the contact-force issue). */
+/* The contact search at the current displacements, then H, X and D rebuilt when the contact
+   pairs (couple, master node, slave face, slave nodes of the integrated constraint) changed: between steps, so that a step's free solve
+   already sees the acceleration made consistent with the carried contact forces. */
 static PetscErrorCode SolverContact(MBCSolver s)
 {
-  PetscBool researched;
+  MBCContact c = s->contact;
+  PetscBool  researched, same;
+  PetscInt   n = 0, k = 0, *pairs;
 
   PetscFunctionBegin;
-  if (!s->contact) PetscFunctionReturn(0);
-  PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_FALSE, &researched));
-  if (researched && s->monitor && s->contact->nsearches > 1) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: re-search (global search %" PetscInt_FMT ")\n", s->step, (double)s->time, s->contact->nsearches));
+  if (!c) PetscFunctionReturn(0);
+  PetscCall(MBCContactUpdate(c, s->nbodies, s->bodies, PETSC_FALSE, &researched));
+  if (researched && s->monitor && c->nsearches > 1) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: re-search (global search %" PetscInt_FMT ")\n", s->step, (double)s->time, c->nsearches));
+  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
+  PetscCall(PetscMalloc1(MBC_PAIR_SIZE * n + 1, &pairs));
+  for (PetscInt i = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const MBCCouple *cp = &c->couples[i];
+      uint32_t         h  = 2166136261u; /* FNV-1a of the slave nodes the point's constraint involves */
+      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) h = (h ^ (uint32_t)cp->snode[l]) * 16777619u;
+      pairs[MBC_PAIR_SIZE * k]     = i;
+      pairs[MBC_PAIR_SIZE * k + 1] = cp->points[j].master;
+      pairs[MBC_PAIR_SIZE * k + 2] = cp->points[j].face;
+      pairs[MBC_PAIR_SIZE * k + 3] = (PetscInt)(h & 0x7fffffff);
+    }
+  same = (PetscBool)(s->pairs_built && n == s->npairs_built);
+  if (same) PetscCall(PetscArraycmp(pairs, s->pairs_built, MBC_PAIR_SIZE * n, &same));
+  if (!same) {
+    PetscCall(MBCSolverContactSetUp(s, n, pairs)); /* takes pairs */
+    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, s->fp.off ? s->fp.off[s->fp.nc] : 0));
+  } else PetscCall(PetscFree(pairs));
   PetscFunctionReturn(0);
 }
 
-/* (couple, master node, slave face) of every contact point: D is rebuilt when this changes. */
+/* The multipliers of the step: du += A^-1 H lambda. */
 static PetscErrorCode SolverContactForces(MBCSolver s)
 {
-  MBCContact c = s->contact;
-  PetscInt   n = 0, k = 0, *pairs;
-  PetscBool  same;
-
   PetscFunctionBegin;
-  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
-  PetscCall(PetscMalloc1(3 * n + 1, &pairs));
-  for (PetscInt i = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
-      pairs[3 * k]     = i;
-      pairs[3 * k + 1] = c->couples[i].points[j].master;
-      pairs[3 * k + 2] = c->couples[i].points[j].face;
-    }
-  same = (PetscBool)(s->pairs_built && n == s->npairs_built);
-  if (same) PetscCall(PetscArraycmp(pairs, s->pairs_built, 3 * n, &same));
-  if (!same) {
-    PetscCall(PetscFree(s->pairs_built));
-    s->pairs_built  = pairs;
-    s->npairs_built = n;
-    PetscCall(MBCSolverContactSetUp(s));
-    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, flexibility matrix rebuilt\n", s->step, (double)s->time, n));
-  } else PetscCall(PetscFree(pairs));
   PetscCall(MBCSolverContactSolve(s));
   if (s->monitor && s->fp.nc) {
-    const PetscScalar *l;
-    PetscInt           sep = 0, stick = 0, slip = 0;
-    PetscCall(VecGetArrayRead(s->lambda, &l));
-    for (PetscInt i = 0; i < s->fp.nc; i++) {
-      const PetscReal rt = PetscSqrtReal(PetscSqr(PetscRealPart(l[3 * i + 1])) + PetscSqr(PetscRealPart(l[3 * i + 2])));
-      if (!(PetscRealPart(l[3 * i]) > 0)) sep++;
-      else if (rt < s->fp.mu[i] * PetscRealPart(l[3 * i]) * (1 - 1e-8)) stick++;
-      else slip++;
-    }
-    PetscCall(VecRestoreArrayRead(s->lambda, &l));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: PGS %s in %" PetscInt_FMT " sweeps (error %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, sep, stick, slip));
+    PetscInt count[3] = {0, 0, 0};
+    PetscCall(MBCSolverContactStates(s, count, NULL, NULL));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: PGS %s in %" PetscInt_FMT " sweeps (error %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
   }
   PetscFunctionReturn(0);
 }
@@ -320,27 +327,93 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* Static analysis in the incremental form of the dynamic one, without inertia:
+   (K + eps diag K) du = F(t) - K u + H lambda, u += du, repeated within a step until the
+   out-of-balance force of the last iterate, max|A du|, is below rtol max|K u|. The spring
+   eps diag(K) pulls towards the last iterate only, so at convergence it carries no force and
+   K u = F + H lambda holds; it makes K regular for a body held only by contact (block 2 of the
+   two-block example), whose rigid motion the contact constraints then fix. The test is on
+   forces, not on du: a force imbalance f left by the PGS tolerance moves a stabilised body
+   rigidly by f / (eps K_ii), a large du that is no error of equilibrium. Without contact or
+   stabilisation one iteration is exact. */
 static PetscErrorCode SolverStatic(MBCSolver s)
 {
+  PetscBool stabilized = PETSC_FALSE;
+
   PetscFunctionBegin;
+  s->theta = 1; /* no inertia: the contact force of the step is lambda_n+1 */
+  s->carry = 0;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
+    body->stab = s->static_stabilize >= 0 ? s->static_stabilize : ((body->bc_component[0] && body->bc_component[1] && body->bc_component[2]) ? 0.0 : 1e-6);
+    if (body->stab > 0) stabilized = PETSC_TRUE;
     PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
     body->aK = 1.0;
     body->aM = 0.0;
   }
-  for (s->step = 1; s->step <= s->nsteps; s->step++) {
-    s->time = PetscMin(s->step * s->dt, s->final_time);
-    for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody body = s->bodies[b];
-      if (!body) continue;
-      PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
-      PetscCall(MBCBodyPrescribed(body, s->time, body->g));
-      PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->u));
-      PetscCall(MBCBodyCheckFinite(body, body->u, "displacement", s->time));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &stabilized, 1, MPIU_BOOL, MPI_LOR, s->comm));
+  s->step = 0;
+  PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  for (PetscInt b = 0; b < s->nbodies; b++) { /* a body free in some direction must touch a couple */
+    PetscBool touches = PETSC_FALSE, free = PETSC_FALSE;
+    if (s->bodies[b]) free = (PetscBool)!(s->bodies[b]->bc_component[0] && s->bodies[b]->bc_component[1] && s->bodies[b]->bc_component[2]);
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &free, 1, MPIU_BOOL, MPI_LOR, s->comm));
+    for (PetscInt i = 0; s->contact && i < s->contact->ncouples && !touches; i++) {
+      MBCSurface *side[2] = {&s->contact->couples[i].master, &s->contact->couples[i].slave};
+      for (PetscInt k = 0; k < 2; k++)
+        for (PetscInt n = 0; n < side[k]->nnodes && !touches; n++) touches = (PetscBool)(side[k]->nbody[n] == b);
     }
-    PetscCall(SolverContact(s));
+    PetscCheck(!free || s->static_stabilize != 0, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and -mbc_static_stabilize 0: its static stiffness is singular; stabilise it (default) or prescribe it", s->scene->filename, s->scene->bodies[b].name);
+    PetscCheck(!free || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+  }
+  for (s->step = 1; s->step <= s->nsteps; s->step++) {
+    PetscReal fmax = 0, kumax = 0;
+    s->time = PetscMin(s->step * s->dt, s->final_time);
+    for (s->static_its = 1;; s->static_its++) {
+      for (PetscInt b = 0; b < s->nbodies; b++) {
+        MBCBody            body = s->bodies[b];
+        PetscInt           rstart;
+        PetscScalar       *gv;
+        const PetscScalar *uv;
+        if (!body) continue;
+        PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
+        PetscCall(MatMult(body->K, body->u, body->work));
+        PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+        PetscCall(MBCBodyPrescribed(body, s->time, body->g)); /* increments of the prescribed values */
+        PetscCall(VecGetOwnershipRange(body->g, &rstart, NULL));
+        PetscCall(VecGetArray(body->g, &gv));
+        PetscCall(VecGetArrayRead(body->u, &uv));
+        for (PetscInt i = 0; i < body->nbc; i++) gv[body->bc_rows[i] - rstart] -= uv[body->bc_rows[i] - rstart];
+        PetscCall(VecRestoreArrayRead(body->u, &uv));
+        PetscCall(VecRestoreArray(body->g, &gv));
+        PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
+      }
+      if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda */
+      fmax = kumax = 0;
+      for (PetscInt b = 0; b < s->nbodies; b++) {
+        MBCBody   body = s->bodies[b];
+        PetscReal n;
+        if (!body) continue;
+        PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
+        PetscCall(MatMult(body->A, body->du, body->work));
+        PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
+        fmax = PetscMax(fmax, n);
+        PetscCall(VecAXPY(body->u, 1.0, body->du));
+        PetscCall(MatMult(body->K, body->u, body->work));
+        PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
+        kumax = PetscMax(kumax, n);
+      }
+      {
+        PetscReal mx[2] = {fmax, kumax};
+        PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPIU_REAL, MPIU_MAX, s->comm));
+        fmax = mx[0], kumax = mx[1];
+      }
+      PetscCall(SolverContact(s));
+      if (s->monitor && (s->contact || stabilized)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
+      if ((!s->contact && !stabilized) || fmax <= s->static_rtol * kumax) break;
+      PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax);
+    }
     PetscCall(SolverMonitor(s));
     PetscCall(MBCSolverOutputStep(s));
   }
@@ -411,6 +484,8 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
   const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt;
 
   PetscFunctionBegin;
+  s->theta = gamma; /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
+  s->carry = (1 - gamma) / gamma;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
@@ -421,6 +496,7 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
   }
   s->step = 0;
   s->time = 0;
+  PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   PetscCall(SolverMonitor(s));
   PetscCall(MBCSolverOutputStep(s));
   for (s->step = 1; s->step <= s->nsteps; s->step++) {
@@ -545,15 +621,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
-  for (PetscInt b = 0; s->H && b < s->nbodies; b++) {
-    PetscCall(MatDestroy(&s->H[b]));
-    PetscCall(MatDestroy(&s->X[b]));
-  }
-  PetscCall(PetscFree2(s->H, s->X));
-  PetscCall(MBCFrictionProblemDestroy(&s->fp));
-  PetscCall(VecDestroy(&s->lambda));
-  PetscCall(VecDestroy(&s->ucontact));
-  PetscCall(PetscFree(s->pairs_built));
+  PetscCall(MBCSolverContactDestroy(s));
   PetscCall(MBCContactDestroy(&s->contact));
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));

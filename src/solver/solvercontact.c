@@ -2,7 +2,18 @@
    H mapping each contact point's frame (n, t1, t2) to the master node (+) and the slave face
    nodes (- weights). With dU_free = A^-1 dF and X = A^-1 H (one multi-right-hand-side solve per
    body with its factor), the multipliers solve u = D lambda + q in the Coulomb cone with
-   D = sum_i H_i^T X_i, q = (gap, 0, 0) + sum_i H_i^T dU_free_i; then dU = dU_free + X lambda. */
+   D = sum_i H_i^T X_i, q = (gap, 0, 0) + sum_i H_i^T dU_free_i; then dU = dU_free + X lambda.
+   A frictionless couple's points carry the normal multiplier only (fp.off gives each point's
+   first column).
+
+   Complementarity is imposed on the step's mean contact force z = theta lambda_n+1 +
+   (1 - theta) lambda_n, theta = gamma (dynamic: the weights of Newmark's velocity update, so
+   z dt is the contact impulse of the step) or 1 (static), not on lambda_n+1. With r = z / theta
+   the problem keeps D: q' = q - c D lambda_n, c = (1 - theta) / theta, lambda_n+1 = r - c lambda_n.
+   For the trapezoidal rule the contact work of a step is then z . (g_n+1 - g_n) = -z . g_n <= 0:
+   a contact that opens gives back no energy. Imposed on lambda_n+1 itself it would be
+   (lambda_n . g_n+1 - lambda_n+1 . g_n) / 2, an energy gain whenever a loaded contact opens (a
+   bouncing block gains energy at every bounce). */
 #include <mbc/private/solverimpl.h>
 #include <mbc/private/pgsimpl.h>
 
@@ -14,9 +25,11 @@ static PetscInt NumContacts(MBCContact c)
   return n;
 }
 
-/* H of one body: 3 columns per contact point; rows of constrained DOFs are zero (a prescribed
-   DOF takes no contact force; the PGS treats a contact with no free DOF as inactive). */
-static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, PetscInt nc, Mat *H)
+/* H of one body: 3 columns per contact point (1 if frictionless), the point's frame times its
+   master (+) and slave (-) node weights (MBCCoupleIntegrate); rows of constrained DOFs are
+   zero (a prescribed DOF takes no contact force; the PGS treats a contact with no free DOF as
+   inactive). */
+static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, Mat *H)
 {
   MBCContact  c = s->contact;
   PetscMPIInt brank;
@@ -25,7 +38,7 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, PetscInt nc, 
   PetscFunctionBegin;
   PetscCall(VecGetSize(body->u, &ndof));
   PetscCall(VecGetLocalSize(body->u, &nloc));
-  PetscCall(MatCreateAIJ(body->comm, nloc, PETSC_DECIDE, ndof, 3 * nc, 24, NULL, 24, NULL, H));
+  PetscCall(MatCreateAIJ(body->comm, nloc, PETSC_DECIDE, ndof, s->fp.off[s->fp.nc], 24, NULL, 24, NULL, H));
   PetscCall(MatSetOption(*H, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
   PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
   for (PetscInt i = 0; i < c->ncouples; i++) {
@@ -35,14 +48,17 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, PetscInt nc, 
       const MBCContactPoint *p = &cp->points[j];
       const PetscReal       *e[3] = {p->n, p->t1, p->t2};
       if (brank) continue; /* rank 0 of the body inserts; assembly sends rows to their owners */
-      for (PetscInt a = 0; a < 3; a++) {
-        const PetscInt col = 3 * k + a;
-        if (m->nbody[p->master] == body->index)
-          for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, m->nrow[p->master] + d, col, e[a][d], ADD_VALUES));
-        for (PetscInt v = 0; v < p->nv; v++) {
-          const PetscInt node = sl->fnode[MBC_MAX_FACE_NODES * p->face + v];
+      for (PetscInt a = 0; a < s->fp.off[k + 1] - s->fp.off[k]; a++) {
+        const PetscInt col = s->fp.off[k] + a;
+        for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
+          const PetscInt node = cp->mnode[l];
+          if (m->nbody[node] != body->index) continue;
+          for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, m->nrow[node] + d, col, cp->mw[l] * e[a][d], ADD_VALUES));
+        }
+        for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) {
+          const PetscInt node = cp->snode[l];
           if (sl->nbody[node] != body->index) continue;
-          for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, sl->nrow[node] + d, col, -p->w[v] * e[a][d], ADD_VALUES));
+          for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, sl->nrow[node] + d, col, -cp->sw[l] * e[a][d], ADD_VALUES));
         }
       }
     }
@@ -53,85 +69,262 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, PetscInt nc, 
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode MBCSolverContactSetUp(MBCSolver s)
+/* Per-body work of the contact step, rebuilt with H: H^T du, its copy on every rank of the
+   body, the scatter between them, and lambda in X's column layout. */
+static PetscErrorCode SolverContactReset(MBCSolver s)
 {
-  MBCContact  c  = s->contact;
-  PetscInt    nc = NumContacts(c);
-  PetscScalar *Dl, *Dg;
-
   PetscFunctionBegin;
-  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     PetscCall(MatDestroy(&s->H[b]));
     PetscCall(MatDestroy(&s->X[b]));
+    PetscCall(VecDestroy(&s->Hu[b]));
+    PetscCall(VecDestroy(&s->Hus[b]));
+    PetscCall(VecDestroy(&s->lam[b]));
+    PetscCall(VecScatterDestroy(&s->hsc[b]));
   }
   PetscCall(MBCFrictionProblemDestroy(&s->fp));
+  PetscCall(VecDestroy(&s->lambda));
+  PetscCall(VecDestroy(&s->ucontact));
+  PetscCall(VecDestroy(&s->lamprev));
+  PetscFunctionReturn(0);
+}
+
+/* Carries a per-point 3-vector field (components in each point's frame n, t1, t2; 1 component if
+   frictionless) from the points of the last build to the new ones, matched by (couple, master
+   node), through global coordinates. Points without a match get 0. */
+static PetscErrorCode CarryField(PetscInt nold, const PetscInt oldpairs[], const PetscReal oldframes[], const PetscInt oldoff[], const PetscReal oldv[], PetscInt nnew, const PetscInt newpairs[], const PetscReal newframes[], const PetscInt newoff[], PetscReal newv[])
+{
+  PetscInt *key, *perm;
+
+  PetscFunctionBegin;
+  for (PetscInt k = 0; k < newoff[nnew]; k++) newv[k] = 0;
+  if (!nold) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc2(nold, &key, nold, &perm));
+  for (PetscInt lo = 0, hi; lo < nold; lo = hi) { /* points are grouped by couple */
+    for (hi = lo; hi < nold && oldpairs[MBC_PAIR_SIZE * hi] == oldpairs[MBC_PAIR_SIZE * lo]; hi++) {
+      key[hi]  = oldpairs[MBC_PAIR_SIZE * hi + 1];
+      perm[hi] = hi;
+    }
+    PetscCall(PetscSortIntWithArray(hi - lo, key + lo, perm + lo));
+    for (PetscInt k = 0; k < nnew; k++) {
+      PetscInt j, dim = newoff[k + 1] - newoff[k];
+      if (newpairs[MBC_PAIR_SIZE * k] != oldpairs[MBC_PAIR_SIZE * lo]) continue;
+      PetscCall(PetscFindInt(newpairs[MBC_PAIR_SIZE * k + 1], hi - lo, key + lo, &j));
+      if (j < 0) continue;
+      j = perm[lo + j];
+      {
+        PetscReal f[3] = {0, 0, 0};
+        for (PetscInt d = 0; d < oldoff[j + 1] - oldoff[j]; d++)
+          for (PetscInt e = 0; e < 3; e++) f[e] += oldv[oldoff[j] + d] * oldframes[9 * j + 3 * d + e];
+        for (PetscInt d = 0; d < dim; d++) newv[newoff[k] + d] = f[0] * newframes[9 * k + 3 * d] + f[1] * newframes[9 * k + 3 * d + 1] + f[2] * newframes[9 * k + 3 * d + 2];
+      }
+    }
+  }
+  PetscCall(PetscFree2(key, perm));
+  PetscFunctionReturn(0);
+}
+
+/* The acceleration a_n holds M^-1 H_old lambda_n; the next step assumes M^-1 H_new lambda_n' with
+   the carried lambda_n' (points that left the contact carry nothing). a += M^-1 (H_new lambda_n' -
+   H_old lambda_n) keeps M a_n = F_n - K u_n + H lambda_n true (u and v, hence the energy, do not
+   change), so the step stays the trapezoidal rule on the mean contact force. */
+static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
+{
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody   body = s->bodies[b];
+    PetscReal norm;
+    if (!body) continue;
+    PetscCall(VecScale(body->fcontact, -1.0));
+    if (s->H[b]) {
+      const PetscScalar *l;
+      PetscScalar       *la;
+      PetscInt           lo, hi;
+      PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
+      PetscCall(VecGetArrayRead(s->lamprev, &l));
+      PetscCall(VecGetArray(s->lam[b], &la));
+      for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i];
+      PetscCall(VecRestoreArray(s->lam[b], &la));
+      PetscCall(VecRestoreArrayRead(s->lamprev, &l));
+      PetscCall(MatMultAdd(s->H[b], s->lam[b], body->fcontact, body->fcontact));
+    }
+    PetscCall(VecNorm(body->fcontact, NORM_INFINITY, &norm));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &norm, 1, MPIU_REAL, MPIU_MAX, body->comm));
+    if (norm == 0) continue;
+    if (!body->kspM) PetscCall(MBCBodyFactor(body, 0.0, 1.0, &body->kspM, &body->Mc, "mass"));
+    PetscCall(VecCopy(body->fcontact, body->rhs));
+    PetscCall(MBCBodyConstrainedSolve(body, body->kspM, 0.0, 1.0, NULL, body->rhs, body->work));
+    PetscCall(VecAXPY(body->a, 1.0, body->work));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Builds H, X = A^-1 H and D for the contact points of pairs (couple, master, face per point),
+   and carries the last step's contact forces and the PGS warm start over to them. */
+PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
+{
+  MBCContact   c  = s->contact;
+  PetscInt     nc = NumContacts(c), m, *dims, nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL;
+  PetscReal   *oldframes = s->frames, *oldlam = NULL, *oldr = NULL;
+  PetscScalar *Dl, *Dg;
+
+  PetscFunctionBegin;
+  PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
+  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  if (nold && s->lamprev) { /* keep what the new points inherit */
+    const PetscScalar *a, *l;
+    PetscInt           mold = s->fp.off[nold];
+    PetscCall(PetscMalloc3(nold + 1, &oldoff, mold, &oldlam, mold, &oldr));
+    PetscCall(PetscArraycpy(oldoff, s->fp.off, nold + 1));
+    PetscCall(VecGetArrayRead(s->lamprev, &a));
+    PetscCall(VecGetArrayRead(s->lambda, &l));
+    for (PetscInt i = 0; i < mold; i++) {
+      oldlam[i] = PetscRealPart(a[i]);
+      oldr[i]   = PetscRealPart(l[i]) / s->dscale;
+    }
+    PetscCall(VecRestoreArrayRead(s->lambda, &l));
+    PetscCall(VecRestoreArrayRead(s->lamprev, &a));
+  }
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) /* the contact force H lambda_n inside the acceleration */
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody body = s->bodies[b];
+      if (!body) continue;
+      if (!body->fcontact) PetscCall(VecDuplicate(body->u, &body->fcontact));
+      if (s->H[b]) PetscCall(MatMult(s->H[b], s->lam[b], body->fcontact));
+      else PetscCall(VecZeroEntries(body->fcontact));
+    }
+  s->frames = NULL;
+  PetscCall(SolverContactReset(s));
+  s->pairs_built  = pairs;
+  s->npairs_built = n;
   s->fp.nc = nc;
+  PetscCall(PetscMalloc1(nc, &s->fp.mu));
+  PetscCall(PetscMalloc1(nc, &dims));
+  PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const MBCContactPoint *p = &c->couples[i].points[j];
+      s->fp.mu[k] = c->couples[i].mu;
+      dims[k]     = c->couples[i].mu > 0 ? 3 : 1;
+      for (PetscInt e = 0; e < 3; e++) {
+        s->frames[9 * k + e]     = p->n[e];
+        s->frames[9 * k + 3 + e] = p->t1[e];
+        s->frames[9 * k + 6 + e] = p->t2[e];
+      }
+    }
+  PetscCall(MBCFrictionProblemSetBlocks(&s->fp, dims));
+  PetscCall(PetscFree(dims));
+  m = s->fp.off[nc];
   if (!nc) {
+    PetscCall(PetscFree3(oldoff, oldlam, oldr));
+    PetscCall(PetscFree(oldframes));
+    PetscCall(PetscFree(oldpairs));
     PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
     PetscFunctionReturn(0);
   }
-  PetscCall(PetscCalloc2(9 * nc * nc, &Dl, 9 * nc * nc, &Dg));
+  PetscCall(PetscCalloc2(m * m, &Dl, m * m, &Dg));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody     body = s->bodies[b];
     Mat         Hd, D;
     PetscMPIInt brank;
     if (!body) continue;
-    PetscCall(BodyContactMatrix(s, body, nc, &s->H[b]));
+    PetscCall(BodyContactMatrix(s, body, &s->H[b]));
     PetscCall(MatConvert(s->H[b], MATDENSE, MAT_INITIAL_MATRIX, &Hd));
     PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &s->X[b]));
     PetscCall(KSPMatSolve(body->ksp, Hd, s->X[b]));
     PetscCall(MatTransposeMatMult(Hd, s->X[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
-    { /* D_i (3nc x 3nc) to every rank of the body, then summed over bodies */
+    { /* D_i (m x m) to every rank of the body, then summed over bodies */
       Mat               *Dseq;
       IS                 all;
       const PetscScalar *a;
       PetscInt           lda;
-      PetscCall(ISCreateStride(PETSC_COMM_SELF, 3 * nc, 0, 1, &all));
+      PetscCall(ISCreateStride(PETSC_COMM_SELF, m, 0, 1, &all));
       PetscCall(MatCreateSubMatrices(D, 1, &all, &all, MAT_INITIAL_MATRIX, &Dseq));
       PetscCall(ISDestroy(&all));
       PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
       PetscCall(MatDenseGetLDA(Dseq[0], &lda));
       PetscCall(MatDenseGetArrayRead(Dseq[0], &a));
       if (!brank)
-        for (PetscInt i = 0; i < 3 * nc; i++)
-          for (PetscInt j = 0; j < 3 * nc; j++) Dl[i * 3 * nc + j] += a[i + j * lda]; /* row-major */
+        for (PetscInt i = 0; i < m; i++)
+          for (PetscInt j = 0; j < m; j++) Dl[i * m + j] += a[i + j * lda]; /* row-major */
       PetscCall(MatDenseRestoreArrayRead(Dseq[0], &a));
       PetscCall(MatDestroySubMatrices(1, &Dseq));
     }
     PetscCall(MatDestroy(&D));
     PetscCall(MatDestroy(&Hd));
+    PetscCall(MatCreateVecs(s->X[b], &s->lam[b], NULL));
+    PetscCall(MatCreateVecs(s->H[b], &s->Hu[b], NULL));
+    PetscCall(VecScatterCreateToAll(s->Hu[b], &s->hsc[b], &s->Hus[b]));
   }
-  PetscCallMPI(MPI_Allreduce(Dl, Dg, (PetscMPIInt)(9 * nc * nc), MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
+  PetscCallMPI(MPI_Allreduce(Dl, Dg, (PetscMPIInt)(m * m), MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
   { /* W = D / dbar as SeqAIJ, dbar the mean diagonal: r = dbar lambda has the units of u, so the
        FCLIB merit weighs forces and displacements alike; the same on every rank (the PGS runs
        redundantly, deterministically) */
     PetscInt *nnz;
     s->dscale = 0;
-    for (PetscInt i = 0; i < 3 * nc; i++) s->dscale += PetscRealPart(Dg[i * 3 * nc + i]) / (3 * nc);
+    for (PetscInt i = 0; i < m; i++) s->dscale += PetscRealPart(Dg[i * m + i]) / m;
     PetscCheck(s->dscale > 0, s->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
-    for (PetscInt i = 0; i < 9 * nc * nc; i++) Dg[i] /= s->dscale;
-    PetscCall(PetscCalloc1(3 * nc, &nnz));
-    for (PetscInt i = 0; i < 3 * nc; i++)
-      for (PetscInt j = 0; j < 3 * nc; j++) nnz[i] += Dg[i * 3 * nc + j] != 0.0;
-    PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, 3 * nc, 3 * nc, 0, nnz, &s->fp.W));
-    for (PetscInt i = 0; i < 3 * nc; i++)
-      for (PetscInt j = 0; j < 3 * nc; j++)
-        if (Dg[i * 3 * nc + j] != 0.0) PetscCall(MatSetValue(s->fp.W, i, j, Dg[i * 3 * nc + j], INSERT_VALUES));
+    for (PetscInt i = 0; i < m * m; i++) Dg[i] /= s->dscale;
+    PetscCall(PetscCalloc1(m, &nnz));
+    for (PetscInt i = 0; i < m; i++)
+      for (PetscInt j = 0; j < m; j++) nnz[i] += Dg[i * m + j] != 0.0;
+    PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, m, m, 0, nnz, &s->fp.W));
+    for (PetscInt i = 0; i < m; i++)
+      for (PetscInt j = 0; j < m; j++)
+        if (Dg[i * m + j] != 0.0) PetscCall(MatSetValue(s->fp.W, i, j, Dg[i * m + j], INSERT_VALUES));
     PetscCall(MatAssemblyBegin(s->fp.W, MAT_FINAL_ASSEMBLY));
     PetscCall(MatAssemblyEnd(s->fp.W, MAT_FINAL_ASSEMBLY));
     PetscCall(PetscFree(nnz));
   }
   PetscCall(PetscFree2(Dl, Dg));
-  PetscCall(VecCreateSeq(PETSC_COMM_SELF, 3 * nc, &s->fp.q));
-  PetscCall(PetscMalloc1(nc, &s->fp.mu));
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++) s->fp.mu[k++] = c->couples[i].mu;
-  PetscCall(VecDestroy(&s->lambda));
-  PetscCall(VecDestroy(&s->ucontact));
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, m, &s->fp.q));
   PetscCall(VecDuplicate(s->fp.q, &s->lambda));
   PetscCall(VecDuplicate(s->fp.q, &s->ucontact));
+  PetscCall(VecDuplicate(s->fp.q, &s->lamprev));
+  { /* carry lambda_n and the warm start r over to the new points */
+    PetscScalar *a, *l;
+    PetscReal   *v;
+    PetscCall(PetscMalloc1(m, &v));
+    PetscCall(VecGetArray(s->lamprev, &a));
+    PetscCall(CarryField(oldoff ? nold : 0, oldpairs, oldframes, oldoff, oldlam, nc, pairs, s->frames, s->fp.off, v));
+    for (PetscInt i = 0; i < m; i++) a[i] = v[i];
+    PetscCall(VecRestoreArray(s->lamprev, &a));
+    PetscCall(VecGetArray(s->lambda, &l));
+    PetscCall(CarryField(oldoff ? nold : 0, oldpairs, oldframes, oldoff, oldr, nc, pairs, s->frames, s->fp.off, v));
+    for (PetscInt i = 0; i < m; i++) l[i] = v[i] * s->dscale;
+    PetscCall(VecRestoreArray(s->lambda, &l));
+    PetscCall(PetscFree(v));
+  }
+  PetscCall(PetscFree3(oldoff, oldlam, oldr));
+  PetscCall(PetscFree(oldframes));
+  PetscCall(PetscFree(oldpairs));
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactAccelerationUpdate(s));
   PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverContactDestroy(MBCSolver s)
+{
+  PetscFunctionBegin;
+  if (!s->H) PetscFunctionReturn(0);
+  PetscCall(SolverContactReset(s));
+  PetscCall(PetscFree6(s->H, s->X, s->Hu, s->Hus, s->lam, s->hsc));
+  PetscCall(PetscFree(s->frames));
+  PetscCall(PetscFree(s->pairs_built));
+  PetscFunctionReturn(0);
+}
+
+/* -mbc_fclib_write FILE at step -mbc_fclib_write_step: the scaled problem (W = D / dscale,
+   r = dscale lambda) and its solution as an FCLIB local problem, written by rank 0. */
+static PetscErrorCode SolverContactWriteFclib(MBCSolver s)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscSNPrintf(s->fp.title, sizeof(s->fp.title), "%s, step %" PetscInt_FMT, s->scene->filename, s->step));
+  if (!rank) PetscCall(MBCFclibWriteLocal(s->fclib_file, &s->fp, s->lambda, s->ucontact));
+  PetscCallMPI(MPI_Barrier(s->comm));
   PetscFunctionReturn(0);
 }
 
@@ -139,64 +332,89 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s)
 PetscErrorCode MBCSolverContactSolve(MBCSolver s)
 {
   MBCContact   c  = s->contact;
-  PetscInt     nc = s->fp.nc;
+  PetscInt     nc = s->fp.nc, m;
   PetscScalar *ql, *qg, *q;
 
   PetscFunctionBegin;
   if (!nc) PetscFunctionReturn(0);
-  PetscCall(PetscCalloc2(3 * nc, &ql, 3 * nc, &qg));
+  m = s->fp.off[nc];
+  PetscCall(PetscCalloc2(m, &ql, m, &qg));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody            body = s->bodies[b];
-    Vec                Hu;
     PetscMPIInt        brank;
-    VecScatter         sc;
-    Vec                Hus;
     const PetscScalar *a;
     if (!body) continue;
-    PetscCall(MatCreateVecs(s->H[b], &Hu, NULL));
-    PetscCall(MatMultTranspose(s->H[b], body->du, Hu));
-    PetscCall(VecScatterCreateToAll(Hu, &sc, &Hus));
-    PetscCall(VecScatterBegin(sc, Hu, Hus, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(sc, Hu, Hus, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(MatMultTranspose(s->H[b], body->du, s->Hu[b]));
+    PetscCall(VecScatterBegin(s->hsc[b], s->Hu[b], s->Hus[b], INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(s->hsc[b], s->Hu[b], s->Hus[b], INSERT_VALUES, SCATTER_FORWARD));
     PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
-    PetscCall(VecGetArrayRead(Hus, &a));
+    PetscCall(VecGetArrayRead(s->Hus[b], &a));
     if (!brank)
-      for (PetscInt i = 0; i < 3 * nc; i++) ql[i] += a[i];
-    PetscCall(VecRestoreArrayRead(Hus, &a));
-    PetscCall(VecScatterDestroy(&sc));
-    PetscCall(VecDestroy(&Hus));
-    PetscCall(VecDestroy(&Hu));
+      for (PetscInt i = 0; i < m; i++) ql[i] += a[i];
+    PetscCall(VecRestoreArrayRead(s->Hus[b], &a));
   }
-  PetscCallMPI(MPI_Allreduce(ql, qg, (PetscMPIInt)(3 * nc), MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
+  PetscCallMPI(MPI_Allreduce(ql, qg, (PetscMPIInt)m, MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
   PetscCall(VecGetArray(s->fp.q, &q));
+  for (PetscInt i = 0; i < m; i++) q[i] = qg[i];
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
-      q[3 * k]     = c->couples[i].points[j].gap + qg[3 * k];
-      q[3 * k + 1] = qg[3 * k + 1];
-      q[3 * k + 2] = qg[3 * k + 2];
-    }
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) q[s->fp.off[k]] += c->couples[i].igap[j];
   PetscCall(VecRestoreArray(s->fp.q, &q));
   PetscCall(PetscFree2(ql, qg));
-  PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: lambda of the last step */
-  PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    Vec     lam;
-    if (!body) continue;
-    PetscCall(MatCreateVecs(s->X[b], &lam, NULL));
-    { /* physical lambda = r / dscale (replicated) into the owned part of X's column layout */
-      const PetscScalar *l;
-      PetscScalar       *la;
-      PetscInt           lo, hi;
-      PetscCall(VecGetOwnershipRange(lam, &lo, &hi));
-      PetscCall(VecGetArrayRead(s->lambda, &l));
-      PetscCall(VecGetArray(lam, &la));
-      for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i] / s->dscale;
-      PetscCall(VecRestoreArray(lam, &la));
-      PetscCall(VecRestoreArrayRead(s->lambda, &l));
-    }
-    PetscCall(MatMultAdd(s->X[b], lam, body->du, body->du));
-    PetscCall(VecDestroy(&lam));
+  if (s->carry != 0) { /* q' = q - c D lambda_n (scaled: W = D / dscale) */
+    Vec t;
+    PetscCall(VecDuplicate(s->lamprev, &t));
+    PetscCall(VecAXPBY(t, s->dscale, 0.0, s->lamprev));
+    PetscCall(MatMult(s->fp.W, t, s->ucontact));
+    PetscCall(VecAXPY(s->fp.q, -s->carry, s->ucontact));
+    PetscCall(VecDestroy(&t));
   }
+  PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: r of the last step */
+  if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
+  PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
+  PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody            body = s->bodies[b];
+    const PetscScalar *l;
+    PetscScalar       *la;
+    PetscInt           lo, hi;
+    if (!body) continue;
+    /* lambda_n+1 (replicated) into the owned part of X's column layout */
+    PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
+    PetscCall(VecGetArrayRead(s->lamprev, &l));
+    PetscCall(VecGetArray(s->lam[b], &la));
+    for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i];
+    PetscCall(VecRestoreArray(s->lam[b], &la));
+    PetscCall(VecRestoreArrayRead(s->lamprev, &l));
+    PetscCall(MatMultAdd(s->X[b], s->lam[b], body->du, body->du));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Per contact point (in couple order): its state and the step's mean contact force z = theta r
+   (in the frame n, t1, t2; tangents 0 where frictionless); counts of each state. state and
+   lambda may be NULL. */
+PetscErrorCode MBCSolverContactStates(MBCSolver s, PetscInt count[3], PetscInt state[], PetscReal lambda[])
+{
+  const PetscScalar *l;
+
+  PetscFunctionBegin;
+  count[0] = count[1] = count[2] = 0;
+  if (!s->fp.nc) PetscFunctionReturn(0);
+  PetscCall(VecGetArrayRead(s->lambda, &l));
+  for (PetscInt i = 0; i < s->fp.nc; i++) {
+    const PetscInt o = s->fp.off[i], dim = s->fp.off[i + 1] - o;
+    PetscReal      lam[3] = {0, 0, 0}, rt;
+    PetscInt       st;
+    for (PetscInt d = 0; d < dim; d++) lam[d] = s->theta * PetscRealPart(l[o + d]) / s->dscale;
+    rt = PetscSqrtReal(lam[1] * lam[1] + lam[2] * lam[2]);
+    if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
+    else if (dim == 3 && rt < s->fp.mu[i] * lam[0] * (1 - 1e-6)) st = MBC_CONTACT_STICK;
+    else st = MBC_CONTACT_SLIP;
+    count[st]++;
+    if (state) state[i] = st;
+    if (lambda)
+      for (PetscInt d = 0; d < 3; d++) lambda[3 * i + d] = lam[d];
+  }
+  PetscCall(VecRestoreArrayRead(s->lambda, &l));
   PetscFunctionReturn(0);
 }

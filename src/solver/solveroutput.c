@@ -116,6 +116,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       fprintf(s->points_csv, "\n");
     }
   }
+  PetscCall(MBCSolverOutputContactOpen(s));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC && !rank) {
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
@@ -155,7 +156,9 @@ static PetscErrorCode SolverOutputPoints(MBCSolver s)
 
 PetscErrorCode MBCSolverOutputStep(MBCSolver s)
 {
-  MBCScene scene = s->scene;
+  MBCScene  scene = s->scene;
+  PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress);
+  PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == s->nsteps));
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
@@ -165,8 +168,9 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
     PetscCall(MBCSolverEnergy(s, e));
     if (s->energy_csv) fprintf(s->energy_csv, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3]));
   }
-  if ((scene->output_displacement || scene->output_stress) && (s->step % s->output_every == 0 || s->step == s->nsteps)) {
-    for (PetscInt b = 0; b < s->nbodies; b++) {
+  PetscCall(MBCSolverOutputContactStep(s, fieldstep));
+  if (fieldstep) {
+    for (PetscInt b = 0; fields && b < s->nbodies; b++) {
       MBCBody body = s->bodies[b];
       if (!body) continue;
       PetscCall(PetscViewerHDF5SetTimestep(s->h5[b], s->noutputs));
@@ -247,7 +251,7 @@ static PetscErrorCode SolverWriteXdmf(MBCSolver s)
   fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
   for (PetscInt k = 0; k < s->noutputs; k++) {
     fprintf(fp, "    <Grid Name=\"step%" PetscInt_FMT "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n      <Time Value=\"%.17g\"/>\n", k, (double)s->output_times[k]);
-    for (PetscInt b = 0; b < s->nbodies; b++) {
+    for (PetscInt b = 0; s->h5 && (s->scene->output_displacement || s->scene->output_stress) && b < s->nbodies; b++) {
       hid_t   h5;
       int     nd;
       hsize_t cdims[3], vdims[3];
@@ -266,6 +270,7 @@ static PetscErrorCode SolverWriteXdmf(MBCSolver s)
       fprintf(fp, "      </Grid>\n");
       H5Fclose(h5);
     }
+    PetscCall(MBCSolverOutputContactXdmf(s, fp, k));
     fprintf(fp, "    </Grid>\n");
   }
   fprintf(fp, "  </Grid>\n  </Domain>\n</Xdmf>\n");
@@ -287,11 +292,12 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
     PetscCall(PetscViewerPopFormat(s->h5[b]));
     PetscCall(PetscViewerDestroy(&s->h5[b]));
   }
+  PetscCall(MBCSolverOutputContactClose(s));
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
   s->points_csv = s->energy_csv = NULL;
   PetscCallMPI(MPI_Barrier(s->comm));
-  if (fields && !rank) PetscCall(SolverWriteXdmf(s));
+  if ((fields || s->contact) && !rank) PetscCall(SolverWriteXdmf(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }

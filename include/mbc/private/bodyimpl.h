@@ -20,8 +20,11 @@ struct _n_MBCBody {
   PetscReal cM, cK;       /* damping C = cM M + cK K (never formed) */
   Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
   KSP ksp;
+  Mat Mc;                 /* mass operator of kspM (constrained rows/cols zeroed), made when contact needs it */
+  KSP kspM;
   PetscReal a0, a1;       /* coefficients of A = aK K + aM M */
   PetscReal aK, aM;
+  PetscReal stab;         /* static: A = K + stab diag(K), a spring to the last iterate */
   PetscReal wext, wdamp;  /* external work and damping dissipation so far (dynamic) */
 
   PetscInt  nloads;       /* scene loads acting on this body */
@@ -35,6 +38,7 @@ struct _n_MBCBody {
 
   Vec u, v, a;            /* displacement, velocity, acceleration */
   Vec du, rhs, f, fold, g, work, work2;
+  Vec fcontact;           /* dynamic: H lambda_n of the last contact build */
 };
 
 PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, MBCBody *);

@@ -3,6 +3,7 @@
 
 #include <mbc/private/contactimpl.h>
 #include <mbc/private/pgsimpl.h>
+#include <stdint.h>
 
 typedef struct {
   PetscInt  body;         /* body holding the nearest vertex */
@@ -10,6 +11,14 @@ typedef struct {
   PetscInt  row;          /* its first global row in the body's displacement Vec (on that rank) */
   PetscReal distance, xv[3];
 } MBCPointLocation;
+
+#define MBC_PAIR_SIZE 4
+
+typedef enum {
+  MBC_CONTACT_SEPARATED = 0,
+  MBC_CONTACT_STICK     = 1,
+  MBC_CONTACT_SLIP      = 2 /* also a frictionless point in contact */
+} MBCContactState;
 
 struct _n_MBCSolver {
   MPI_Comm  comm;
@@ -31,18 +40,30 @@ struct _n_MBCSolver {
   PetscInt  output_every, noutputs;
   PetscReal *output_times;
   PetscViewer *h5;        /* per body, NULL where the rank is not in the body */
-  FILE     *points_csv, *energy_csv;
+  FILE     *points_csv, *energy_csv, *contact_csv;
+  int64_t   contact_h5;   /* hid_t of <output>_contact.h5 on rank 0, else -1 */
   MBCPointLocation *points;
   PetscBool monitor, view;
 
   MBCContact contact;     /* NULL when the scene has no couples */
   Mat       *H, *X;       /* per body: contact matrix and A^-1 H (NULL off the body) */
+  Vec       *Hu, *Hus, *lam; /* per body: H^T du, its copy on every rank of the body, lambda in X's column layout */
+  VecScatter *hsc;        /* per body: Hu -> Hus */
   MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem, replicated on every rank */
   MBCPGS     pgs;
   PetscReal  dscale;      /* D is scaled by 1/dscale for the PGS: lambda = r / dscale */
-  Vec        lambda, ucontact;
-  PetscInt   npairs_built, *pairs_built; /* (couple, master, face) of each point when D was built */
+  Vec        lambda, ucontact; /* PGS unknown r (scaled) and u = W r + q */
+  Vec        lamprev;     /* lambda_n+1 after the step (physical): carried in the acceleration */
+  PetscReal  theta, carry; /* complementarity on z = theta lambda_n+1 + (1 - theta) lambda_n; carry = (1 - theta) / theta */
+  PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
+  PetscReal *frames;      /* (n, t1, t2) of each point when D was built */
   PetscBool  search_only;
+  char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
+  PetscInt   fclib_step;
+
+  /* static analysis: equilibrium iterations, stabilisation of bodies held only by contact */
+  PetscReal  static_stabilize, static_rtol;
+  PetscInt   static_max_it, static_its;
 
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
@@ -51,6 +72,12 @@ struct _n_MBCSolver {
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
+PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
-PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactDestroy(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactStates(MBCSolver, PetscInt[3], PetscInt[], PetscReal[]);
