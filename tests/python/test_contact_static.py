@@ -159,3 +159,14 @@ def test_fclib_write_step_out_of_range(tmp_path):
     h5 = patch_scene(tmp_path, "hex8", 0.0)
     r = solve(h5, "-mbc_fclib_write", str(tmp_path / "x.hdf5"), "-mbc_fclib_write_step", "7", check=False)
     assert r.returncode != 0 and "-mbc_fclib_write_step 7" in r.stderr, r.stderr
+
+
+def test_patch_test_on_four_ranks(tmp_path):
+    """With 4 ranks each body spans two: the pressures equal the 1-rank ones to the PGS
+    tolerance (measured 1.6e-10 relative; asserted 1e-7)."""
+    h5 = patch_scene(tmp_path, "tet4", 0.3)
+    solve(h5, "-mbc_output", str(tmp_path / "np1"))
+    solve(h5, "-mbc_output", str(tmp_path / "np4"), nproc=4)
+    p1 = contact_step(str(tmp_path / "np1_contact.h5"))["pressure"]
+    p4 = contact_step(str(tmp_path / "np4_contact.h5"))["pressure"]
+    assert np.abs(p4 - p1).max() <= 1e-7 * np.abs(p1).max()
