@@ -149,6 +149,25 @@ PetscErrorCode MBCBodyPrescribed(MBCBody body, PetscReal t, Vec g)
   PetscFunctionReturn(0);
 }
 
+/* g = prescribed displacement at time t minus the current one on the constrained rows, 0
+   elsewhere: the increments an incremental step imposes. */
+PetscErrorCode MBCBodyPrescribedIncrement(MBCBody body, PetscReal t, Vec g)
+{
+  PetscScalar       *gv;
+  const PetscScalar *uv;
+  PetscInt           rstart;
+
+  PetscFunctionBegin;
+  PetscCall(MBCBodyPrescribed(body, t, g));
+  PetscCall(VecGetOwnershipRange(g, &rstart, NULL));
+  PetscCall(VecGetArray(g, &gv));
+  PetscCall(VecGetArrayRead(body->u, &uv));
+  for (PetscInt i = 0; i < body->nbc; i++) gv[body->bc_rows[i] - rstart] -= uv[body->bc_rows[i] - rstart];
+  PetscCall(VecRestoreArrayRead(body->u, &uv));
+  PetscCall(VecRestoreArray(g, &gv));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCBodyComputeStress(MBCBody body, Vec u, Vec stress)
 {
   void (*funcs[1])(PetscInt, PetscInt, PetscInt, const PetscInt[], const PetscInt[], const PetscScalar[], const PetscScalar[], const PetscScalar[], const PetscInt[], const PetscInt[], const PetscScalar[], const PetscScalar[], const PetscScalar[], PetscReal, const PetscReal[], PetscInt, const PetscScalar[], PetscScalar[]);

@@ -1,7 +1,7 @@
 /* FCLIB interchange (layout: shared/benchmarks/fclib/README.md) with the HDF5 C API: Debian's
    libfclib links the serial HDF5, which must not share a process with PETSc's MPI HDF5. */
 #include <mbc/private/pgsimpl.h>
-#include <hdf5.h>
+#include <mbc/private/h5util.h>
 
 static PetscErrorCode H5ReadArray(hid_t loc, const char *file, const char *path, hid_t type, void *buf, hsize_t *n)
 {
@@ -206,18 +206,6 @@ PetscErrorCode MBCFclibRead(const char file[], MBCFrictionProblem *fp, PetscBool
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode H5Write(hid_t loc, const char *name, hid_t type, hsize_t n, const void *buf)
-{
-  hid_t sp = H5Screate_simple(1, &n, NULL), d;
-
-  PetscFunctionBegin;
-  d = H5Dcreate2(loc, name, type, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  PetscCheck(d >= 0 && H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write dataset %s", name);
-  H5Dclose(d);
-  H5Sclose(sp);
-  PetscFunctionReturn(0);
-}
-
 /* Writes u = W r + q as an FCLIB local problem (W in compressed rows), with r, u (when given)
    as /solution/r and /solution/u. FCLIB contacts are 3-blocks: a frictionless 1-block is written
    as a 3-block with mu = 0, q_t = 0 and W_tt = W_nn I (so r_t = u_t = 0 solve it: the same problem). */
@@ -273,24 +261,24 @@ PetscErrorCode MBCFclibWriteLocal(const char file[], MBCFrictionProblem *fp, Vec
   g  = H5Gcreate2(h5, "fclib_local", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   gw = H5Gcreate2(g, "W", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   dims[0] = (int)n, dims[1] = (int)n, dims[2] = -2, dims[3] = p[n];
-  PetscCall(H5Write(gw, "m", H5T_NATIVE_INT, 1, &dims[0]));
-  PetscCall(H5Write(gw, "n", H5T_NATIVE_INT, 1, &dims[1]));
-  PetscCall(H5Write(gw, "nz", H5T_NATIVE_INT, 1, &dims[2]));
-  PetscCall(H5Write(gw, "nzmax", H5T_NATIVE_INT, 1, &dims[3]));
-  PetscCall(H5Write(gw, "p", H5T_NATIVE_INT, (hsize_t)n + 1, p));
-  PetscCall(H5Write(gw, "i", H5T_NATIVE_INT, (hsize_t)p[n], ix));
-  PetscCall(H5Write(gw, "x", H5T_NATIVE_DOUBLE, (hsize_t)p[n], x));
+  PetscCall(MBCH5WriteArray(gw, "m", H5T_NATIVE_INT, 1, 1, &dims[0]));
+  PetscCall(MBCH5WriteArray(gw, "n", H5T_NATIVE_INT, 1, 1, &dims[1]));
+  PetscCall(MBCH5WriteArray(gw, "nz", H5T_NATIVE_INT, 1, 1, &dims[2]));
+  PetscCall(MBCH5WriteArray(gw, "nzmax", H5T_NATIVE_INT, 1, 1, &dims[3]));
+  PetscCall(MBCH5WriteArray(gw, "p", H5T_NATIVE_INT, n + 1, 1, p));
+  PetscCall(MBCH5WriteArray(gw, "i", H5T_NATIVE_INT, (PetscInt)p[n], 1, ix));
+  PetscCall(MBCH5WriteArray(gw, "x", H5T_NATIVE_DOUBLE, (PetscInt)p[n], 1, x));
   H5Gclose(gw);
   gv = H5Gcreate2(g, "vectors", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   PetscCall(VecGetArrayRead(fp->q, &a));
   for (PetscInt row = 0; row < m; row++) vec[map[row]] = PetscRealPart(a[row]);
   PetscCall(VecRestoreArrayRead(fp->q, &a));
-  PetscCall(H5Write(gv, "q", H5T_NATIVE_DOUBLE, (hsize_t)n, vec));
-  PetscCall(H5Write(gv, "mu", H5T_NATIVE_DOUBLE, (hsize_t)fp->nc, fp->mu));
+  PetscCall(MBCH5WriteArray(gv, "q", H5T_NATIVE_DOUBLE, n, 1, vec));
+  PetscCall(MBCH5WriteArray(gv, "mu", H5T_NATIVE_DOUBLE, fp->nc, 1, fp->mu));
   H5Gclose(gv);
   {
     int sd = 3;
-    PetscCall(H5Write(g, "spacedim", H5T_NATIVE_INT, 1, &sd));
+    PetscCall(MBCH5WriteArray(g, "spacedim", H5T_NATIVE_INT, 1, 1, &sd));
   }
   H5Gclose(g);
   if (r && u) {
@@ -302,7 +290,7 @@ PetscErrorCode MBCFclibWriteLocal(const char file[], MBCFrictionProblem *fp, Vec
       PetscCall(VecGetArrayRead(vs[k], &a));
       for (PetscInt row = 0; row < m; row++) vec[map[row]] = PetscRealPart(a[row]);
       PetscCall(VecRestoreArrayRead(vs[k], &a));
-      PetscCall(H5Write(gs, names[k], H5T_NATIVE_DOUBLE, (hsize_t)n, vec));
+      PetscCall(MBCH5WriteArray(gs, names[k], H5T_NATIVE_DOUBLE, n, 1, vec));
     }
     H5Gclose(gs);
   }

@@ -372,21 +372,12 @@ static PetscErrorCode SolverStatic(MBCSolver s)
     s->time = PetscMin(s->step * s->dt, s->final_time);
     for (s->static_its = 1;; s->static_its++) {
       for (PetscInt b = 0; b < s->nbodies; b++) {
-        MBCBody            body = s->bodies[b];
-        PetscInt           rstart;
-        PetscScalar       *gv;
-        const PetscScalar *uv;
+        MBCBody body = s->bodies[b];
         if (!body) continue;
         PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
         PetscCall(MatMult(body->K, body->u, body->work));
         PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-        PetscCall(MBCBodyPrescribed(body, s->time, body->g)); /* increments of the prescribed values */
-        PetscCall(VecGetOwnershipRange(body->g, &rstart, NULL));
-        PetscCall(VecGetArray(body->g, &gv));
-        PetscCall(VecGetArrayRead(body->u, &uv));
-        for (PetscInt i = 0; i < body->nbc; i++) gv[body->bc_rows[i] - rstart] -= uv[body->bc_rows[i] - rstart];
-        PetscCall(VecRestoreArrayRead(body->u, &uv));
-        PetscCall(VecRestoreArray(body->g, &gv));
+        PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
         PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
       }
       if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda */
@@ -502,10 +493,7 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
   for (s->step = 1; s->step <= s->nsteps; s->step++) {
     s->time = s->step * dt;
     for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody     body = s->bodies[b];
-      PetscInt    rstart;
-      PetscScalar *gv;
-      const PetscScalar *uv;
+      MBCBody body = s->bodies[b];
       if (!body) continue;
       PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->f));
       PetscCall(VecCopy(body->f, body->rhs));
@@ -520,14 +508,7 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
         PetscCall(VecAXPY(body->work2, a5, body->a));
         PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
       }
-      /* increments of the prescribed values */
-      PetscCall(MBCBodyPrescribed(body, s->time, body->g));
-      PetscCall(VecGetOwnershipRange(body->g, &rstart, NULL));
-      PetscCall(VecGetArray(body->g, &gv));
-      PetscCall(VecGetArrayRead(body->u, &uv));
-      for (PetscInt i = 0; i < body->nbc; i++) gv[body->bc_rows[i] - rstart] -= uv[body->bc_rows[i] - rstart];
-      PetscCall(VecRestoreArrayRead(body->u, &uv));
-      PetscCall(VecRestoreArray(body->g, &gv));
+      PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
       PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
     }
     if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda */

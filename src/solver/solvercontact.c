@@ -124,6 +124,23 @@ static PetscErrorCode CarryField(PetscInt nold, const PetscInt oldpairs[], const
   PetscFunctionReturn(0);
 }
 
+/* lambda (replicated, s->lamprev) into the owned part of body b's column layout of H and X. */
+static PetscErrorCode SolverLambdaToBody(MBCSolver s, PetscInt b)
+{
+  const PetscScalar *l;
+  PetscScalar       *la;
+  PetscInt           lo, hi;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
+  PetscCall(VecGetArrayRead(s->lamprev, &l));
+  PetscCall(VecGetArray(s->lam[b], &la));
+  for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i];
+  PetscCall(VecRestoreArray(s->lam[b], &la));
+  PetscCall(VecRestoreArrayRead(s->lamprev, &l));
+  PetscFunctionReturn(0);
+}
+
 /* The acceleration a_n holds M^-1 H_old lambda_n; the next step assumes M^-1 H_new lambda_n' with
    the carried lambda_n' (points that left the contact carry nothing). a += M^-1 (H_new lambda_n' -
    H_old lambda_n) keeps M a_n = F_n - K u_n + H lambda_n true (u and v, hence the energy, do not
@@ -137,15 +154,7 @@ static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
     if (!body) continue;
     PetscCall(VecScale(body->fcontact, -1.0));
     if (s->H[b]) {
-      const PetscScalar *l;
-      PetscScalar       *la;
-      PetscInt           lo, hi;
-      PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
-      PetscCall(VecGetArrayRead(s->lamprev, &l));
-      PetscCall(VecGetArray(s->lam[b], &la));
-      for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i];
-      PetscCall(VecRestoreArray(s->lam[b], &la));
-      PetscCall(VecRestoreArrayRead(s->lamprev, &l));
+      PetscCall(SolverLambdaToBody(s, b));
       PetscCall(MatMultAdd(s->H[b], s->lam[b], body->fcontact, body->fcontact));
     }
     PetscCall(VecNorm(body->fcontact, NORM_INFINITY, &norm));
@@ -373,18 +382,9 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
   PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
   PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody            body = s->bodies[b];
-    const PetscScalar *l;
-    PetscScalar       *la;
-    PetscInt           lo, hi;
+    MBCBody body = s->bodies[b];
     if (!body) continue;
-    /* lambda_n+1 (replicated) into the owned part of X's column layout */
-    PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
-    PetscCall(VecGetArrayRead(s->lamprev, &l));
-    PetscCall(VecGetArray(s->lam[b], &la));
-    for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i];
-    PetscCall(VecRestoreArray(s->lam[b], &la));
-    PetscCall(VecRestoreArrayRead(s->lamprev, &l));
+    PetscCall(SolverLambdaToBody(s, b));
     PetscCall(MatMultAdd(s->X[b], s->lam[b], body->du, body->du));
   }
   PetscFunctionReturn(0);

@@ -2,7 +2,7 @@
    the field output steps, every contact point's position, pressure, tangential traction, force,
    state and gap in <output>_contact.h5 (rank 0, HDF5 C API), shown by the XDMF index as points. */
 #include <mbc/private/solverimpl.h>
-#include <hdf5.h>
+#include <mbc/private/h5util.h>
 
 PetscErrorCode MBCSolverOutputContactOpen(MBCSolver s)
 {
@@ -19,19 +19,6 @@ PetscErrorCode MBCSolverOutputContactOpen(MBCSolver s)
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
   s->contact_h5 = H5Fcreate(file, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   PetscCheck(s->contact_h5 >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot create the contact result file %s", file);
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode H5WriteArray(hid_t loc, const char *name, hid_t type, PetscInt n, PetscInt ncomp, const void *buf)
-{
-  hsize_t dims[2] = {(hsize_t)n, (hsize_t)ncomp};
-  hid_t   sp      = H5Screate_simple(ncomp > 1 ? 2 : 1, dims, NULL), d;
-
-  PetscFunctionBegin;
-  d = H5Dcreate2(loc, name, type, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  PetscCheck(d >= 0 && H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write contact dataset %s", name);
-  H5Dclose(d);
-  H5Sclose(sp);
   PetscFunctionReturn(0);
 }
 
@@ -85,16 +72,16 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     H5Awrite(at, H5T_NATIVE_DOUBLE, &s->time);
     H5Aclose(at);
     H5Sclose(sp);
-    PetscCall(H5WriteArray(g, "position", H5T_NATIVE_DOUBLE, np, 3, x));
-    PetscCall(H5WriteArray(g, "normal", H5T_NATIVE_DOUBLE, np, 3, nrm));
-    PetscCall(H5WriteArray(g, "force", H5T_NATIVE_DOUBLE, np, 3, force));
-    PetscCall(H5WriteArray(g, "multiplier", H5T_NATIVE_DOUBLE, np, 3, lam));
-    PetscCall(H5WriteArray(g, "pressure", H5T_NATIVE_DOUBLE, np, 1, pressure));
-    PetscCall(H5WriteArray(g, "traction", H5T_NATIVE_DOUBLE, np, 3, traction));
-    PetscCall(H5WriteArray(g, "gap", H5T_NATIVE_DOUBLE, np, 1, gap));
-    PetscCall(H5WriteArray(g, "area", H5T_NATIVE_DOUBLE, np, 1, area));
-    PetscCall(H5WriteArray(g, "state", H5T_NATIVE_INT, np, 1, istate));
-    PetscCall(H5WriteArray(g, "couple", H5T_NATIVE_INT, np, 1, couple));
+    PetscCall(MBCH5WriteArray(g, "position", H5T_NATIVE_DOUBLE, np, 3, x));
+    PetscCall(MBCH5WriteArray(g, "normal", H5T_NATIVE_DOUBLE, np, 3, nrm));
+    PetscCall(MBCH5WriteArray(g, "force", H5T_NATIVE_DOUBLE, np, 3, force));
+    PetscCall(MBCH5WriteArray(g, "multiplier", H5T_NATIVE_DOUBLE, np, 3, lam));
+    PetscCall(MBCH5WriteArray(g, "pressure", H5T_NATIVE_DOUBLE, np, 1, pressure));
+    PetscCall(MBCH5WriteArray(g, "traction", H5T_NATIVE_DOUBLE, np, 3, traction));
+    PetscCall(MBCH5WriteArray(g, "gap", H5T_NATIVE_DOUBLE, np, 1, gap));
+    PetscCall(MBCH5WriteArray(g, "area", H5T_NATIVE_DOUBLE, np, 1, area));
+    PetscCall(MBCH5WriteArray(g, "state", H5T_NATIVE_INT, np, 1, istate));
+    PetscCall(MBCH5WriteArray(g, "couple", H5T_NATIVE_INT, np, 1, couple));
     H5Gclose(g);
   }
   PetscCall(PetscFree6(lam, x, nrm, force, traction, state));

@@ -49,6 +49,7 @@ PETSC_INTERN PetscErrorCode MBCBodyAssembleElasticity(MBCBody, Mat, Mat);
 PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);
 PETSC_INTERN PetscErrorCode MBCBodyExternalForce(MBCBody, PetscReal, PetscBool, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyPrescribed(MBCBody, PetscReal, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyPrescribedIncrement(MBCBody, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode MBCBodySetConstrainedRows(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyConstrainedSolve(MBCBody, KSP, PetscReal, PetscReal, Vec, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyComputeStress(MBCBody, Vec, Vec);
