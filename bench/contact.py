@@ -19,7 +19,9 @@ round(0.7 n) x round(0.7 n); both 10 layers high.
    of block 2's top (mean of top_uz over the last 0.5 s of <scene>_result_points.csv) against
    the exact -1.5e-4 m.
 
-Prints tables and writes docs/contact.png. Exits non-zero if a solver run fails.
+Prints tables and writes docs/contact.png. Exits non-zero if a solver run fails. The whole run
+takes about 15 minutes on 2 cores (most of it the loose tolerances of part 2, where block 2
+sinks in, the pairs change and D is rebuilt at most steps); --quick about 25 s.
 
   bench/contact.py [--quick] [--sizes 5 10 15 20 25 30] [--steps 5] [--repeat 1] [--tol-size 15]
 """
