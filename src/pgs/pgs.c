@@ -172,7 +172,7 @@ PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
   pgs->max_it = 1000;
   pgs->active_set = 20;
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Projected Gauss-Seidel for the contact multipliers", "MBCPGS");
-  PetscCall(PetscOptionsReal("-mbc_pgs_rtol", "Tolerance on the FCLIB merit", "MBCPGSSetFromOptions", pgs->rtol, &pgs->rtol, NULL));
+  PetscCall(PetscOptionsReal("-mbc_pgs_rtol", "Tolerance on the FCLIB merit (in a simulation: of the step problem scaled to |q| = 1, so relative)", "MBCPGSSetFromOptions", pgs->rtol, &pgs->rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_pgs_max_it", "Maximum sweeps", "MBCPGSSetFromOptions", pgs->max_it, &pgs->max_it, NULL));
   PetscCall(PetscOptionsReal("-mbc_pgs_omega", "Relaxation factor (0, 2)", "MBCPGSSetFromOptions", pgs->omega, &pgs->omega, NULL));
   PetscCall(PetscOptionsInt("-mbc_pgs_active_set", "Every this many sweeps, try the direct solve on the sticking contacts (0: never)", "MBCPGSSetFromOptions", pgs->active_set, &pgs->active_set, NULL));

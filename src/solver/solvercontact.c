@@ -241,7 +241,10 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     PetscCall(MatConvert(s->H[b], MATDENSE, MAT_INITIAL_MATRIX, &Hd));
     PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &s->X[b]));
     PetscCall(KSPMatSolve(body->ksp, Hd, s->X[b]));
-    PetscCall(MatTransposeMatMult(Hd, s->X[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
+    PetscCall(MatDestroy(&Hd));
+    /* D_i = H^T X with H sparse (a dozen entries per column): the dense product would cost
+       2 N m^2 flops, this one 2 nnz(H) m */
+    PetscCall(MatTransposeMatMult(s->H[b], s->X[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
     { /* D_i (m x m) to every rank of the body, then summed over bodies */
       Mat               *Dseq;
       IS                 all;
@@ -260,7 +263,6 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
       PetscCall(MatDestroySubMatrices(1, &Dseq));
     }
     PetscCall(MatDestroy(&D));
-    PetscCall(MatDestroy(&Hd));
     PetscCall(MatCreateVecs(s->X[b], &s->lam[b], NULL));
     PetscCall(MatCreateVecs(s->H[b], &s->Hu[b], NULL));
     PetscCall(VecScatterCreateToAll(s->Hu[b], &s->hsc[b], &s->Hus[b]));
@@ -377,7 +379,19 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     PetscCall(VecAXPY(s->fp.q, -s->carry, s->ucontact));
     PetscCall(VecDestroy(&t));
   }
-  PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: r of the last step */
+  { /* solve with q scaled to unit norm: the FCLIB merit |r - proj(..)| / (1 + |q|) then is
+       relative, and -mbc_pgs_rtol means the same in m or mm (absolute in the scene's length
+       unit, 1e-8 would be 10 nm in m and 10 pm in mm) */
+    PetscReal L;
+    PetscCall(VecNorm(s->fp.q, NORM_2, &L));
+    if (!(L > 0)) L = 1;
+    PetscCall(VecScale(s->fp.q, 1 / L));
+    PetscCall(VecScale(s->lambda, 1 / L));
+    PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: r of the last step */
+    PetscCall(VecScale(s->fp.q, L));
+    PetscCall(VecScale(s->lambda, L));
+    PetscCall(VecScale(s->ucontact, L));
+  }
   if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
   PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
   PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */

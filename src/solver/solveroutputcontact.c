@@ -28,7 +28,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
 {
   MBCContact c = s->contact;
   PetscInt   np = 0, count[3], *state;
-  PetscReal *lam, *x, *nrm, *force, *pressure, *traction, *gap, *area;
+  PetscReal *lam, *x, *x0, *nrm, *force, *pressure, *traction, *gap, *area;
   int       *couple, *istate;
 
   PetscFunctionBegin;
@@ -36,6 +36,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   for (PetscInt i = 0; i < c->ncouples; i++) np += c->couples[i].npoints;
   PetscCall(PetscCalloc6(3 * np + 1, &lam, 3 * np + 1, &x, 3 * np + 1, &nrm, 3 * np + 1, &force, 3 * np + 1, &traction, np + 1, &state));
   PetscCall(PetscCalloc5(np + 1, &pressure, np + 1, &gap, np + 1, &area, np + 1, &couple, np + 1, &istate));
+  PetscCall(PetscCalloc1(3 * np + 1, &x0));
   if (np == s->fp.nc) PetscCall(MBCSolverContactStates(s, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
@@ -51,6 +52,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       area[k]   = p->area;
       for (PetscInt d = 0; d < 3; d++) {
         x[3 * k + d]        = cp->master.x[3 * p->master + d];
+        x0[3 * k + d]       = cp->master.x0[3 * p->master + d];
         nrm[3 * k + d]      = p->n[d];
         force[3 * k + d]    = z[0] * p->n[d] + z[1] * p->t1[d] + z[2] * p->t2[d];
         traction[3 * k + d] = area[k] > 0 ? (z[1] * p->t1[d] + z[2] * p->t2[d]) / area[k] : 0;
@@ -73,6 +75,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     H5Aclose(at);
     H5Sclose(sp);
     PetscCall(MBCH5WriteArray(g, "position", H5T_NATIVE_DOUBLE, np, 3, x));
+    PetscCall(MBCH5WriteArray(g, "reference", H5T_NATIVE_DOUBLE, np, 3, x0));
     PetscCall(MBCH5WriteArray(g, "normal", H5T_NATIVE_DOUBLE, np, 3, nrm));
     PetscCall(MBCH5WriteArray(g, "force", H5T_NATIVE_DOUBLE, np, 3, force));
     PetscCall(MBCH5WriteArray(g, "multiplier", H5T_NATIVE_DOUBLE, np, 3, lam));
@@ -86,6 +89,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   }
   PetscCall(PetscFree6(lam, x, nrm, force, traction, state));
   PetscCall(PetscFree5(pressure, gap, area, couple, istate));
+  PetscCall(PetscFree(x0));
   PetscFunctionReturn(0);
 }
 
