@@ -33,7 +33,7 @@ build: deps
 	@cmake --build $(BUILD) -j $(JOBS)
 
 run: build
-	$(PYTHON) meshes/column/run.py
+	$(PYTHON) meshes/hertz/run.py
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure

@@ -101,7 +101,7 @@ def run(h5, *options):
         if w and w[0] in EVENTS:
             ev[w[0]] = (int(w[1]), float(w[3]))
     sweeps = [int(s) for s in re.findall(r"contact: PGS CONVERGED_\w+ in (\d+) sweeps", out)]
-    points = [int(s) for s in re.findall(r"contact: (\d+) contact points, flexibility matrix rebuilt", out)]
+    points = [int(s) for s in re.findall(r"contact: (\d+) contact points, (?:\d+ multipliers, )?flexibility matrix rebuilt", out)]
     last = re.findall(r"contact: PGS .*separated (\d+), stick (\d+), slip (\d+)", out)
     steps = len(re.findall(r"^step\s+\d+ t \S+\s+max\|u\|", out, re.M)) - 1  # minus step 0
     if not sweeps or not points or steps < 1:

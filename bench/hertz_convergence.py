@@ -1,0 +1,131 @@
+#!/usr/bin/python3
+"""Error against run time on the paper's Hertz example (meshes/hertz): two parallel cylinders,
+R = 5 mm, E = 210 GPa, nu = 0.3, frictionless, -0.03 mm imposed, static, a quarter of each.
+
+For each mesh level (element edge hc at the contact; uniform over 0.75 mm, then growing by 1.15
+up to 0.5 mm): DOFs, contact points, run time split by phase (-log_view events: assembly,
+factorization, D = H^T A^-1 H, PGS, solves, search, output), peak RSS of the solver, and the
+errors of b and p_max against Hertz for the computed load P and of the surface displacements
+against the paper's ANSYS column. Then the same finest-but-one level at a quarter of the
+approach (b / R halves: the departure from Hertz's half-spaces), the paper's dynamic route on
+one level, and the sphere on a half-space (Hertz point contact) at two levels. Prints tables
+and writes docs/hertz_convergence.png (error against run time).
+
+  bench/hertz_convergence.py [--quick] [--levels 0.04 0.02 0.01 0.0075 0.005]
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "meshes", "hertz"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import build  # noqa: E402  (meshes/hertz/build.py)
+import plot  # noqa: E402  (bench/plot.py)
+import report  # noqa: E402  (meshes/hertz/report.py)
+
+SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
+EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "D": "MBCFlexibilityAssemble", "PGS": "MBCPGSSolve",
+          "solves": "MBCBodySolve", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch"), "output": "MBCOutput"}
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+
+
+def solve(h5, *options):
+    """Runs the solver; returns (wall s, peak RSS MiB of the child (os.wait4), {phase: s}, DOFs, stdout)."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen([SOLVER, "-scene", h5, "-log_view", "-mbc_view", *options], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=ENV)
+    out = p.stdout.read().decode()
+    err = p.stderr.read().decode()
+    _, status, usage = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    wall = time.perf_counter() - t0
+    if p.returncode:
+        sys.exit(f"solver failed on {h5}:\n{err}")
+    phases = {}
+    for name, ev in EVENTS.items():
+        total = 0.0
+        for e in ev if isinstance(ev, tuple) else (ev,):
+            m = re.search(rf"^{e}\s+\d+\s+\S+\s+(\S+)", out, re.M)
+            total += float(m.group(1)) if m else 0.0
+        phases[name] = total
+    dofs = sum(int(d) for d in re.findall(r"(\d+) DOFs", out))
+    return wall, usage.ru_maxrss / 1024.0, phases, dofs, out
+
+
+def cylinder_level(work, hc, analysis="static", delta=None):
+    h5 = build.build(work, hc, analysis=analysis)
+    if delta is not None:  # another approach: rewrite the scene's imposed value
+        with open(os.path.join(work, "hertz.yaml")) as f:
+            scene = yaml.safe_load(f)
+        scene["dirichlet"][-1]["value"] = -delta
+        with open(os.path.join(work, "hertz.yaml"), "w") as f:
+            yaml.safe_dump(scene, f, sort_keys=False)
+        subprocess.run([os.path.join(ROOT, "python", "mbcontact-prep"), os.path.join(work, "hertz.yaml"), "-o", h5, "-q"], check=True)
+    wall, rss, ph, dofs, _ = solve(h5)
+    res = report.cylinder_results(os.path.join(work, "hertz_result"))
+    return dict(hc=hc, wall=wall, rss=rss, dofs=dofs, res=res, err=report.errors(res), **ph)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="two coarse levels, no dynamic route, one sphere level")
+    ap.add_argument("--levels", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.0075, 0.005])
+    ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "hertz_convergence.png"))
+    a = ap.parse_args()
+    levels = [0.04, 0.02] if a.quick else a.levels
+    work = tempfile.mkdtemp(prefix="mbc_hertz_")
+
+    print("Hertz cylinders, static: errors against Hertz for the computed P (b, p_max) and against the paper's ANSYS column (surface u_y)")
+    head = (f"{'hc [mm]':>8} {'DOFs':>7} {'points':>6} {'P [N/mm]':>9} {'b err':>8} {'p_max err':>9} {'u_y err':>8} "
+            f"{'assemble':>8} {'factor':>7} {'D':>7} {'PGS':>6} {'solves':>6} {'search':>6} {'output':>6} {'wall':>7} {'RSS MiB':>8}")
+    print(head, flush=True)
+    rows = []
+    for hc in levels:
+        r = cylinder_level(os.path.join(work, f"c{hc}"), hc)
+        rows.append(r)
+        e = r["err"]
+        print(f"{hc:8.4f} {r['dofs']:7d} {r['res']['points']:6d} {r['res']['P']:9.2f} {e['b']:8.2%} {e['p_max']:9.2%} {max(e['upper'], e['lower']):8.2%} "
+              f"{r['assemble']:8.2f} {r['factor']:7.2f} {r['D']:7.2f} {r['PGS']:6.3f} {r['solves']:6.2f} {r['search']:6.3f} {r['output']:6.2f} {r['wall']:7.2f} {r['rss']:8.0f}", flush=True)
+    print(f"(the paper, 0.1 mm elements: b {report.PAPER['b'] / report.HERTZ_PAPER['b'] - 1:+.2%}, p_max {report.PAPER['p_max'] / report.HERTZ_PAPER['p_max'] - 1:+.2%})")
+
+    sphere_rows, quarter = [], None
+    if not a.quick:
+        hc = sorted(levels)[1] if len(levels) > 1 else levels[0]
+        quarter = cylinder_level(os.path.join(work, "quarter"), hc, delta=build.DELTA / 4)
+        print(f"\nsame mesh (hc {hc}), a quarter of the approach (0.0075 mm): P {quarter['res']['P']:.2f} N/mm, "
+              f"b/R {quarter['res']['b'] / build.R:.4f}: b err {quarter['err']['b']:+.2%}, p_max err {quarter['err']['p_max']:+.2%} "
+              f"(full approach: b/R {rows[-2]['res']['b'] / build.R:.4f})")
+        dyn = cylinder_level(os.path.join(work, "dyn"), 0.02, analysis="dynamic")
+        print(f"dynamic route (hc 0.02, rho 7.85e-9 t/mm3, damping 200, dt 0.01 s, 300 steps, load ramped over 1 s): "
+              f"b err {dyn['err']['b']:+.2%}, p_max err {dyn['err']['p_max']:+.2%}, u_y err {max(dyn['err']['upper'], dyn['err']['lower']):.2%}, "
+              f"wall {dyn['wall']:.1f} s (D {dyn['D']:.1f} s, solves {dyn['solves']:.1f} s, PGS {dyn['PGS']:.2f} s)")
+
+    print("\nsphere on a half-space (R = 10 mm, an eighth on a quarter block, -0.02 mm imposed): a and p0 against Hertz for the computed P")
+    print(f"{'hc [mm]':>8} {'DOFs':>7} {'P [N]':>8} {'a err':>8} {'p0 err':>8} {'factor':>7} {'D':>7} {'wall':>7} {'RSS MiB':>8}", flush=True)
+    for hc in ([0.09] if a.quick else [0.09, 0.06]):
+        d = os.path.join(work, f"s{hc}")
+        h5 = build.build_sphere(d, hc, 0.8)
+        wall, rss, ph, dofs, _ = solve(h5)
+        res = report.sphere_results(os.path.join(d, "sphere_result"))
+        ah, ph0 = report.hertz_point(res["P"], build.SPHERE_R)
+        sphere_rows.append(dict(hc=hc, wall=wall, a=res["a"] / ah - 1, p0=res["p0"] / ph0 - 1))
+        print(f"{hc:8.3f} {dofs:7d} {res['P']:8.1f} {res['a'] / ah - 1:8.2%} {res['p0'] / ph0 - 1:8.2%} {ph['factor']:7.2f} {ph['D']:7.2f} {wall:7.2f} {rss:8.0f}", flush=True)
+
+    walls = np.array([r["wall"] for r in rows])
+    series = [(walls, np.abs([r["err"]["b"] for r in rows]), "o-", "cylinders: |error of b|"),
+              (walls, np.abs([r["err"]["p_max"] for r in rows]), "s-", "cylinders: |error of p_max|"),
+              (walls, np.array([max(r["err"]["upper"], r["err"]["lower"]) for r in rows]), "^-", "cylinders: surface u_y vs ANSYS")]
+    if sphere_rows:
+        series.append((np.array([s["wall"] for s in sphere_rows]), np.abs([s["p0"] for s in sphere_rows]), "d--", "sphere: |error of p0|"))
+    plot.loglog(a.plot, "Hertz: error against run time (2 cores, one rank)", "run time [s]", series, ylabel="relative error")
+
+
+if __name__ == "__main__":
+    main()
