@@ -22,7 +22,6 @@ import tempfile
 import time
 
 import numpy as np
-import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "meshes", "hertz"))
@@ -30,6 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import build  # noqa: E402  (meshes/hertz/build.py)
 import plot  # noqa: E402  (bench/plot.py)
 import report  # noqa: E402  (meshes/hertz/report.py)
+from mbcontact.prep import prepare  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "D": "MBCFlexibilityAssemble", "PGS": "MBCPGSSolve",
@@ -61,13 +61,10 @@ def solve(h5, *options):
 
 def cylinder_level(work, hc, analysis="static", delta=None):
     h5 = build.build(work, hc, analysis=analysis)
-    if delta is not None:  # another approach: rewrite the scene's imposed value
-        with open(os.path.join(work, "hertz.yaml")) as f:
-            scene = yaml.safe_load(f)
+    if delta is not None:  # another approach
+        scene = build.cylinders_scene(analysis)
         scene["dirichlet"][-1]["value"] = -delta
-        with open(os.path.join(work, "hertz.yaml"), "w") as f:
-            yaml.safe_dump(scene, f, sort_keys=False)
-        subprocess.run([os.path.join(ROOT, "python", "mbcontact-prep"), os.path.join(work, "hertz.yaml"), "-o", h5, "-q"], check=True)
+        h5 = prepare(work, "hertz", scene)
     wall, rss, ph, dofs, _ = solve(h5)
     res = report.cylinder_results(os.path.join(work, "hertz_result"))
     return dict(hc=hc, wall=wall, rss=rss, dofs=dofs, res=res, err=report.errors(res), **ph)

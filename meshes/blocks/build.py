@@ -8,15 +8,14 @@ C = 200 M, mu = 0.6; block 1's base fixed normally; block 2 loaded suddenly by a
 """
 import argparse
 import os
-import subprocess
 import sys
 
-import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 from mbcontact import meshgen  # noqa: E402
+from mbcontact.prep import prepare  # noqa: E402
 
 
 def scene(dt, final_time):
@@ -40,11 +39,7 @@ def build(outdir, dt=0.01, final_time=2.5):
     meshgen.boxes(os.path.join(outdir, "blocks.msh"),
                   [dict(lo=(0, 0, 0), hi=(100, 100, 100), n=(10, 10, 10), cell="hex8", name="block1"),
                    dict(lo=(0, 0, 100), hi=(100, 100, 200), n=(20, 20, 10), cell="hex8", name="block2")])
-    with open(os.path.join(outdir, "blocks.yaml"), "w") as f:
-        yaml.safe_dump(scene(dt, final_time), f, sort_keys=False)
-    h5 = os.path.join(outdir, "blocks.h5")
-    subprocess.run([os.path.join(ROOT, "python", "mbcontact-prep"), os.path.join(outdir, "blocks.yaml"), "-o", h5, "-q"], check=True)
-    return h5
+    return prepare(outdir, "blocks", scene(dt, final_time))
 
 
 if __name__ == "__main__":

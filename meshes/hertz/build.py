@@ -9,23 +9,22 @@ block 1 holds the contact point (0, 0) at a right-angle corner, with square elem
 `hc` over `fine` mm along the arc and inward, growing by at most `growth` beyond; blocks 2 and 3
 fill the rest coarsely. One element through the length (the field does not vary along z).
 
-  meshes/hertz/build.py OUTDIR [--hc 0.01] [--static | --dynamic]    writes hertz.msh, hertz.yaml, hertz.h5
+  meshes/hertz/build.py OUTDIR [--hc 0.01] [--dynamic]    writes hertz.msh, hertz.yaml, hertz.h5 (static unless --dynamic)
 
 A second, 3D case (sphere(): an eighth of a sphere on a quarter block, graded towards the pole)
 checks Hertz point contact.
 """
 import argparse
 import os
-import subprocess
 import sys
 
 import numpy as np
-import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 from mbcontact import meshgen  # noqa: E402
+from mbcontact.prep import prepare  # noqa: E402
 
 R, E, NU, LENGTH, DELTA = 5.0, 210000.0, 0.3, 1.0, 0.03
 DENSITY, DAMPING = 7.85e-9, 200.0  # t/mm3 (the paper's 7.85e-6 kg/mm3), 1/s
@@ -163,11 +162,7 @@ def build(outdir, hc=0.01, fine=None, analysis="static", dt=0.01, final_time=3.0
     fine = fine if fine is not None else 0.75
     p2, quads = quarter_disc(hc, fine)
     meshgen.write_parts(os.path.join(outdir, "hertz.msh"), [extrude("upper", p2, quads, LENGTH), extrude("lower", p2, quads, LENGTH, flip_y=True)])
-    with open(os.path.join(outdir, "hertz.yaml"), "w") as f:
-        yaml.safe_dump(cylinders_scene(analysis, dt, final_time), f, sort_keys=False)
-    h5 = os.path.join(outdir, "hertz.h5")
-    subprocess.run([os.path.join(ROOT, "python", "mbcontact-prep"), os.path.join(outdir, "hertz.yaml"), "-o", h5, "-q"], check=True)
-    return h5
+    return prepare(outdir, "hertz", cylinders_scene(analysis, dt, final_time))
 
 
 def _graded_axis(length, hc, fine, growth, hmax):
@@ -249,11 +244,7 @@ def sphere_scene():
 def build_sphere(outdir, hc=0.05, fine=0.8):
     os.makedirs(outdir, exist_ok=True)
     meshgen.write_parts(os.path.join(outdir, "sphere.msh"), list(sphere_parts(SPHERE_R, hc, fine)))
-    with open(os.path.join(outdir, "sphere.yaml"), "w") as f:
-        yaml.safe_dump(sphere_scene(), f, sort_keys=False)
-    h5 = os.path.join(outdir, "sphere.h5")
-    subprocess.run([os.path.join(ROOT, "python", "mbcontact-prep"), os.path.join(outdir, "sphere.yaml"), "-o", h5, "-q"], check=True)
-    return h5
+    return prepare(outdir, "sphere", sphere_scene())
 
 
 if __name__ == "__main__":

@@ -207,3 +207,17 @@ def _attrs(group, **values):
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def prepare(outdir, name, scene):
+    """Writes scene (a dict) as OUTDIR/NAME.yaml and makes OUTDIR/NAME.h5 from it with
+    mbcontact-prep (a subprocess, as the command line would); returns the .h5 path. For the
+    scene-building scripts of meshes/ and bench/."""
+    import yaml
+
+    yml, h5 = os.path.join(outdir, f"{name}.yaml"), os.path.join(outdir, f"{name}.h5")
+    with open(yml, "w") as f:
+        yaml.safe_dump(scene, f, sort_keys=False)
+    prep = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "mbcontact-prep")
+    subprocess.run([prep, yml, "-o", h5, "-q"], check=True)
+    return h5
