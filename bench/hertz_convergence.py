@@ -6,7 +6,8 @@ For each mesh level (element edge hc at the contact; uniform over 0.75 mm, then 
 up to 0.5 mm): DOFs, contact points, run time split by phase (-log_view events: assembly,
 factorization, D = H^T A^-1 H, PGS, solves, search, output), peak RSS of the solver, and the
 errors of b and p_max against Hertz for the computed load P and of the surface displacements
-against the paper's ANSYS column. Then the same finest-but-one level at a quarter of the
+against the paper's ANSYS column. Then the PGS tolerance on one level (only Q1 elements exist,
+so the element order is not a parameter yet), the same finest-but-one level at a quarter of the
 approach (b / R halves: the departure from Hertz's half-spaces), the paper's dynamic route on
 one level, and the sphere on a half-space (Hertz point contact) at two levels. Prints tables
 and writes docs/hertz_convergence.png (error against run time).
@@ -94,6 +95,13 @@ def main():
 
     sphere_rows, quarter = [], None
     if not a.quick:
+        hc = 0.01 if 0.01 in levels else levels[-1]
+        h5 = build.build(os.path.join(work, "tol"), hc)
+        print(f"\nPGS tolerance (hc {hc}): {'rtol':>7} {'b err':>8} {'p_max err':>9} {'PGS [s]':>8} {'wall':>7}")
+        for rtol in (1e-3, 1e-4, 1e-6, 1e-8, 1e-10):
+            wall, rss, ph, dofs, _ = solve(h5, "-mbc_pgs_rtol", f"{rtol:g}")
+            e = report.errors(report.cylinder_results(os.path.join(work, "tol", "hertz_result")))
+            print(f"{'':30s} {rtol:7.0e} {e['b']:8.2%} {e['p_max']:9.2%} {ph['PGS']:8.3f} {wall:7.2f}", flush=True)
         hc = sorted(levels)[1] if len(levels) > 1 else levels[0]
         quarter = cylinder_level(os.path.join(work, "quarter"), hc, delta=build.DELTA / 4)
         print(f"\nsame mesh (hc {hc}), a quarter of the approach (0.0075 mm): P {quarter['res']['P']:.2f} N/mm, "

@@ -50,6 +50,7 @@ static PetscErrorCode RunFclib(const char *file, PetscBool *converged)
   *converged = (PetscBool)(pgs.reason > 0);
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&u));
+  PetscCall(MBCPGSReset(&pgs));
   PetscCall(MBCFrictionProblemDestroy(&fp));
   PetscFunctionReturn(0);
 }

@@ -190,13 +190,15 @@ PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
    it; the result, projected onto the cones, is kept only if it lowers the merit, so a wrong
    guess costs a factorization, never accuracy. Gauss-Seidel alone creeps on strongly coupled D
    (large time steps; bodies held only by contact in a static analysis): thousands of sweeps. */
-static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
+static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
 {
   PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0;
   PetscReal         *dir;
-  PetscScalar       *rv, *Wc, *A, *x;
+  PetscScalar       *rv, *Wc = NULL, *A = NULL, *x, *lu;
   const PetscScalar *qv, *uv;
-  PetscBLASInt       bn, one = 1, info, *piv;
+  PetscBLASInt       bn, one = 1, info = 0, *piv = NULL, *lupiv;
+  PetscBool          slips = PETSC_FALSE, reuse = PETSC_FALSE;
+  PetscObjectId      id;
   Vec                rtry;
   PetscReal          etry;
 
@@ -231,6 +233,19 @@ static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscB
     PetscCall(PetscFree4(S, first, contact, dir));
     PetscFunctionReturn(0);
   }
+  /* no contact slips: the system is W_SS itself. Its factor is kept and reused while S and W
+     stay the same (a sticking steady state then costs one triangular solve per step). */
+  for (PetscInt j = 0; j < nin; j++) slips = (PetscBool)(slips || dir[2 * j] != 0 || dir[2 * j + 1] != 0);
+  PetscCall(PetscObjectGetId((PetscObject)fp->W, &id)); /* W is never changed after assembly: a new one has a new id */
+  if (!slips && pgs->lu && pgs->lun == ns && pgs->luW == id) PetscCall(PetscArraycmp(S, pgs->luS, ns, &reuse));
+  PetscCall(PetscBLASIntCast(n, &bn));
+  PetscCall(PetscMalloc1(n, &x));
+  if (reuse) {
+    PetscCall(VecGetArrayRead(fp->q, &qv));
+    for (PetscInt a = 0; a < n; a++) x[a] = -qv[S[a]];
+    PetscCall(VecRestoreArrayRead(fp->q, &qv));
+    lu = pgs->lu, lupiv = pgs->lupiv;
+  } else {
   PetscCall(PetscCalloc1((size_t)ns * ns, &Wc));
   for (PetscInt a = 0; a < ns; a++) { /* W on the rows of the contacts in contact, column-major */
     PetscInt           ncols, b = 0;
@@ -243,8 +258,8 @@ static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscB
     }
     PetscCall(MatRestoreRow(fp->W, S[a], &ncols, &cols, &vals));
   }
-  PetscCall(PetscBLASIntCast(n, &bn));
-  PetscCall(PetscCalloc3((size_t)n * n, &A, n, &x, n, &piv));
+  PetscCall(PetscCalloc1((size_t)n * n, &A));
+  PetscCall(PetscMalloc1(n, &piv));
   PetscCall(VecGetArrayRead(fp->q, &qv));
   for (PetscInt j = 0, e = 0; j < nin; j++) { /* equations: u = 0 (stick), u_n = 0 (slip) */
     const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
@@ -271,7 +286,17 @@ static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscB
     for (PetscInt a = 0; a < n; a++) A[a + (size_t)a * n] += 1e-10 * dmax;
   }
   PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&bn, &bn, A, &bn, piv, &info));
-  if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &bn, &one, A, &bn, piv, x, &bn, &info));
+  PetscCall(PetscFree(Wc));
+  lu = A, lupiv = piv;
+  if (!info && !slips) { /* keep this factor */
+    PetscCall(MBCPGSReset(pgs));
+    pgs->lu = A, pgs->lupiv = piv, A = NULL, piv = NULL;
+    pgs->lun = ns, pgs->luW = id;
+    PetscCall(PetscMalloc1(ns, &pgs->luS));
+    PetscCall(PetscArraycpy(pgs->luS, S, ns));
+  }
+  }
+  if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &bn, &one, lu, &bn, lupiv, x, &bn, &info));
   if (!info) {
     PetscCall(VecDuplicate(r, &rtry));
     PetscCall(VecZeroEntries(rtry));
@@ -293,15 +318,16 @@ static PetscErrorCode ActiveSetStep(MBCFrictionProblem *fp, Vec r, Vec u, PetscB
     }
     PetscCall(VecRestoreArray(rtry, &rv));
     PetscCall(MBCFrictionError(fp, rtry, u, &etry));
-    PetscCall(PetscInfo(NULL, "active set: %" PetscInt_FMT " in contact, %" PetscInt_FMT " unknowns, merit %g -> %g\n", nin, n, (double)*error, (double)etry));
+    PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " in contact, %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", nin, n, (double)*error, (double)etry));
     if (etry < *error) {
       PetscCall(VecCopy(rtry, r));
       *error = etry;
     } else PetscCall(MBCFrictionError(fp, r, u, &etry)); /* u back to the kept r */
     PetscCall(VecDestroy(&rtry));
   }
-  PetscCall(PetscFree3(A, x, piv));
-  PetscCall(PetscFree(Wc));
+  PetscCall(PetscFree(x));
+  PetscCall(PetscFree(A));
+  PetscCall(PetscFree(piv));
   PetscCall(PetscFree4(S, first, contact, dir));
   PetscFunctionReturn(0);
 }
@@ -327,13 +353,15 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
   for (pgs->its = 0; pgs->reason == MBC_PGS_ITERATING; pgs->its++) {
     const PetscScalar *qv;
     PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
-    if (pgs->active_set && pgs->its > 0 && pgs->its % pgs->active_set == 0 && pgs->error >= pgs->rtol) {
+    /* every active_set sweeps, and at once when a factor of the last solve is kept (warm start
+       of a step like the last) */
+    if (pgs->active_set && ((pgs->its > 0 && pgs->its % pgs->active_set == 0) || (pgs->its == 0 && pgs->lu)) && pgs->error >= pgs->rtol) {
       /* a few active-set (semismooth Newton) steps while they pay; the first also counts the
          contacts closed in q as active: with a body held only by contact (static), D has a huge
          rigid-mode part and the Gauss-Seidel iterate leaves most of them unloaded */
       for (PetscInt k = 0; k < 10 && pgs->error >= pgs->rtol; k++) {
         const PetscReal before = pgs->error;
-        PetscCall(ActiveSetStep(fp, r, u, (PetscBool)(k == 0), &pgs->error));
+        PetscCall(ActiveSetStep(pgs, fp, r, u, (PetscBool)(k == 0 && pgs->its > 0), &pgs->error));
         if (!(pgs->error < 0.5 * before)) break;
       }
     }
@@ -386,6 +414,17 @@ PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *fp, const PetscIn
   PetscCall(PetscMalloc1(fp->nc + 1, &fp->off));
   fp->off[0] = 0;
   for (PetscInt i = 0; i < fp->nc; i++) fp->off[i + 1] = fp->off[i] + (dims ? dims[i] : 3);
+  PetscFunctionReturn(0);
+}
+
+/* Frees the kept active-set factor. */
+PetscErrorCode MBCPGSReset(MBCPGS *pgs)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(pgs->lu));
+  PetscCall(PetscFree(pgs->lupiv));
+  PetscCall(PetscFree(pgs->luS));
+  pgs->lun = 0;
   PetscFunctionReturn(0);
 }
 

@@ -604,6 +604,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   if (!s) PetscFunctionReturn(0);
   PetscCall(MBCSolverContactDestroy(s));
   PetscCall(MBCContactDestroy(&s->contact));
+  PetscCall(MBCPGSReset(&s->pgs));
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));

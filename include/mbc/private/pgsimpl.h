@@ -4,6 +4,7 @@
 #pragma once
 
 #include <mbcontact.h>
+#include <petscblaslapack.h>
 
 typedef struct {
   PetscInt   nc;   /* contacts */
@@ -28,12 +29,18 @@ typedef struct {
   MBCPGSReason reason;
   PetscReal    error;          /* FCLIB merit at exit */
   PetscLogDouble time;
+  /* the last factor of the active-set step with no contact slipping, kept for the next steps */
+  PetscScalar     *lu;
+  PetscBLASInt    *lupiv;
+  PetscInt        *luS, lun;
+  PetscObjectId    luW;        /* id of the W it factors */
 } MBCPGS;
 
 PETSC_EXTERN PetscLogEvent MBC_PGSSolve, MBC_FlexibilityAssemble;
 
 PETSC_EXTERN PetscErrorCode MBCPGSSetFromOptions(MBCPGS *);
 PETSC_EXTERN PetscErrorCode MBCPGSSolve(MBCPGS *, MBCFrictionProblem *, Vec, Vec);
+PETSC_EXTERN PetscErrorCode MBCPGSReset(MBCPGS *);
 PETSC_EXTERN PetscErrorCode MBCFrictionError(MBCFrictionProblem *, Vec, Vec, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCContactLocalSolve(const PetscReal[9], const PetscReal[3], PetscReal, PetscReal[3]);
 PETSC_EXTERN PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *, const PetscInt[]);
