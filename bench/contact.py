@@ -8,7 +8,7 @@ round(0.7 n) x round(0.7 n); both 10 layers high.
 
 1. Against n, a few Newmark steps (--steps, dt = 0.01 s): times from -log_view's events
    MBCFlexibilityAssemble (D, dense, built once as the pairs do not change; split into the
-   KSPMatSolve of X = A^-1 H and the dense product H^T X), MBCPGSSolve (per step), sweeps per
+   KSPMatSolve of X = A^-1 H and the product H^T X, H sparse), MBCPGSSolve (per step), sweeps per
    step from -mbc_monitor ("contact: PGS CONVERGED_RTOL in N sweeps"), MBCBodyFactor and
    MBCBodySolve for context, wall time and peak RSS of the solver (--repeat: the fastest of
    several runs). Growth exponents are least-squares slopes of log time against log contact
@@ -141,7 +141,7 @@ def against_points(a, work):
         if r["builds"] != 1:
             print(f"    D built {r['builds']} times (the pairs changed)")
     print("\npoints: contact points (master nodes); m = 3 points multipliers; D = MBCFlexibilityAssemble, of which")
-    print("solves = KSPMatSolve (X = A^-1 H, m right-hand sides per body) and HtX = MatTransposeMatMult (dense H^T X);")
+    print("solves = KSPMatSolve (X = A^-1 H, m right-hand sides per body) and HtX = MatTransposeMatMult (H^T X, H sparse);")
     print("PGS/step = MBCPGSSolve per call, sweeps = mean sweeps per step; factor = MBCBodyFactor (all factorizations);")
     print("solve/step = MBCBodySolve / steps (both bodies, the initial-state solves included).")
     p = np.array([r["points"] for r in rows], float)
@@ -183,8 +183,8 @@ def against_tolerance(a, work):
             print(f"{tol:7.0e} {('every %d' % act) if act else 'off':>10} {np.mean(r['sweeps']):11.1f} {max(r['sweeps']):6d} "
                   f"{r['pgs'] / r['pgs_calls']:9.4f} {r['pgs']:9.2f} {r['builds']:8d} {r['top']:12.5e} {r['err']:9.2e} "
                   f"{r['wall']:7.2f}  {'/'.join(map(str, r['state']))}{'  (same run as above)' if same else ''}", flush=True)
-    print("\nrtol: -mbc_pgs_rtol, on the FCLIB merit (the natural-map residual in metres, as W = D / mean diag(D), over")
-    print("1 + |q|); active set: -mbc_pgs_active_set (direct solve on the sticking contacts every that many sweeps);")
+    print("\nrtol: -mbc_pgs_rtol, on the FCLIB merit of each step's problem scaled to |q| = 1 (relative); active set:")
+    print("-mbc_pgs_active_set (the direct solve on the contact set every that many sweeps, and at sweep 0 with the kept factor);")
     print("error: |steady top_uz / -1.5e-4 - 1| (discretisation included). A run without the active set is not repeated")
     print(f"when no step of the run with it reached sweep {ACTIVE_SET}: the step is never tried, the computation is the same.")
     return rows
@@ -217,7 +217,7 @@ def main():
                     f"two blocks, {a.steps} steps, one rank", "contact points",
                     [(p, [r["D"] for r in rows], "o-", "D assembly (once)"),
                      (p, [r["solves"] for r in rows], "o--", "  of which KSPMatSolve"),
-                     (p, [r["htx"] for r in rows], "o:", "  of which dense H^T X"),
+                     (p, [r["htx"] for r in rows], "o:", "  of which H^T X"),
                      (p, [r["pgs"] for r in rows], "s-", "PGS per step"),
                      (p, [r["events"].get("MBCBodyFactor", 0) for r in rows], "^-", "body factorizations"),
                      (p, [r["body_solve"] for r in rows], "v-", "body solves per step"),

@@ -15,6 +15,19 @@ MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
            "OMPI_MCA_rmaps_base_oversubscribe": "1", "PYTHONPATH": os.path.join(ROOT, "python")}
 
 
+def load_script(relpath, name):
+    """A script of the tree (e.g. meshes/hertz/build.py) as a module under a unique name: the
+    scene scripts are all called build.py, and one sys.modules entry would serve them all."""
+    import importlib.util
+    path = os.path.join(ROOT, relpath)
+    sys.path.insert(0, os.path.dirname(path))  # for the script's own sibling imports
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 def env():
     e = dict(os.environ)
     e.update(MPI_ENV)

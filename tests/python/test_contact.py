@@ -1,16 +1,13 @@
 """Contact forces in the Newmark step: the paper's two-block example."""
-import os
-import sys
 
 import numpy as np
 import pytest
 
-from conftest import ROOT, prep, solve
+from conftest import load_script, prep, solve
 import yaml
 from mbcontact.results import read_csv
 
-sys.path.insert(0, os.path.join(ROOT, "meshes", "blocks"))
-import build as blocks  # noqa: E402  (meshes/blocks/build.py)
+blocks = load_script("meshes/blocks/build.py", "blocks_build")
 
 
 @pytest.mark.parametrize("dt,newmark,final_time", [(0.01, (0.25, 0.5), 2.5), (0.04, (0.3025, 0.6), 4.0),

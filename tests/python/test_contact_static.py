@@ -1,22 +1,18 @@
 """Contact in static analyses: the paper's two blocks without inertia (block 2 held only by
 contact), the contact patch test on non-matching meshes, contact output files, and the
 multiplier problem of a simulation step written as FCLIB and solved again."""
-import os
 import re
-import sys
 
 import h5py
 import numpy as np
 import pytest
-import yaml
 
-from conftest import ROOT, prep, result, solve
+from conftest import load_script, prep, result, solve
 from mbcontact import meshgen
 from mbcontact.results import read_body, read_csv
 from test_fclib import local_problem, merit, run
 
-sys.path.insert(0, os.path.join(ROOT, "meshes", "blocks"))
-import build as blocks  # noqa: E402  (meshes/blocks/build.py)
+blocks = load_script("meshes/blocks/build.py", "blocks_build")
 
 STATIC = ("-mbc_analysis", "static", "-mbc_dt", "1", "-mbc_final_time", "1")
 

@@ -1,16 +1,13 @@
 """The paper's Hertz example (two parallel cylinders, meshes/hertz) and Hertz point contact
 (a sphere on a half-space), static, against Hertz theory and the paper's ANSYS displacements."""
-import os
-import sys
 
 import pytest
 import yaml
 
-from conftest import ROOT, prep, solve
+from conftest import load_script, prep, solve
 
-sys.path.insert(0, os.path.join(ROOT, "meshes", "hertz"))
-import build  # noqa: E402  (meshes/hertz/build.py)
-import report  # noqa: E402  (meshes/hertz/report.py)
+build = load_script("meshes/hertz/build.py", "hertz_build")
+report = load_script("meshes/hertz/report.py", "hertz_report")
 
 
 def cylinders(tmp_path, hc, delta=None):
