@@ -23,7 +23,7 @@ Prints tables and writes docs/contact.png. Exits non-zero if a solver run fails.
 takes about 15 minutes on 2 cores (most of it the loose tolerances of part 2, where block 2
 sinks in, the pairs change and D is rebuilt at most steps); --quick about 25 s.
 
-  bench/contact.py [--quick] [--sizes 5 10 15 20 25 30] [--steps 5] [--repeat 1] [--tol-size 15]
+  bench/contact.py [--quick] [--sizes 5 10 15 20 25 30] [--steps 5] [--repeat 1] [--tol-size 15] [--sizes-only]
 """
 import argparse
 import os
@@ -201,6 +201,7 @@ def main():
     ap.add_argument("--tol-final-time", type=float, default=1.5, help="end of the tolerance runs [s]")
     ap.add_argument("--tols", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10])
     ap.add_argument("--max-it", type=int, default=100000, help="-mbc_pgs_max_it of the tolerance runs")
+    ap.add_argument("--sizes-only", action="store_true", help="part 1 only (the tolerance study takes most of the time)")
     ap.add_argument("--plot", default=None, help="PNG (default docs/contact.png; with --quick, in the temporary directory)")
     a = ap.parse_args()
     if a.quick:
@@ -210,7 +211,8 @@ def main():
         sys.exit(f"no solver at {SOLVER} (build it, or set MBC_BUILD_DIR)")
     with tempfile.TemporaryDirectory() as work:
         rows, fits = against_points(a, work)
-        against_tolerance(a, work)
+        if not a.sizes_only:
+            against_tolerance(a, work)
         p = [r["points"] for r in rows]
         ref = lambda e, y: [y * (x / p[-1]) ** e for x in p]  # noqa: E731  slopes through the largest size
         plot.loglog(a.plot or (os.path.join(work, "contact.png") if a.quick else os.path.join(ROOT, "docs", "contact.png")),

@@ -403,7 +403,7 @@ static PetscErrorCode SolverStatic(MBCSolver s)
       PetscCall(SolverContact(s));
       if (s->monitor && (s->contact || stabilized)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
       if ((!s->contact && !stabilized) || fmax <= s->static_rtol * kumax) break;
-      PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax);
+      PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->pgs.rtol > s->static_rtol ? "; or -mbc_pgs_rtol is looser than -mbc_static_rtol" : "");
     }
     PetscCall(SolverMonitor(s));
     PetscCall(MBCSolverOutputStep(s));
