@@ -184,6 +184,55 @@ PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
   PetscFunctionReturn(0);
 }
 
+/* The active-set system (column-major A, n x n) and its right side x: u = 0 for sticking
+   contacts (all their rows of S), u_n = 0 for slipping ones with r_t = mu r_n d (d frozen). */
+static PetscErrorCode ActiveSetSystem(MBCFrictionProblem *fp, const PetscInt S[], PetscInt ns, PetscInt nin, const PetscInt contact[], const PetscInt first[], const PetscReal dir[], PetscInt n, PetscScalar A[], PetscScalar x[])
+{
+  PetscScalar       *Wc;
+  const PetscScalar *qv;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1((size_t)ns * ns, &Wc));
+  for (PetscInt a = 0; a < ns; a++) { /* W on the rows of the contacts in contact, column-major */
+    PetscInt           ncols, b = 0;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscCall(MatGetRow(fp->W, S[a], &ncols, &cols, &vals));
+    for (PetscInt k = 0; k < ncols; k++) {
+      while (b < ns && S[b] < cols[k]) b++;
+      if (b < ns && S[b] == cols[k]) Wc[a + (size_t)b * ns] = vals[k];
+    }
+    PetscCall(MatRestoreRow(fp->W, S[a], &ncols, &cols, &vals));
+  }
+  PetscCall(VecGetArrayRead(fp->q, &qv));
+  for (PetscInt j = 0, e = 0; j < nin; j++) { /* equations: u = 0 (stick), u_n = 0 (slip) */
+    const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
+    for (PetscInt d = 0; d < neq; d++, e++) {
+      const PetscInt row = first[j] + d;
+      x[e] = -qv[S[row]];
+      for (PetscInt k = 0, c = 0; k < nin; k++) { /* unknowns: r (stick), r_n (slip) */
+        const PetscInt   i = contact[k], col = first[k];
+        const PetscReal  mu = fp->mu[i];
+        if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
+          A[e + (size_t)c * n] = Wc[row + (size_t)col * ns] + mu * (dir[2 * k] * Wc[row + (size_t)(col + 1) * ns] + dir[2 * k + 1] * Wc[row + (size_t)(col + 2) * ns]);
+          c++;
+        } else
+          for (PetscInt dd = 0; dd < fp->off[i + 1] - fp->off[i]; dd++, c++) A[e + (size_t)c * n] = Wc[row + (size_t)(col + dd) * ns];
+      }
+    }
+  }
+  PetscCall(VecRestoreArrayRead(fp->q, &qv));
+  { /* W_SS may be singular: tangential forces along directions prescribed on both sides (a
+       roller under a roller) have no flexibility. A shift of 1e-10 of the largest diagonal picks
+       the solution with those forces near zero and leaves the others to 1e-10. */
+    PetscReal dmax = 0;
+    for (PetscInt a = 0; a < n; a++) dmax = PetscMax(dmax, PetscAbsScalar(A[a + (size_t)a * n]));
+    for (PetscInt a = 0; a < n; a++) A[a + (size_t)a * n] += 1e-10 * dmax;
+  }
+  PetscCall(PetscFree(Wc));
+  PetscFunctionReturn(0);
+}
+
 /* Active-set step: with the contacts split by the current iterate (and q) into separated (r = 0),
    sticking (u = 0: all components unknown) and slipping (u_n = 0, r_t = mu r_n d with the
    friction direction d frozen: r_n unknown), the problem is linear. One dense LU (LAPACK) solves
@@ -194,7 +243,7 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
 {
   PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0;
   PetscReal         *dir;
-  PetscScalar       *rv, *Wc = NULL, *A = NULL, *x, *lu;
+  PetscScalar       *rv, *A = NULL, *x, *lu;
   const PetscScalar *qv, *uv;
   PetscBLASInt       bn, one = 1, info = 0, *piv = NULL, *lupiv;
   PetscBool          slips = PETSC_FALSE, reuse = PETSC_FALSE;
@@ -246,55 +295,18 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
     PetscCall(VecRestoreArrayRead(fp->q, &qv));
     lu = pgs->lu, lupiv = pgs->lupiv;
   } else {
-  PetscCall(PetscCalloc1((size_t)ns * ns, &Wc));
-  for (PetscInt a = 0; a < ns; a++) { /* W on the rows of the contacts in contact, column-major */
-    PetscInt           ncols, b = 0;
-    const PetscInt    *cols;
-    const PetscScalar *vals;
-    PetscCall(MatGetRow(fp->W, S[a], &ncols, &cols, &vals));
-    for (PetscInt k = 0; k < ncols; k++) {
-      while (b < ns && S[b] < cols[k]) b++;
-      if (b < ns && S[b] == cols[k]) Wc[a + (size_t)b * ns] = vals[k];
+    PetscCall(PetscCalloc1((size_t)n * n, &A));
+    PetscCall(PetscMalloc1(n, &piv));
+    PetscCall(ActiveSetSystem(fp, S, ns, nin, contact, first, dir, n, A, x));
+    PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&bn, &bn, A, &bn, piv, &info));
+    lu = A, lupiv = piv;
+    if (!info && !slips) { /* keep this factor */
+      PetscCall(MBCPGSReset(pgs));
+      pgs->lu = A, pgs->lupiv = piv, A = NULL, piv = NULL;
+      pgs->lun = ns, pgs->luW = id;
+      PetscCall(PetscMalloc1(ns, &pgs->luS));
+      PetscCall(PetscArraycpy(pgs->luS, S, ns));
     }
-    PetscCall(MatRestoreRow(fp->W, S[a], &ncols, &cols, &vals));
-  }
-  PetscCall(PetscCalloc1((size_t)n * n, &A));
-  PetscCall(PetscMalloc1(n, &piv));
-  PetscCall(VecGetArrayRead(fp->q, &qv));
-  for (PetscInt j = 0, e = 0; j < nin; j++) { /* equations: u = 0 (stick), u_n = 0 (slip) */
-    const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
-    for (PetscInt d = 0; d < neq; d++, e++) {
-      const PetscInt row = first[j] + d;
-      x[e] = -qv[S[row]];
-      for (PetscInt k = 0, c = 0; k < nin; k++) { /* unknowns: r (stick), r_n (slip) */
-        const PetscInt   i = contact[k], col = first[k];
-        const PetscReal  mu = fp->mu[i];
-        if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
-          A[e + (size_t)c * n] = Wc[row + (size_t)col * ns] + mu * (dir[2 * k] * Wc[row + (size_t)(col + 1) * ns] + dir[2 * k + 1] * Wc[row + (size_t)(col + 2) * ns]);
-          c++;
-        } else
-          for (PetscInt dd = 0; dd < fp->off[i + 1] - fp->off[i]; dd++, c++) A[e + (size_t)c * n] = Wc[row + (size_t)(col + dd) * ns];
-      }
-    }
-  }
-  PetscCall(VecRestoreArrayRead(fp->q, &qv));
-  { /* W_SS may be singular: tangential forces along directions prescribed on both sides (a
-       roller under a roller) have no flexibility. A shift of 1e-10 of the largest diagonal picks
-       the solution with those forces near zero and leaves the others to 1e-10. */
-    PetscReal dmax = 0;
-    for (PetscInt a = 0; a < n; a++) dmax = PetscMax(dmax, PetscAbsScalar(A[a + (size_t)a * n]));
-    for (PetscInt a = 0; a < n; a++) A[a + (size_t)a * n] += 1e-10 * dmax;
-  }
-  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&bn, &bn, A, &bn, piv, &info));
-  PetscCall(PetscFree(Wc));
-  lu = A, lupiv = piv;
-  if (!info && !slips) { /* keep this factor */
-    PetscCall(MBCPGSReset(pgs));
-    pgs->lu = A, pgs->lupiv = piv, A = NULL, piv = NULL;
-    pgs->lun = ns, pgs->luW = id;
-    PetscCall(PetscMalloc1(ns, &pgs->luS));
-    PetscCall(PetscArraycpy(pgs->luS, S, ns));
-  }
   }
   if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &bn, &one, lu, &bn, lupiv, x, &bn, &info));
   if (!info) {
