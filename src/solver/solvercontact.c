@@ -89,15 +89,16 @@ static PetscErrorCode SolverContactReset(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Carries a per-point 3-vector field (components in each point's frame n, t1, t2; 1 component if
-   frictionless) from the points of the last build to the new ones, matched by (couple, master
+/* Carries nf per-point 3-vector fields (components in each point's frame n, t1, t2; 1 component
+   if frictionless) from the points of the last build to the new ones, matched by (couple, master
    node), through global coordinates. Points without a match get 0. */
-static PetscErrorCode CarryField(PetscInt nold, const PetscInt oldpairs[], const PetscReal oldframes[], const PetscInt oldoff[], const PetscReal oldv[], PetscInt nnew, const PetscInt newpairs[], const PetscReal newframes[], const PetscInt newoff[], PetscReal newv[])
+static PetscErrorCode CarryFields(PetscInt nf, PetscInt nold, const PetscInt oldpairs[], const PetscReal oldframes[], const PetscInt oldoff[], const PetscReal *oldv[], PetscInt nnew, const PetscInt newpairs[], const PetscReal newframes[], const PetscInt newoff[], PetscReal *newv[])
 {
   PetscInt *key, *perm;
 
   PetscFunctionBegin;
-  for (PetscInt k = 0; k < newoff[nnew]; k++) newv[k] = 0;
+  for (PetscInt f = 0; f < nf; f++)
+    for (PetscInt k = 0; k < newoff[nnew]; k++) newv[f][k] = 0;
   if (!nold) PetscFunctionReturn(0);
   PetscCall(PetscMalloc2(nold, &key, nold, &perm));
   for (PetscInt lo = 0, hi; lo < nold; lo = hi) { /* points are grouped by couple */
@@ -112,11 +113,11 @@ static PetscErrorCode CarryField(PetscInt nold, const PetscInt oldpairs[], const
       PetscCall(PetscFindInt(newpairs[MBC_PAIR_SIZE * k + 1], hi - lo, key + lo, &j));
       if (j < 0) continue;
       j = perm[lo + j];
-      {
+      for (PetscInt fi = 0; fi < nf; fi++) {
         PetscReal f[3] = {0, 0, 0};
         for (PetscInt d = 0; d < oldoff[j + 1] - oldoff[j]; d++)
-          for (PetscInt e = 0; e < 3; e++) f[e] += oldv[oldoff[j] + d] * oldframes[9 * j + 3 * d + e];
-        for (PetscInt d = 0; d < dim; d++) newv[newoff[k] + d] = f[0] * newframes[9 * k + 3 * d] + f[1] * newframes[9 * k + 3 * d + 1] + f[2] * newframes[9 * k + 3 * d + 2];
+          for (PetscInt e = 0; e < 3; e++) f[e] += oldv[fi][oldoff[j] + d] * oldframes[9 * j + 3 * d + e];
+        for (PetscInt d = 0; d < dim; d++) newv[fi][newoff[k] + d] = f[0] * newframes[9 * k + 3 * d] + f[1] * newframes[9 * k + 3 * d + 1] + f[2] * newframes[9 * k + 3 * d + 2];
       }
     }
   }
@@ -168,69 +169,13 @@ static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Builds H, X = A^-1 H and D for the contact points of pairs (couple, master, face per point),
-   and carries the last step's contact forces and the PGS warm start over to them. */
-PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
+/* H_i, X_i = A_i^-1 H_i and the per-body work vectors for every body, and W = D / dscale with
+   D = sum_i H_i^T X_i (m x m), replicated on every rank. */
+static PetscErrorCode SolverContactBuildD(MBCSolver s, PetscInt m)
 {
-  MBCContact   c  = s->contact;
-  PetscInt     nc = NumContacts(c), m, *dims, nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL;
-  PetscReal   *oldframes = s->frames, *oldlam = NULL, *oldr = NULL;
   PetscScalar *Dl, *Dg;
 
   PetscFunctionBegin;
-  PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
-  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
-  if (nold && s->lamprev) { /* keep what the new points inherit */
-    const PetscScalar *a, *l;
-    PetscInt           mold = s->fp.off[nold];
-    PetscCall(PetscMalloc3(nold + 1, &oldoff, mold, &oldlam, mold, &oldr));
-    PetscCall(PetscArraycpy(oldoff, s->fp.off, nold + 1));
-    PetscCall(VecGetArrayRead(s->lamprev, &a));
-    PetscCall(VecGetArrayRead(s->lambda, &l));
-    for (PetscInt i = 0; i < mold; i++) {
-      oldlam[i] = PetscRealPart(a[i]);
-      oldr[i]   = PetscRealPart(l[i]) / s->dscale;
-    }
-    PetscCall(VecRestoreArrayRead(s->lambda, &l));
-    PetscCall(VecRestoreArrayRead(s->lamprev, &a));
-  }
-  if (s->analysis == MBC_ANALYSIS_DYNAMIC) /* the contact force H lambda_n inside the acceleration */
-    for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody body = s->bodies[b];
-      if (!body) continue;
-      if (!body->fcontact) PetscCall(VecDuplicate(body->u, &body->fcontact));
-      if (s->H[b]) PetscCall(MatMult(s->H[b], s->lam[b], body->fcontact));
-      else PetscCall(VecZeroEntries(body->fcontact));
-    }
-  s->frames = NULL;
-  PetscCall(SolverContactReset(s));
-  s->pairs_built  = pairs;
-  s->npairs_built = n;
-  s->fp.nc = nc;
-  PetscCall(PetscMalloc1(nc, &s->fp.mu));
-  PetscCall(PetscMalloc1(nc, &dims));
-  PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
-      const MBCContactPoint *p = &c->couples[i].points[j];
-      s->fp.mu[k] = c->couples[i].mu;
-      dims[k]     = c->couples[i].mu > 0 ? 3 : 1;
-      for (PetscInt e = 0; e < 3; e++) {
-        s->frames[9 * k + e]     = p->n[e];
-        s->frames[9 * k + 3 + e] = p->t1[e];
-        s->frames[9 * k + 6 + e] = p->t2[e];
-      }
-    }
-  PetscCall(MBCFrictionProblemSetBlocks(&s->fp, dims));
-  PetscCall(PetscFree(dims));
-  m = s->fp.off[nc];
-  if (!nc) {
-    PetscCall(PetscFree3(oldoff, oldlam, oldr));
-    PetscCall(PetscFree(oldframes));
-    PetscCall(PetscFree(oldpairs));
-    PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
-    PetscFunctionReturn(0);
-  }
   PetscCall(PetscCalloc2(m * m, &Dl, m * m, &Dg));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody     body = s->bodies[b];
@@ -288,28 +233,86 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     PetscCall(PetscFree(nnz));
   }
   PetscCall(PetscFree2(Dl, Dg));
-  PetscCall(VecCreateSeq(PETSC_COMM_SELF, m, &s->fp.q));
-  PetscCall(VecDuplicate(s->fp.q, &s->lambda));
-  PetscCall(VecDuplicate(s->fp.q, &s->ucontact));
-  PetscCall(VecDuplicate(s->fp.q, &s->lamprev));
-  { /* carry lambda_n and the warm start r over to the new points */
-    PetscScalar *a, *l;
-    PetscReal   *v;
-    PetscCall(PetscMalloc1(m, &v));
-    PetscCall(VecGetArray(s->lamprev, &a));
-    PetscCall(CarryField(oldoff ? nold : 0, oldpairs, oldframes, oldoff, oldlam, nc, pairs, s->frames, s->fp.off, v));
-    for (PetscInt i = 0; i < m; i++) a[i] = v[i];
-    PetscCall(VecRestoreArray(s->lamprev, &a));
-    PetscCall(VecGetArray(s->lambda, &l));
-    PetscCall(CarryField(oldoff ? nold : 0, oldpairs, oldframes, oldoff, oldr, nc, pairs, s->frames, s->fp.off, v));
-    for (PetscInt i = 0; i < m; i++) l[i] = v[i] * s->dscale;
-    PetscCall(VecRestoreArray(s->lambda, &l));
-    PetscCall(PetscFree(v));
+  PetscFunctionReturn(0);
+}
+
+/* Builds H, X = A^-1 H and D for the contact points of pairs (couple, master, face per point),
+   and carries the last step's contact forces and the PGS warm start over to them. */
+PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
+{
+  MBCContact   c  = s->contact;
+  PetscInt     nc = NumContacts(c), m, *dims, nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL;
+  PetscReal   *oldframes = s->frames, *oldlam = NULL, *oldr = NULL;
+
+  PetscFunctionBegin;
+  PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
+  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  if (nold && s->lamprev) { /* keep what the new points inherit */
+    const PetscScalar *a, *l;
+    PetscInt           mold = s->fp.off[nold];
+    PetscCall(PetscMalloc3(nold + 1, &oldoff, mold, &oldlam, mold, &oldr));
+    PetscCall(PetscArraycpy(oldoff, s->fp.off, nold + 1));
+    PetscCall(VecGetArrayRead(s->lamprev, &a));
+    PetscCall(VecGetArrayRead(s->lambda, &l));
+    for (PetscInt i = 0; i < mold; i++) {
+      oldlam[i] = PetscRealPart(a[i]);
+      oldr[i]   = PetscRealPart(l[i]) / s->dscale;
+    }
+    PetscCall(VecRestoreArrayRead(s->lambda, &l));
+    PetscCall(VecRestoreArrayRead(s->lamprev, &a));
+  }
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) /* the contact force H lambda_n inside the acceleration */
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody body = s->bodies[b];
+      if (!body) continue;
+      if (!body->fcontact) PetscCall(VecDuplicate(body->u, &body->fcontact));
+      if (s->H[b]) PetscCall(MatMult(s->H[b], s->lam[b], body->fcontact));
+      else PetscCall(VecZeroEntries(body->fcontact));
+    }
+  s->frames = NULL;
+  PetscCall(SolverContactReset(s));
+  s->pairs_built  = pairs;
+  s->npairs_built = n;
+  s->fp.nc = nc;
+  PetscCall(PetscMalloc1(nc, &s->fp.mu));
+  PetscCall(PetscMalloc1(nc, &dims));
+  PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const MBCContactPoint *p = &c->couples[i].points[j];
+      s->fp.mu[k] = c->couples[i].mu;
+      dims[k]     = c->couples[i].mu > 0 ? 3 : 1;
+      for (PetscInt e = 0; e < 3; e++) {
+        s->frames[9 * k + e]     = p->n[e];
+        s->frames[9 * k + 3 + e] = p->t1[e];
+        s->frames[9 * k + 6 + e] = p->t2[e];
+      }
+    }
+  PetscCall(MBCFrictionProblemSetBlocks(&s->fp, dims));
+  PetscCall(PetscFree(dims));
+  m = s->fp.off[nc];
+  if (nc) {
+    PetscReal *v[2];
+    PetscCall(SolverContactBuildD(s, m));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, m, &s->fp.q));
+    PetscCall(VecDuplicate(s->fp.q, &s->lambda));
+    PetscCall(VecDuplicate(s->fp.q, &s->ucontact));
+    PetscCall(VecDuplicate(s->fp.q, &s->lamprev));
+    /* carry lambda_n and the warm start r (physical, then scaled) over to the new points */
+    PetscCall(VecGetArray(s->lamprev, &v[0]));
+    PetscCall(VecGetArray(s->lambda, &v[1]));
+    {
+      const PetscReal *old[2] = {oldlam, oldr};
+      PetscCall(CarryFields(2, oldoff ? nold : 0, oldpairs, oldframes, oldoff, old, nc, pairs, s->frames, s->fp.off, v));
+    }
+    for (PetscInt i = 0; i < m; i++) v[1][i] *= s->dscale;
+    PetscCall(VecRestoreArray(s->lambda, &v[1]));
+    PetscCall(VecRestoreArray(s->lamprev, &v[0]));
   }
   PetscCall(PetscFree3(oldoff, oldlam, oldr));
   PetscCall(PetscFree(oldframes));
   PetscCall(PetscFree(oldpairs));
-  if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactAccelerationUpdate(s));
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactAccelerationUpdate(s)); /* also when no point is left */
   PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
