@@ -242,7 +242,7 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
 {
   MBCContact   c  = s->contact;
   PetscInt     nc = NumContacts(c), m, *dims, nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL;
-  PetscReal   *oldframes = s->frames, *oldlam = NULL, *oldr = NULL;
+  PetscReal   *oldframes = s->frames, *oldlam = NULL, *oldr = NULL, *oldslip = s->slip;
 
   PetscFunctionBegin;
   PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
@@ -270,6 +270,7 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
       else PetscCall(VecZeroEntries(body->fcontact));
     }
   s->frames = NULL;
+  s->slip   = NULL;
   PetscCall(SolverContactReset(s));
   s->pairs_built  = pairs;
   s->npairs_built = n;
@@ -277,6 +278,7 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
   PetscCall(PetscMalloc1(nc, &s->fp.mu));
   PetscCall(PetscMalloc1(nc, &dims));
   PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
+  PetscCall(PetscCalloc1(3 * nc + 1, &s->slip));
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const MBCContactPoint *p = &c->couples[i].points[j];
@@ -308,8 +310,18 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     for (PetscInt i = 0; i < m; i++) v[1][i] *= s->dscale;
     PetscCall(VecRestoreArray(s->lambda, &v[1]));
     PetscCall(VecRestoreArray(s->lamprev, &v[0]));
+    if (oldslip && nold) { /* the slip so far, (0, t1, t2) in each point's frame */
+      PetscInt        *off3;
+      const PetscReal *old[1] = {oldslip};
+      PetscCall(PetscMalloc1(PetscMax(nold, nc) + 1, &off3));
+      for (PetscInt i = 0; i <= PetscMax(nold, nc); i++) off3[i] = 3 * i;
+      PetscCall(CarryFields(1, nold, oldpairs, oldframes, off3, old, nc, pairs, s->frames, off3, &s->slip));
+      for (PetscInt k = 0; k < nc; k++) s->slip[3 * k] = 0;
+      PetscCall(PetscFree(off3));
+    }
   }
   PetscCall(PetscFree3(oldoff, oldlam, oldr));
+  PetscCall(PetscFree(oldslip));
   PetscCall(PetscFree(oldframes));
   PetscCall(PetscFree(oldpairs));
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactAccelerationUpdate(s)); /* also when no point is left */
@@ -324,6 +336,7 @@ PetscErrorCode MBCSolverContactDestroy(MBCSolver s)
   PetscCall(SolverContactReset(s));
   PetscCall(PetscFree6(s->H, s->X, s->Hu, s->Hus, s->lam, s->hsc));
   PetscCall(PetscFree(s->frames));
+  PetscCall(PetscFree(s->slip));
   PetscCall(PetscFree(s->pairs_built));
   PetscFunctionReturn(0);
 }
@@ -398,6 +411,15 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
   if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
   PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
   PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
+  { /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the step's slip
+       (H's master weight is 1, so in length units) */
+    const PetscScalar *u;
+    PetscCall(VecGetArrayRead(s->ucontact, &u));
+    for (PetscInt k = 0; k < nc; k++)
+      if (s->fp.off[k + 1] - s->fp.off[k] == 3)
+        for (PetscInt d = 1; d < 3; d++) s->slip[3 * k + d] += PetscRealPart(u[s->fp.off[k] + d]);
+    PetscCall(VecRestoreArrayRead(s->ucontact, &u));
+  }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;

@@ -14,7 +14,7 @@ PetscErrorCode MBCSolverOutputContactOpen(MBCSolver s)
   if (!s->contact || rank) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_contact.csv", s->output));
   PetscCall(MBCFileOpenWrite(file, &s->contact_csv));
-  fprintf(s->contact_csv, "t,couple,points,separated,stick,slip,normal_force,fx,fy,fz\n");
+  fprintf(s->contact_csv, "t,couple,points,separated,stick,slip,normal_force,fx,fy,fz,max_slip,max_opening\n");
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_contact.h5", s->output));
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
   s->contact_h5 = H5Fcreate(file, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
@@ -28,7 +28,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
 {
   MBCContact c = s->contact;
   PetscInt   np = 0, count[3], *state;
-  PetscReal *lam, *x, *x0, *nrm, *force, *pressure, *traction, *gap, *area;
+  PetscReal *lam, *x, *x0, *slip, *nrm, *force, *pressure, *traction, *gap, *area;
   int       *couple, *istate;
 
   PetscFunctionBegin;
@@ -36,12 +36,12 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   for (PetscInt i = 0; i < c->ncouples; i++) np += c->couples[i].npoints;
   PetscCall(PetscCalloc6(3 * np + 1, &lam, 3 * np + 1, &x, 3 * np + 1, &nrm, 3 * np + 1, &force, 3 * np + 1, &traction, np + 1, &state));
   PetscCall(PetscCalloc5(np + 1, &pressure, np + 1, &gap, np + 1, &area, np + 1, &couple, np + 1, &istate));
-  PetscCall(PetscCalloc1(3 * np + 1, &x0));
+  PetscCall(PetscCalloc2(3 * np + 1, &x0, 3 * np + 1, &slip));
   if (np == s->fp.nc) PetscCall(MBCSolverContactStates(s, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
     PetscReal  sum[5] = {0, 0, 0, 0, 0}; /* -, the three states, normal force */
-    PetscReal  f[3]   = {0, 0, 0};
+    PetscReal  f[3]   = {0, 0, 0}, maxslip = 0, maxopen = 0;
     PetscInt   kfirst = k;
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
       const MBCContactPoint *p = &cp->points[j];
@@ -56,13 +56,17 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
         nrm[3 * k + d]      = p->n[d];
         force[3 * k + d]    = z[0] * p->n[d] + z[1] * p->t1[d] + z[2] * p->t2[d];
         traction[3 * k + d] = area[k] > 0 ? (z[1] * p->t1[d] + z[2] * p->t2[d]) / area[k] : 0;
+        slip[3 * k + d]     = cp->mu > 0 && np == s->fp.nc ? s->slip[3 * k + 1] * p->t1[d] + s->slip[3 * k + 2] * p->t2[d] : (cp->mu > 0 ? 0 : NAN);
         f[d] += force[3 * k + d];
       }
+      maxslip = PetscMax(maxslip, PetscSqrtReal(PetscSqr(slip[3 * k]) + PetscSqr(slip[3 * k + 1]) + PetscSqr(slip[3 * k + 2])));
+      maxopen = PetscMax(maxopen, gap[k]);
       pressure[k] = area[k] > 0 ? z[0] / area[k] : 0;
       sum[1 + state[k]] += 1;
       sum[4] += z[0];
     }
-    if (s->contact_csv) fprintf(s->contact_csv, "%.17g,%" PetscInt_FMT ",%" PetscInt_FMT ",%d,%d,%d,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, cp->k, k - kfirst, (int)sum[1], (int)sum[2], (int)sum[3], (double)sum[4], (double)f[0], (double)f[1], (double)f[2]);
+    if (cp->mu == 0) maxslip = NAN; /* frictionless: the tangential motion is not tracked */
+    if (s->contact_csv) fprintf(s->contact_csv, "%.17g,%" PetscInt_FMT ",%" PetscInt_FMT ",%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, cp->k, k - kfirst, (int)sum[1], (int)sum[2], (int)sum[3], (double)sum[4], (double)f[0], (double)f[1], (double)f[2], (double)maxslip, (double)maxopen);
   }
   if (fields && s->contact_h5 >= 0 && s->contact_csv) {
     char  name[64];
@@ -82,6 +86,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     PetscCall(MBCH5WriteArray(g, "pressure", H5T_NATIVE_DOUBLE, np, 1, pressure));
     PetscCall(MBCH5WriteArray(g, "traction", H5T_NATIVE_DOUBLE, np, 3, traction));
     PetscCall(MBCH5WriteArray(g, "gap", H5T_NATIVE_DOUBLE, np, 1, gap));
+    PetscCall(MBCH5WriteArray(g, "slip", H5T_NATIVE_DOUBLE, np, 3, slip));
     PetscCall(MBCH5WriteArray(g, "area", H5T_NATIVE_DOUBLE, np, 1, area));
     PetscCall(MBCH5WriteArray(g, "state", H5T_NATIVE_INT, np, 1, istate));
     PetscCall(MBCH5WriteArray(g, "couple", H5T_NATIVE_INT, np, 1, couple));
@@ -89,7 +94,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   }
   PetscCall(PetscFree6(lam, x, nrm, force, traction, state));
   PetscCall(PetscFree5(pressure, gap, area, couple, istate));
-  PetscCall(PetscFree(x0));
+  PetscCall(PetscFree2(x0, slip));
   PetscFunctionReturn(0);
 }
 
@@ -108,7 +113,7 @@ PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver s, FILE *fp, PetscInt k)
 {
   char        h5name[PETSC_MAX_PATH_LEN], h5path[PETSC_MAX_PATH_LEN], path[64];
   const char *base = s->output, *slash;
-  const char *scalars[3] = {"pressure", "gap", "state"}, *vectors[3] = {"traction", "force", "normal"};
+  const char *scalars[3] = {"pressure", "gap", "state"}, *vectors[4] = {"traction", "force", "normal", "slip"};
   hid_t       h5;
   hsize_t     np = 0;
 
@@ -135,7 +140,7 @@ PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver s, FILE *fp, PetscInt k)
   fprintf(fp, "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%llu\" NodesPerElement=\"1\"/>\n", (unsigned long long)np);
   fprintf(fp, "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%llu 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/step_%" PetscInt_FMT "/position</DataItem>\n        </Geometry>\n", (unsigned long long)np, h5name, k);
   for (int i = 0; i < 3; i++) fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Node\">\n          <DataItem Dimensions=\"%llu\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">%s:/step_%" PetscInt_FMT "/%s</DataItem>\n        </Attribute>\n", scalars[i], (unsigned long long)np, i == 2 ? "Int" : "Float", i == 2 ? 4 : 8, h5name, k, scalars[i]);
-  for (int i = 0; i < 3; i++) fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"Vector\" Center=\"Node\">\n          <DataItem Dimensions=\"%llu 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/step_%" PetscInt_FMT "/%s</DataItem>\n        </Attribute>\n", vectors[i], (unsigned long long)np, h5name, k, vectors[i]);
+  for (int i = 0; i < 4; i++) fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"Vector\" Center=\"Node\">\n          <DataItem Dimensions=\"%llu 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/step_%" PetscInt_FMT "/%s</DataItem>\n        </Attribute>\n", vectors[i], (unsigned long long)np, h5name, k, vectors[i]);
   fprintf(fp, "      </Grid>\n");
   PetscFunctionReturn(0);
 }

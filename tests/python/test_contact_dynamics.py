@@ -103,6 +103,9 @@ def test_block_slides_down_incline(tmp_path, newmark):
     assert np.abs(p["bottom_uz"]).max() < 1e-6
     last, state = contact_state(r.stdout)
     assert state["converged"] and state["stick"] == 0 and state["slip"] > 0, last
+    # the reported slip (sum of the steps' tangential relative displacements) is the slide
+    cc = read_csv(result(h5, "_contact.csv"))
+    assert abs(cc["max_slip"][-1] / p["bottom_ux"][-1] - 1) < 1e-4, (cc["max_slip"][-1], p["bottom_ux"][-1])
 
 
 @pytest.mark.parametrize("newmark", [TRAPEZOIDAL, DISSIPATIVE], ids=["trapezoidal", "dissipative"])

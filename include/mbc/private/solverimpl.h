@@ -57,6 +57,7 @@ struct _n_MBCSolver {
   PetscReal  theta, carry; /* complementarity on z = theta lambda_n+1 + (1 - theta) lambda_n; carry = (1 - theta) / theta */
   PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
   PetscReal *frames;      /* (n, t1, t2) of each point when D was built */
+  PetscReal *slip;        /* per point: (0, t1, t2) components of its tangential relative displacement so far (frictional couples) */
   PetscBool  search_only;
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
