@@ -100,7 +100,7 @@ def _write(output, scene, bodies, labels, face_counts):
             fd, partial = tempfile.mkstemp(prefix=".mbcontact-prep-", suffix=".h5", dir=folder)
             os.close(fd)
             _write_meshes(npz, partial)
-            write_metadata(partial, scene, bodies, face_counts)
+            write_metadata(partial, scene, bodies, face_counts, labels)
             os.replace(partial, output)
         except OSError as err:
             raise InputError(f"cannot write {output}: {err.strerror or err}") from None
@@ -135,7 +135,7 @@ def _write_meshes(npz, h5):
                             + done.stderr.strip()[:6000])
 
 
-def write_metadata(path, scene, bodies, face_counts):
+def write_metadata(path, scene, bodies, face_counts, labels=None):
     """Add the /mbcontact group (docs/scene-h5.md) to an existing HDF5 file."""
     import h5py
 
@@ -159,8 +159,14 @@ def write_metadata(path, scene, bodies, face_counts):
         _list(root, "bodies", zip(scene.bodies, bodies), lambda g, item: _attrs(
             g, name=item[0].name, cell_type=item[1].cell_type, num_cells=len(item[1].cells),
             num_vertices=len(item[1].coords), **item[0].material))
+        def side_faces(c, column):  # faces of each body on one side of couple c: the edge weights of the decomposition
+            if labels is None:
+                return np.zeros(len(bodies), dtype=np.int32)
+            return np.array([np.count_nonzero(lab[:, column] == c.k) for lab in labels], dtype=np.int32)
+
         _list(root, "couples", scene.couples, lambda g, c: _attrs(
-            g, k=c.k, mu=c.mu, master=",".join(c.master), slave=",".join(c.slave)))
+            g, k=c.k, mu=c.mu, master=",".join(c.master), slave=",".join(c.slave),
+            master_faces=side_faces(c, 1), slave_faces=side_faces(c, 2)))
 
         dirichlet = []
         for d in scene.dirichlet:

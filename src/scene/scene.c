@@ -47,7 +47,7 @@ static PetscErrorCode H5ReadReals(H5Node *node, const char *name, PetscInt nvalu
 {
   hid_t    attr, space;
   hssize_t n;
-  double   buf[16];
+  double  *buf;
 
   PetscFunctionBegin;
   if (optional && H5Aexists(node->obj, name) <= 0) PetscFunctionReturn(0);
@@ -55,13 +55,15 @@ static PetscErrorCode H5ReadReals(H5Node *node, const char *name, PetscInt nvalu
   space = H5Aget_space(attr);
   n     = H5Sget_simple_extent_npoints(space);
   H5Sclose(space);
-  PetscCheck(n == nvalues && n <= 16, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s has %lld values, expected %" PetscInt_FMT, node->file, name, node->path, (long long)n, nvalues);
+  PetscCheck(n == nvalues, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s has %lld values, expected %" PetscInt_FMT, node->file, name, node->path, (long long)n, nvalues);
+  PetscCall(PetscMalloc1(nvalues + 1, &buf));
   PetscCheck(H5Aread(attr, H5T_NATIVE_DOUBLE, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not a number", node->file, name, node->path);
   H5Aclose(attr);
   for (PetscInt i = 0; i < nvalues; i++) {
     PetscCheck(PetscIsNormalReal(buf[i]) || buf[i] == 0.0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not finite (%g)", node->file, name, node->path, buf[i]);
     values[i] = (PetscReal)buf[i];
   }
+  PetscCall(PetscFree(buf));
   PetscFunctionReturn(0);
 }
 
@@ -356,6 +358,9 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCall(H5ReadReal(&e, "mu", &c->mu, PETSC_TRUE));
     PetscCall(H5ReadString(&e, "master", NULL, 0, &c->master, PETSC_FALSE));
     PetscCall(H5ReadString(&e, "slave", NULL, 0, &c->slave, PETSC_FALSE));
+    PetscCall(PetscCalloc2(s->nbodies, &c->master_faces, s->nbodies, &c->slave_faces)); /* optional: 0 in files of older preps */
+    PetscCall(H5ReadReals(&e, "master_faces", s->nbodies, c->master_faces, PETSC_TRUE));
+    PetscCall(H5ReadReals(&e, "slave_faces", s->nbodies, c->slave_faces, PETSC_TRUE));
     PetscCheck(c->k >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple %s has real constant k = %" PetscInt_FMT "; k must be at least 1", s->filename, e.path, c->k);
     PetscCheck(c->mu >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g < 0", s->filename, c->k, (double)c->mu);
     PetscCall(H5NodeClose(&e));
@@ -457,6 +462,7 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   if (!s) PetscFunctionReturn(0);
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].master));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].slave));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree2(s->couples[i].master_faces, s->couples[i].slave_faces));
   for (PetscInt i = 0; i < s->ntables; i++) PetscCall(PetscFree2(s->tables[i].t, s->tables[i].f));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].bodies));
   PetscCall(PetscFree(s->bodies));

@@ -81,55 +81,6 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Bodies onto ranks: with at least as many bodies as ranks, greedy by vertex (DOF) count onto the
-   least loaded rank; with fewer, each body gets a contiguous range of ranks in proportion to
-   its vertices. (A METIS partition of the body graph weighted by contact comes with contact.) */
-static PetscErrorCode SolverDecompose(MBCSolver s)
-{
-  MBCScene    scene = s->scene;
-  PetscInt    N     = scene->nbodies;
-  PetscMPIInt P, rank;
-
-  PetscFunctionBegin;
-  PetscCallMPI(MPI_Comm_size(s->comm, &P));
-  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-  PetscCall(PetscCalloc2(N, &s->body_first_rank, N, &s->body_nranks));
-  if (N >= P) {
-    PetscInt *order, *weight;
-    PetscReal *load;
-    PetscCall(PetscMalloc3(N, &order, N, &weight, P, &load));
-    for (PetscInt b = 0; b < N; b++) {
-      order[b]  = b;
-      weight[b] = -scene->bodies[b].num_vertices;
-    }
-    PetscCall(PetscSortIntWithArray(N, weight, order));
-    for (PetscMPIInt r = 0; r < P; r++) load[r] = 0;
-    for (PetscInt i = 0; i < N; i++) {
-      PetscMPIInt best = 0;
-      for (PetscMPIInt r = 1; r < P; r++)
-        if (load[r] < load[best]) best = r;
-      s->body_first_rank[order[i]] = best;
-      s->body_nranks[order[i]]     = 1;
-      load[best] += (PetscReal)(-weight[i]) + 1;
-    }
-    PetscCall(PetscFree3(order, weight, load));
-  } else {
-    PetscMPIInt first = 0;
-    for (PetscInt b = 0; b < N; b++) s->body_nranks[b] = 1;
-    for (PetscMPIInt extra = P - (PetscMPIInt)N; extra > 0; extra--) {
-      PetscInt best = 0;
-      for (PetscInt b = 1; b < N; b++)
-        if ((PetscReal)scene->bodies[b].num_vertices / s->body_nranks[b] > (PetscReal)scene->bodies[best].num_vertices / s->body_nranks[best]) best = b;
-      s->body_nranks[best]++;
-    }
-    for (PetscInt b = 0; b < N; b++) {
-      s->body_first_rank[b] = first;
-      first += s->body_nranks[b];
-    }
-  }
-  PetscFunctionReturn(0);
-}
-
 /* -body_X applies to every body: copy it to -body_<name>_X for each body that does not set
    its own, so every body's KSP has one prefix and options read at solve time (-ksp_view,
    -ksp_monitor) work too. */
@@ -184,7 +135,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   if (s->setupcalled) PetscFunctionReturn(0);
   PetscCheck(scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Call MBCSolverSetScene() first");
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-  PetscCall(SolverDecompose(s));
+  PetscCall(MBCSolverDecompose(s));
   PetscCall(SolverPropagateBodyOptions(s));
   s->nbodies = scene->nbodies;
   PetscCall(PetscCalloc1(s->nbodies, &s->bodies));
@@ -568,6 +519,11 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
   PetscFunctionBegin;
   PetscCall(MBCSceneView(s->scene, viewer));
   PetscCall(PetscViewerASCIIPrintf(viewer, "%s analysis: dt %g, %" PetscInt_FMT " steps to t = %g\n", MBCAnalysisTypes[s->analysis], (double)s->dt, s->nsteps, (double)s->final_time));
+  {
+    PetscMPIInt P;
+    PetscCallMPI(MPI_Comm_size(s->comm, &P));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "decomposition (METIS on the body graph) onto %d ranks: largest rank load %.3f of the mean, %g contact faces between bodies on different ranks\n", P, (double)s->decomp_imbalance, (double)s->decomp_cut));
+  }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     const PetscInt ndof = 3 * s->scene->bodies[b].num_vertices; /* P1/Q1 displacement */
     PetscInt       nbc  = 0;

@@ -42,6 +42,7 @@ typedef struct {
   PetscInt  k;
   PetscReal mu;
   char     *master, *slave; /* surface names joined by "," */
+  PetscReal *master_faces, *slave_faces; /* per body: its faces on each side (weights of the decomposition) */
 } MBCCoupleDesc;
 
 typedef struct {

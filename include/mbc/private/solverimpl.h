@@ -34,6 +34,7 @@ struct _n_MBCSolver {
   PetscInt  nbodies;
   MBCBody  *bodies;       /* NULL where this rank is not in the body */
   PetscMPIInt *body_first_rank, *body_nranks;
+  PetscReal   decomp_cut, decomp_imbalance; /* contact faces between bodies on different ranks; largest rank load / mean */
 
   /* output */
   char      output[PETSC_MAX_PATH_LEN];
@@ -70,6 +71,7 @@ struct _n_MBCSolver {
   PetscReal work, dissipated;
 };
 
+PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
