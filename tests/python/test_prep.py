@@ -148,7 +148,10 @@ def test_two_box_scene_metadata(case):
             ("b1_zmax", 1, 9), ("b2_zmin", 2, 2 * 4), ("b1_zmin", 3, 9), ("b1_xmin", 4, 3 * 2),
             ("b2_xmax", 5, 2 * 4), ("b2_zmax", 6, 2 * 4)]
 
-        assert read_list(root["couples"]) == [dict(k=1, mu=0.6, master="b1_zmax", slave="b2_zmin")]
+        couples = read_list(root["couples"])
+        # per body, its faces on each side: 3x3 master faces on b1, 2x4 slave faces on b2
+        assert [list(couples[0].pop(k)) for k in ("master_faces", "slave_faces")] == [[9, 0], [0, 8]]
+        assert couples == [dict(k=1, mu=0.6, master="b1_zmax", slave="b2_zmin")]
 
         dirichlet = read_list(root["dirichlet"])
         assert [(d["surface"], d["surface_id"], d["component"], d["time"], d["time_function"])
