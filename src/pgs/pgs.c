@@ -53,7 +53,7 @@ static PetscReal ContactResidual2(const PetscReal r[3], const PetscReal u[3], Pe
 
 /* FCLIB merit: sqrt(sum over contacts of |r - proj_K(r - (u + mu |u_t| e_n))|^2) / (1 + |q|);
    a frictionless 1-block contributes (r_n - max(0, r_n - u_n))^2, the same value its 3-block
-   with mu = 0 and r_t = 0 would. */
+   with mu = 0 and r_t = 0 would. Sums over the ranks. */
 PetscErrorCode MBCFrictionError(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal *error)
 {
   const PetscScalar *rv, *uv;
@@ -73,6 +73,7 @@ PetscErrorCode MBCFrictionError(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal 
   }
   PetscCall(VecRestoreArrayRead(u, &uv));
   PetscCall(VecRestoreArrayRead(r, &rv));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &e, 1, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)fp->W)));
   PetscCall(VecNorm(fp->q, NORM_2, &qn));
   *error = PetscSqrtReal(e) / (1 + qn);
   PetscFunctionReturn(0);
@@ -167,92 +168,119 @@ PetscErrorCode MBCContactLocalSolve(const PetscReal A[9], const PetscReal b[3], 
 PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
 {
   PetscFunctionBegin;
-  pgs->rtol   = 1e-8;
-  pgs->omega  = 1.0;
-  pgs->max_it = 1000;
-  pgs->active_set = 20;
+  pgs->rtol         = 1e-8;
+  pgs->omega        = 1.0;
+  pgs->max_it       = 1000;
+  pgs->active_set   = 20;
+  pgs->sweeps_local = 1;
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Projected Gauss-Seidel for the contact multipliers", "MBCPGS");
   PetscCall(PetscOptionsReal("-mbc_pgs_rtol", "Tolerance on the FCLIB merit (in a simulation: of the step problem scaled to |q| = 1, so relative)", "MBCPGSSetFromOptions", pgs->rtol, &pgs->rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_pgs_max_it", "Maximum sweeps", "MBCPGSSetFromOptions", pgs->max_it, &pgs->max_it, NULL));
   PetscCall(PetscOptionsReal("-mbc_pgs_omega", "Relaxation factor (0, 2)", "MBCPGSSetFromOptions", pgs->omega, &pgs->omega, NULL));
-  PetscCall(PetscOptionsInt("-mbc_pgs_active_set", "Every this many sweeps, try the direct solve on the sticking contacts (0: never)", "MBCPGSSetFromOptions", pgs->active_set, &pgs->active_set, NULL));
+  PetscCall(PetscOptionsInt("-mbc_pgs_active_set", "Every this many sweeps, try the direct solve on the contacts in contact (0: never)", "MBCPGSSetFromOptions", pgs->active_set, &pgs->active_set, NULL));
+  PetscCall(PetscOptionsInt("-mbc_pgs_local_sweeps", "Gauss-Seidel sweeps over a rank's own contacts between two exchanges of the others' (parallel)", "MBCPGSSetFromOptions", pgs->sweeps_local, &pgs->sweeps_local, NULL));
   PetscCall(PetscOptionsBool("-mbc_pgs_monitor", "Print the merit every sweep", "MBCPGSSetFromOptions", pgs->monitor, &pgs->monitor, NULL));
   PetscOptionsEnd();
   PetscCheck(pgs->rtol > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_rtol %g must be positive", (double)pgs->rtol);
   PetscCheck(pgs->max_it > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_max_it %" PetscInt_FMT " must be positive", pgs->max_it);
   PetscCheck(pgs->omega > 0 && pgs->omega < 2, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_omega %g must lie in (0, 2)", (double)pgs->omega);
+  PetscCheck(pgs->active_set >= 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_active_set %" PetscInt_FMT " must be >= 0", pgs->active_set);
+  PetscCheck(pgs->sweeps_local >= 1, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_local_sweeps %" PetscInt_FMT " must be at least 1", pgs->sweeps_local);
   PetscFunctionReturn(0);
 }
 
-/* The active-set system (column-major A, n x n) and its right side x: u = 0 for sticking
-   contacts (all their rows of S), u_n = 0 for slipping ones with r_t = mu r_n d (d frozen). */
-static PetscErrorCode ActiveSetSystem(MBCFrictionProblem *fp, const PetscInt S[], PetscInt ns, PetscInt nin, const PetscInt contact[], const PetscInt first[], const PetscReal dir[], PetscInt n, PetscScalar A[], PetscScalar x[])
+/* The parts of W a rank sweeps with: its diagonal block Ad (its rows and columns), the
+   off-diagonal block Ao (its rows, the other ranks' columns, compacted) and the scatter of
+   those columns of r; the diagonal 3x3 (1x1) blocks of its contacts. Kept while W is. */
+static PetscErrorCode PGSSetUpW(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r)
 {
-  PetscScalar       *Wc;
-  const PetscScalar *qv;
+  PetscBool mpi;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1((size_t)ns * ns, &Wc));
-  for (PetscInt a = 0; a < ns; a++) { /* W on the rows of the contacts in contact, column-major */
-    PetscInt           ncols, b = 0;
+  if (pgs->Wc == fp->W) PetscFunctionReturn(0);
+  PetscCall(MBCPGSReset(pgs));
+  PetscCall(PetscObjectReference((PetscObject)fp->W));
+  pgs->Wc = fp->W;
+  PetscCall(PetscObjectBaseTypeCompare((PetscObject)fp->W, MATMPIAIJ, &mpi));
+  if (mpi) {
+    const PetscInt *garray;
+    PetscInt        ng;
+    IS              is;
+    PetscCall(MatMPIAIJGetSeqAIJ(fp->W, &pgs->Ad, &pgs->Ao, &garray));
+    PetscCall(MatGetSize(pgs->Ao, NULL, &ng));
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, ng, garray, PETSC_COPY_VALUES, &is));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, ng, &pgs->rg));
+    PetscCall(VecDuplicate(pgs->rg, &pgs->cg));
+    PetscCall(VecDuplicate(pgs->rg, &pgs->eg));
+    PetscCall(VecScatterCreate(r, is, pgs->rg, NULL, &pgs->gsc));
+    PetscCall(ISDestroy(&is));
+  } else pgs->Ad = fp->W, pgs->Ao = NULL;
+  PetscCall(PetscMalloc1(9 * fp->nc + 1, &pgs->diag));
+  for (PetscInt i = 0; i < fp->nc; i++) { /* diagonal blocks, row-major dim x dim */
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o, idx[3] = {o, o + 1, o + 2};
+    PetscScalar    v[9];
+    PetscCall(MatGetValues(pgs->Ad, dim, idx, dim, idx, v));
+    for (PetscInt k = 0; k < dim * dim; k++) pgs->diag[9 * i + k] = PetscRealPart(v[k]);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Row grow of the active-set system: the sum over row `row` (local) of W of coef_j W_row,j into
+   the columns col_j >= 0 (the column map and coefficients of this rank's slots in c, e, of the
+   others' in cg, eg); cols, vals: work space of W's row length. */
+static PetscErrorCode ActiveSetRow(MBCPGS *pgs, PetscInt row, PetscInt grow, const PetscScalar c[], const PetscScalar e[], const PetscScalar cg[], const PetscScalar eg[], PetscInt acols[], PetscScalar avals[], Mat A)
+{
+  Mat      parts[2] = {pgs->Ad, pgs->Ao};
+  PetscInt n = 0, nu = 0;
+
+  PetscFunctionBegin;
+  for (PetscInt k = 0; k < 2; k++) {
+    const PetscScalar *cc = k ? cg : c, *ee = k ? eg : e;
+    PetscInt           ncols;
     const PetscInt    *cols;
     const PetscScalar *vals;
-    PetscCall(MatGetRow(fp->W, S[a], &ncols, &cols, &vals));
-    for (PetscInt k = 0; k < ncols; k++) {
-      while (b < ns && S[b] < cols[k]) b++;
-      if (b < ns && S[b] == cols[k]) Wc[a + (size_t)b * ns] = vals[k];
+    if (!parts[k]) continue;
+    PetscCall(MatGetRow(parts[k], row, &ncols, &cols, &vals));
+    for (PetscInt j = 0; j < ncols; j++) {
+      const PetscInt col = (PetscInt)PetscRealPart(cc[cols[j]]);
+      if (col >= 0 && vals[j] != 0.0) acols[n] = col, avals[n++] = ee[cols[j]] * vals[j];
     }
-    PetscCall(MatRestoreRow(fp->W, S[a], &ncols, &cols, &vals));
+    PetscCall(MatRestoreRow(parts[k], row, &ncols, &cols, &vals));
   }
-  PetscCall(VecGetArrayRead(fp->q, &qv));
-  for (PetscInt j = 0, e = 0; j < nin; j++) { /* equations: u = 0 (stick), u_n = 0 (slip) */
-    const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
-    for (PetscInt d = 0; d < neq; d++, e++) {
-      const PetscInt row = first[j] + d;
-      x[e] = -qv[S[row]];
-      for (PetscInt k = 0, c = 0; k < nin; k++) { /* unknowns: r (stick), r_n (slip) */
-        const PetscInt   i = contact[k], col = first[k];
-        const PetscReal  mu = fp->mu[i];
-        if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
-          A[e + (size_t)c * n] = Wc[row + (size_t)col * ns] + mu * (dir[2 * k] * Wc[row + (size_t)(col + 1) * ns] + dir[2 * k + 1] * Wc[row + (size_t)(col + 2) * ns]);
-          c++;
-        } else
-          for (PetscInt dd = 0; dd < fp->off[i + 1] - fp->off[i]; dd++, c++) A[e + (size_t)c * n] = Wc[row + (size_t)(col + dd) * ns];
-      }
-    }
+  PetscCall(PetscSortIntWithScalarArray(n, acols, avals));
+  for (PetscInt j = 0; j < n; j++) { /* a slipping contact's three slots share its column */
+    if (nu && acols[nu - 1] == acols[j]) avals[nu - 1] += avals[j];
+    else acols[nu] = acols[j], avals[nu++] = avals[j];
   }
-  PetscCall(VecRestoreArrayRead(fp->q, &qv));
-  { /* W_SS may be singular: tangential forces along directions prescribed on both sides (a
-       roller under a roller) have no flexibility. A shift of 1e-10 of the largest diagonal picks
-       the solution with those forces near zero and leaves the others to 1e-10. */
-    PetscReal dmax = 0;
-    for (PetscInt a = 0; a < n; a++) dmax = PetscMax(dmax, PetscAbsScalar(A[a + (size_t)a * n]));
-    for (PetscInt a = 0; a < n; a++) A[a + (size_t)a * n] += 1e-10 * dmax;
-  }
-  PetscCall(PetscFree(Wc));
+  PetscCall(MatSetValues(A, 1, &grow, nu, acols, avals, INSERT_VALUES));
   PetscFunctionReturn(0);
 }
 
 /* Active-set step: with the contacts split by the current iterate (and q) into separated (r = 0),
    sticking (u = 0: all components unknown) and slipping (u_n = 0, r_t = mu r_n d with the
-   friction direction d frozen: r_n unknown), the problem is linear. One dense LU (LAPACK) solves
+   friction direction d frozen: r_n unknown), the problem is linear. A sparse direct solve
+   (KSP prefix -mbc_pgs_, MUMPS LU by default; rows and unknowns of a contact on its rank) solves
    it; the result, projected onto the cones, is kept only if it lowers the merit, so a wrong
    guess costs a factorization, never accuracy. Gauss-Seidel alone creeps on strongly coupled D
-   (large time steps; bodies held only by contact in a static analysis): thousands of sweeps. */
+   (large time steps; bodies held only by contact in a static analysis): thousands of sweeps.
+   Each W slot j of a contact in contact maps to a column col_j with a coefficient e_j: (k, 1)
+   for the k-th unknown of a sticking contact, (k, 1), (k, mu d1), (k, mu d2) for the slots of a
+   slipping one, (-1, 0) otherwise; the other ranks' maps arrive with the scatter of r. */
 static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
 {
-  PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0;
-  PetscReal         *dir;
-  PetscScalar       *rv, *A = NULL, *x, *lu;
-  const PetscScalar *qv, *uv;
-  PetscBLASInt       bn, one = 1, info = 0, *piv = NULL, *lupiv;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)fp->W);
+  PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0, nstart = 0, N, tot[2];
+  PetscReal         *dir, dmax = 0;
+  PetscScalar       *rv, *cv, *ev;
+  const PetscScalar *qv, *uv, *cgv = NULL, *egv = NULL;
   PetscBool          slips = PETSC_FALSE, reuse = PETSC_FALSE;
-  PetscObjectId      id;
-  Vec                rtry;
+  Vec                colv, coefv, x, b, rtry;
+  KSP                ksp;
   PetscReal          etry;
+  KSPConvergedReason reason;
 
   PetscFunctionBegin;
-  PetscCall(PetscMalloc4(fp->off[fp->nc], &S, fp->nc, &first, fp->nc, &contact, 2 * fp->nc, &dir));
+  PetscCall(PetscMalloc4(fp->off[fp->nc] + 1, &S, fp->nc + 1, &first, fp->nc + 1, &contact, 2 * fp->nc + 1, &dir));
   PetscCall(VecGetArray(r, &rv));
   PetscCall(VecGetArrayRead(u, &uv));
   PetscCall(VecGetArrayRead(fp->q, &qv));
@@ -268,6 +296,7 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
       dir[2 * nin]     = PetscRealPart(rv[o + 1]) / rt;
       dir[2 * nin + 1] = PetscRealPart(rv[o + 2]) / rt;
       n += 1;
+      slips = PETSC_TRUE;
     } else {
       dir[2 * nin] = dir[2 * nin + 1] = 0;
       n += dim;
@@ -278,96 +307,248 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
   PetscCall(VecRestoreArrayRead(fp->q, &qv));
   PetscCall(VecRestoreArrayRead(u, &uv));
   PetscCall(VecRestoreArray(r, &rv));
-  if (!nin) {
+  tot[0] = n, tot[1] = slips;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, tot, 2, MPIU_INT, MPI_SUM, comm));
+  N = tot[0], slips = (PetscBool)(tot[1] > 0);
+  if (!N) {
     PetscCall(PetscFree4(S, first, contact, dir));
     PetscFunctionReturn(0);
   }
+  PetscCallMPI(MPI_Exscan(&n, &nstart, 1, MPIU_INT, MPI_SUM, comm));
+  {
+    PetscMPIInt rank;
+    PetscCallMPI(MPI_Comm_rank(comm, &rank));
+    if (!rank) nstart = 0;
+  }
   /* no contact slips: the system is W_SS itself. Its factor is kept and reused while S and W
      stay the same (a sticking steady state then costs one triangular solve per step). */
-  for (PetscInt j = 0; j < nin; j++) slips = (PetscBool)(slips || dir[2 * j] != 0 || dir[2 * j + 1] != 0);
-  PetscCall(PetscObjectGetId((PetscObject)fp->W, &id)); /* W is never changed after assembly: a new one has a new id */
-  if (!slips && pgs->lu && pgs->lun == ns && pgs->luW == id) PetscCall(PetscArraycmp(S, pgs->luS, ns, &reuse));
-  PetscCall(PetscBLASIntCast(n, &bn));
-  PetscCall(PetscMalloc1(n, &x));
-  if (reuse) {
-    PetscCall(VecGetArrayRead(fp->q, &qv));
-    for (PetscInt a = 0; a < n; a++) x[a] = -qv[S[a]];
-    PetscCall(VecRestoreArrayRead(fp->q, &qv));
-    lu = pgs->lu, lupiv = pgs->lupiv;
-  } else {
-    PetscCall(PetscCalloc1((size_t)n * n, &A));
-    PetscCall(PetscMalloc1(n, &piv));
-    PetscCall(ActiveSetSystem(fp, S, ns, nin, contact, first, dir, n, A, x));
-    PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&bn, &bn, A, &bn, piv, &info));
-    lu = A, lupiv = piv;
-    if (!info && !slips) { /* keep this factor */
-      PetscCall(MBCPGSReset(pgs));
-      pgs->lu = A, pgs->lupiv = piv, A = NULL, piv = NULL;
-      pgs->lun = ns, pgs->luW = id;
-      PetscCall(PetscMalloc1(ns, &pgs->luS));
-      PetscCall(PetscArraycpy(pgs->luS, S, ns));
-    }
+  if (!slips && pgs->kept) {
+    PetscBool same = (PetscBool)(pgs->lun == ns);
+    if (same) PetscCall(PetscArraycmp(S, pgs->luS, ns, &same));
+    PetscCallMPI(MPI_Allreduce(&same, &reuse, 1, MPIU_BOOL, MPI_LAND, comm));
   }
-  if (!info) PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &bn, &one, lu, &bn, lupiv, x, &bn, &info));
-  if (!info) {
+  PetscCall(VecCreateMPI(comm, n, N, &b));
+  PetscCall(VecDuplicate(b, &x));
+  PetscCall(VecGetArrayRead(fp->q, &qv));
+  PetscCall(VecGetArray(b, &cv));
+  for (PetscInt j = 0, e = 0; j < nin; j++) { /* right side -q of the equations: u = 0 (stick), u_n = 0 (slip) */
+    const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
+    for (PetscInt d = 0; d < neq; d++) cv[e++] = -qv[S[first[j] + d]];
+  }
+  PetscCall(VecRestoreArray(b, &cv));
+  PetscCall(VecRestoreArrayRead(fp->q, &qv));
+  if (!reuse) {
+    Mat       A;
+    PC        pc;
+    PetscInt    *nnz, *onz, *acols, rowmax = 0;
+    PetscScalar *avals;
+    PetscCall(VecDuplicate(r, &colv));
+    PetscCall(VecDuplicate(r, &coefv));
+    PetscCall(VecSet(colv, -1.0));
+    PetscCall(VecZeroEntries(coefv));
+    PetscCall(VecGetArray(colv, &cv));
+    PetscCall(VecGetArray(coefv, &ev));
+    for (PetscInt k = 0, c = nstart; k < nin; k++) {
+      const PetscInt i = contact[k], o = fp->off[i], dim = fp->off[i + 1] - o;
+      if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
+        cv[o] = cv[o + 1] = cv[o + 2] = (PetscScalar)c++;
+        ev[o] = 1, ev[o + 1] = fp->mu[i] * dir[2 * k], ev[o + 2] = fp->mu[i] * dir[2 * k + 1];
+      } else
+        for (PetscInt d = 0; d < dim; d++) cv[o + d] = (PetscScalar)c++, ev[o + d] = 1;
+    }
+    PetscCall(VecRestoreArray(coefv, &ev));
+    PetscCall(VecRestoreArray(colv, &cv));
+    if (pgs->gsc) {
+      PetscCall(VecScatterBegin(pgs->gsc, colv, pgs->cg, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecScatterEnd(pgs->gsc, colv, pgs->cg, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecScatterBegin(pgs->gsc, coefv, pgs->eg, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecScatterEnd(pgs->gsc, coefv, pgs->eg, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecGetArrayRead(pgs->cg, &cgv));
+      PetscCall(VecGetArrayRead(pgs->eg, &egv));
+    }
+    PetscCall(PetscMalloc2(n + 1, &nnz, n + 1, &onz));
+    for (PetscInt j = 0, e = 0; j < nin; j++) { /* preallocation: at most the row lengths of W (also bounded by n and N - n) */
+      const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
+      for (PetscInt d = 0; d < neq; d++, e++) {
+        PetscInt nd, no = 0, t; /* MatRestoreRow() zeroes the count */
+        PetscCall(MatGetRow(pgs->Ad, S[first[j] + d], &nd, NULL, NULL));
+        t = nd;
+        PetscCall(MatRestoreRow(pgs->Ad, S[first[j] + d], &t, NULL, NULL));
+        if (pgs->Ao) {
+          PetscCall(MatGetRow(pgs->Ao, S[first[j] + d], &no, NULL, NULL));
+          t = no;
+          PetscCall(MatRestoreRow(pgs->Ao, S[first[j] + d], &t, NULL, NULL));
+        }
+        nnz[e] = PetscMin(nd, n) + 1, onz[e] = PetscMin(no, N - n);
+        rowmax = PetscMax(rowmax, nd + no);
+      }
+    }
+    PetscCall(PetscMalloc2(rowmax + 1, &acols, rowmax + 1, &avals));
+    PetscCall(MatCreate(comm, &A));
+    PetscCall(MatSetSizes(A, n, n, N, N));
+    PetscCall(MatSetType(A, MATAIJ));
+    PetscCall(MatSeqAIJSetPreallocation(A, 0, nnz));
+    PetscCall(MatMPIAIJSetPreallocation(A, 0, nnz, 0, onz));
+    PetscCall(MatSetOption(A, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+    PetscCall(PetscFree2(nnz, onz));
+    PetscCall(VecGetArrayRead(colv, (const PetscScalar **)&cv));
+    PetscCall(VecGetArrayRead(coefv, (const PetscScalar **)&ev));
+    for (PetscInt j = 0, e = nstart; j < nin; j++) {
+      const PetscInt neq = (dir[2 * j] != 0 || dir[2 * j + 1] != 0) ? 1 : fp->off[contact[j] + 1] - fp->off[contact[j]];
+      for (PetscInt d = 0; d < neq; d++, e++) {
+        PetscScalar w;
+        PetscCall(ActiveSetRow(pgs, S[first[j] + d], e, cv, ev, cgv, egv, acols, avals, A));
+        PetscCall(MatGetValues(pgs->Ad, 1, &S[first[j] + d], 1, &S[first[j] + d], &w));
+        dmax = PetscMax(dmax, PetscAbsScalar(w));
+      }
+    }
+    PetscCall(PetscFree2(acols, avals));
+    PetscCall(VecRestoreArrayRead(coefv, (const PetscScalar **)&ev));
+    PetscCall(VecRestoreArrayRead(colv, (const PetscScalar **)&cv));
+    if (cgv) {
+      PetscCall(VecRestoreArrayRead(pgs->cg, &cgv));
+      PetscCall(VecRestoreArrayRead(pgs->eg, &egv));
+    }
+    /* W_SS may be singular: tangential forces along directions prescribed on both sides (a
+       roller under a roller) have no flexibility. A shift of 1e-10 of the largest diagonal picks
+       the solution with those forces near zero and leaves the others to 1e-10. */
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
+    PetscCall(MatAssemblyBegin(A, MAT_FLUSH_ASSEMBLY)); /* rows inserted, the shift added */
+    PetscCall(MatAssemblyEnd(A, MAT_FLUSH_ASSEMBLY));
+    for (PetscInt e = nstart; e < nstart + n; e++) PetscCall(MatSetValue(A, e, e, 1e-10 * dmax, ADD_VALUES));
+    PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
+    PetscCall(VecDestroy(&colv));
+    PetscCall(VecDestroy(&coefv));
+    { /* a new KSP each time: the system's size changes with the active set */
+      PetscBool mumps;
+      PetscCall(KSPCreate(comm, &ksp));
+      PetscCall(KSPSetOptionsPrefix(ksp, "mbc_pgs_"));
+      PetscCall(KSPSetType(ksp, KSPPREONLY));
+      PetscCall(KSPGetPC(ksp, &pc));
+      PetscCall(PCSetType(pc, PCLU));
+      PetscCall(PetscHasExternalPackage("mumps", &mumps));
+      if (mumps) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+      PetscCall(KSPSetErrorIfNotConverged(ksp, PETSC_FALSE));
+      PetscCall(KSPSetFromOptions(ksp));
+    }
+    PetscCall(KSPSetOperators(ksp, A, A));
+    PetscCall(MatDestroy(&A));
+    PetscCall(KSPSetUp(ksp));
+    if (!slips) { /* keep this factor (one with slipping contacts is used once) */
+      PetscCall(KSPDestroy(&pgs->ksp));
+      pgs->ksp = ksp;
+      PetscCall(PetscFree(pgs->luS));
+      PetscCall(PetscMalloc1(ns + 1, &pgs->luS));
+      PetscCall(PetscArraycpy(pgs->luS, S, ns));
+      pgs->lun  = ns;
+      pgs->kept = PETSC_TRUE;
+    }
+  } else ksp = pgs->ksp;
+  PetscCall(KSPSolve(ksp, b, x));
+  PetscCall(KSPGetConvergedReason(ksp, &reason));
+  if (reason < 0 && ksp == pgs->ksp) pgs->kept = PETSC_FALSE;
+  if (slips) PetscCall(KSPDestroy(&ksp));
+  if (reason >= 0) {
+    const PetscScalar *xv;
     PetscCall(VecDuplicate(r, &rtry));
     PetscCall(VecZeroEntries(rtry));
     PetscCall(VecGetArray(rtry, &rv));
+    PetscCall(VecGetArrayRead(x, &xv));
     for (PetscInt k = 0, c = 0; k < nin; k++) {
       const PetscInt i = contact[k], o = fp->off[i], dim = fp->off[i + 1] - o;
       PetscReal      y[3], p[3];
       if (dir[2 * k] != 0 || dir[2 * k + 1] != 0) {
-        y[0] = PetscRealPart(x[c++]);
+        y[0] = PetscRealPart(xv[c++]);
         y[1] = fp->mu[i] * y[0] * dir[2 * k];
         y[2] = fp->mu[i] * y[0] * dir[2 * k + 1];
       } else
-        for (PetscInt d = 0; d < dim; d++) y[d] = PetscRealPart(x[c++]);
+        for (PetscInt d = 0; d < dim; d++) y[d] = PetscRealPart(xv[c++]);
       if (dim == 1) rv[o] = PetscMax(0, y[0]); /* keep it in the cone */
       else {
         ProjectCone(y, fp->mu[i], p);
         for (PetscInt d = 0; d < 3; d++) rv[o + d] = p[d];
       }
     }
+    PetscCall(VecRestoreArrayRead(x, &xv));
     PetscCall(VecRestoreArray(rtry, &rv));
     PetscCall(MBCFrictionError(fp, rtry, u, &etry));
-    PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " in contact, %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", nin, n, (double)*error, (double)etry));
+    PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", N, (double)*error, (double)etry));
     if (etry < *error) {
       PetscCall(VecCopy(rtry, r));
       *error = etry;
     } else PetscCall(MBCFrictionError(fp, r, u, &etry)); /* u back to the kept r */
     PetscCall(VecDestroy(&rtry));
   }
-  PetscCall(PetscFree(x));
-  PetscCall(PetscFree(A));
-  PetscCall(PetscFree(piv));
+  PetscCall(VecDestroy(&x));
+  PetscCall(VecDestroy(&b));
   PetscCall(PetscFree4(S, first, contact, dir));
   PetscFunctionReturn(0);
 }
 
-/* Sweeps over the contacts in order; r holds the warm start on entry, the solution on exit;
-   u = W r + q. Stops when the merit falls below rtol. */
+/* One Gauss-Seidel sweep over this rank's contacts, the others' r as last exchanged (in parallel
+   a block Jacobi between ranks, Gauss-Seidel inside each). */
+static PetscErrorCode PGSLocalSweep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r)
+{
+  PetscScalar       *rv;
+  const PetscScalar *qv, *gv = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetArray(r, &rv));
+  PetscCall(VecGetArrayRead(fp->q, &qv));
+  if (pgs->rg) PetscCall(VecGetArrayRead(pgs->rg, &gv));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    PetscReal      b[3], rnew[3];
+    for (PetscInt d = 0; d < dim; d++) { /* b = q_i + (W r)_i - W_ii r_i */
+      const PetscInt     row = o + d;
+      PetscInt           ncols;
+      const PetscInt    *cols;
+      const PetscScalar *vals;
+      b[d] = PetscRealPart(qv[row]);
+      PetscCall(MatGetRow(pgs->Ad, row, &ncols, &cols, &vals));
+      for (PetscInt k = 0; k < ncols; k++) b[d] += PetscRealPart(vals[k] * rv[cols[k]]);
+      PetscCall(MatRestoreRow(pgs->Ad, row, &ncols, &cols, &vals));
+      if (pgs->Ao) {
+        PetscCall(MatGetRow(pgs->Ao, row, &ncols, &cols, &vals));
+        for (PetscInt k = 0; k < ncols; k++) b[d] += PetscRealPart(vals[k] * gv[cols[k]]);
+        PetscCall(MatRestoreRow(pgs->Ao, row, &ncols, &cols, &vals));
+      }
+      for (PetscInt e = 0; e < dim; e++) b[d] -= pgs->diag[9 * i + dim * d + e] * PetscRealPart(rv[o + e]);
+    }
+    if (dim == 1) rnew[0] = (b[0] >= 0 || !(pgs->diag[9 * i] > 0)) ? 0 : -b[0] / pgs->diag[9 * i];
+    else PetscCall(MBCContactLocalSolve(&pgs->diag[9 * i], b, fp->mu[i], rnew));
+    if (pgs->omega != 1) { /* over-relaxation may leave the cone: project back */
+      PetscReal x[3];
+      for (PetscInt d = 0; d < dim; d++) x[d] = pgs->omega * rnew[d] + (1 - pgs->omega) * PetscRealPart(rv[o + d]);
+      if (dim == 1) rnew[0] = PetscMax(0, x[0]);
+      else ProjectCone(x, fp->mu[i], rnew);
+    }
+    for (PetscInt d = 0; d < dim; d++) rv[o + d] = rnew[d];
+  }
+  if (gv) PetscCall(VecRestoreArrayRead(pgs->rg, &gv));
+  PetscCall(VecRestoreArrayRead(fp->q, &qv));
+  PetscCall(VecRestoreArray(r, &rv));
+  PetscFunctionReturn(0);
+}
+
+/* Sweeps over the contacts; r holds the warm start on entry, the solution on exit; u = W r + q.
+   Stops when the merit falls below rtol. On several ranks each rank sweeps its own contacts
+   (-mbc_pgs_local_sweeps times) with the others' r of the last exchange. */
 PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
 {
-  PetscReal     *diag, *rv;
   PetscLogDouble t0, t1;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_PGSSolve, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
-  PetscCall(PetscMalloc1(9 * fp->nc, &diag));
-  for (PetscInt i = 0; i < fp->nc; i++) { /* diagonal blocks, row-major dim x dim */
-    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o, idx[3] = {o, o + 1, o + 2};
-    PetscScalar    v[9];
-    PetscCall(MatGetValues(fp->W, dim, idx, dim, idx, v));
-    for (PetscInt k = 0; k < dim * dim; k++) diag[9 * i + k] = PetscRealPart(v[k]);
-  }
+  PetscCall(PGSSetUpW(pgs, fp, r));
   pgs->reason = MBC_PGS_ITERATING;
   for (pgs->its = 0; pgs->reason == MBC_PGS_ITERATING; pgs->its++) {
-    const PetscScalar *qv;
     PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
     /* every active_set sweeps, and at once when a factor of the last solve is kept (warm start
        of a step like the last) */
-    if (pgs->active_set && ((pgs->its > 0 && pgs->its % pgs->active_set == 0) || (pgs->its == 0 && pgs->lu)) && pgs->error >= pgs->rtol) {
+    if (pgs->active_set && ((pgs->its > 0 && pgs->its % pgs->active_set == 0) || (pgs->its == 0 && pgs->kept)) && pgs->error >= pgs->rtol) {
       /* a few active-set (semismooth Newton) steps while they pay; the first also counts the
          contacts closed in q as active: with a body held only by contact (static), D has a huge
          rigid-mode part and the Gauss-Seidel iterate leaves most of them unloaded */
@@ -377,41 +558,17 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
         if (!(pgs->error < 0.5 * before)) break;
       }
     }
-    if (pgs->monitor) PetscCall(PetscPrintf(PETSC_COMM_SELF, "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
+    if (pgs->monitor) PetscCall(PetscPrintf(PetscObjectComm((PetscObject)fp->W), "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
     if (PetscIsInfOrNanReal(pgs->error)) pgs->reason = MBC_PGS_DIVERGED_NANORINF;
     else if (pgs->error < pgs->rtol) pgs->reason = MBC_PGS_CONVERGED_RTOL;
     else if (pgs->its >= pgs->max_it) pgs->reason = MBC_PGS_DIVERGED_ITS;
     if (pgs->reason != MBC_PGS_ITERATING) break;
-    PetscCall(VecGetArray(r, &rv));
-    PetscCall(VecGetArrayRead(fp->q, &qv));
-    for (PetscInt i = 0; i < fp->nc; i++) {
-      const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
-      PetscReal      b[3], rnew[3];
-      for (PetscInt d = 0; d < dim; d++) { /* b = q_i + (W r)_i - W_ii r_i */
-        const PetscInt     row = o + d;
-        PetscInt           ncols;
-        const PetscInt    *cols;
-        const PetscScalar *vals;
-        b[d] = PetscRealPart(qv[row]);
-        PetscCall(MatGetRow(fp->W, row, &ncols, &cols, &vals));
-        for (PetscInt k = 0; k < ncols; k++) b[d] += PetscRealPart(vals[k]) * rv[cols[k]];
-        PetscCall(MatRestoreRow(fp->W, row, &ncols, &cols, &vals));
-        for (PetscInt e = 0; e < dim; e++) b[d] -= diag[9 * i + dim * d + e] * rv[o + e];
-      }
-      if (dim == 1) rnew[0] = (b[0] >= 0 || !(diag[9 * i] > 0)) ? 0 : -b[0] / diag[9 * i];
-      else PetscCall(MBCContactLocalSolve(&diag[9 * i], b, fp->mu[i], rnew));
-      if (pgs->omega != 1) { /* over-relaxation may leave the cone: project back */
-        PetscReal x[3];
-        for (PetscInt d = 0; d < dim; d++) x[d] = pgs->omega * rnew[d] + (1 - pgs->omega) * rv[o + d];
-        if (dim == 1) rnew[0] = PetscMax(0, x[0]);
-        else ProjectCone(x, fp->mu[i], rnew);
-      }
-      for (PetscInt d = 0; d < dim; d++) rv[o + d] = rnew[d];
+    if (pgs->gsc) { /* the other ranks' r */
+      PetscCall(VecScatterBegin(pgs->gsc, r, pgs->rg, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecScatterEnd(pgs->gsc, r, pgs->rg, INSERT_VALUES, SCATTER_FORWARD));
     }
-    PetscCall(VecRestoreArrayRead(fp->q, &qv));
-    PetscCall(VecRestoreArray(r, &rv));
+    for (PetscInt k = 0; k < (pgs->gsc ? pgs->sweeps_local : 1); k++) PetscCall(PGSLocalSweep(pgs, fp, r));
   }
-  PetscCall(PetscFree(diag));
   PetscCall(PetscTime(&t1));
   pgs->time = t1 - t0;
   PetscCall(PetscLogEventEnd(MBC_PGSSolve, 0, 0, 0, 0));
@@ -429,14 +586,21 @@ PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *fp, const PetscIn
   PetscFunctionReturn(0);
 }
 
-/* Frees the kept active-set factor. */
+/* Frees what belongs to one W: its parts, the ghost scatter, the kept active-set factor. */
 PetscErrorCode MBCPGSReset(MBCPGS *pgs)
 {
   PetscFunctionBegin;
-  PetscCall(PetscFree(pgs->lu));
-  PetscCall(PetscFree(pgs->lupiv));
+  PetscCall(MatDestroy(&pgs->Wc));
+  pgs->Ad = pgs->Ao = NULL;
+  PetscCall(VecDestroy(&pgs->rg));
+  PetscCall(VecDestroy(&pgs->cg));
+  PetscCall(VecDestroy(&pgs->eg));
+  PetscCall(VecScatterDestroy(&pgs->gsc));
+  PetscCall(PetscFree(pgs->diag));
+  PetscCall(KSPDestroy(&pgs->ksp));
   PetscCall(PetscFree(pgs->luS));
-  pgs->lun = 0;
+  pgs->lun  = 0;
+  pgs->kept = PETSC_FALSE;
   PetscFunctionReturn(0);
 }
 

@@ -15,6 +15,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->static_stabilize = -1;
   s->static_rtol      = 1e-6;
   s->static_max_it    = 50;
+  s->dblock           = 256;
   *solver = s;
   PetscFunctionReturn(0);
 }
@@ -60,6 +61,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, NULL));
   PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: epsilon of the spring epsilon diag(K) to the last iterate (< 0: 1e-6 for bodies free in some direction, 0 elsewhere)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
+  PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
@@ -77,6 +79,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   if (s->fclib_step < 0) s->fclib_step = s->nsteps;
   PetscCheck(!s->fclib_file[0] || (s->fclib_step >= 1 && s->fclib_step <= s->nsteps), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT " is not a step of this run (1 to %" PetscInt_FMT ")", s->fclib_step, s->nsteps);
   PetscCheck(s->static_rtol > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_rtol %g must be positive", (double)s->static_rtol);
+  PetscCheck(s->dblock >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_block %" PetscInt_FMT " must be at least 1", s->dblock);
   PetscCheck(s->static_max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_max_it %" PetscInt_FMT " must be at least 1", s->static_max_it);
   PetscFunctionReturn(0);
 }
@@ -153,7 +156,8 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact));
     PetscCall(MBCPGSSetFromOptions(&s->pgs));
-    PetscCall(PetscCalloc6(s->nbodies, &s->H, s->nbodies, &s->X, s->nbodies, &s->Hu, s->nbodies, &s->Hus, s->nbodies, &s->lam, s->nbodies, &s->hsc));
+    PetscCall(PetscCalloc6(s->nbodies, &s->H, s->nbodies, &s->Hu, s->nbodies, &s->lam, s->nbodies, &s->Hl, s->nbodies, &s->Xl, s->nbodies, &s->nbcols));
+    PetscCall(PetscCalloc1(s->nbodies, &s->bcols));
   }
   s->setupcalled = PETSC_TRUE;
   if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
@@ -240,7 +244,7 @@ static PetscErrorCode SolverContact(MBCSolver s)
   if (same) PetscCall(PetscArraycmp(pairs, s->pairs_built, MBC_PAIR_SIZE * n, &same));
   if (!same) {
     PetscCall(MBCSolverContactSetUp(s, n, pairs)); /* takes pairs */
-    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, s->fp.off ? s->fp.off[s->fp.nc] : 0));
+    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, s->coff ? s->coff[s->ncontact] : 0));
   } else PetscCall(PetscFree(pairs));
   PetscFunctionReturn(0);
 }
@@ -250,7 +254,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 {
   PetscFunctionBegin;
   PetscCall(MBCSolverContactSolve(s));
-  if (s->monitor && s->fp.nc) {
+  if (s->monitor && s->ncontact) {
     PetscInt count[3] = {0, 0, 0};
     PetscCall(MBCSolverContactStates(s, count, NULL, NULL));
     PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: PGS %s in %" PetscInt_FMT " sweeps (error %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));

@@ -1,10 +1,15 @@
 /* Contact forces in the Newmark step (the paper's eqs. (2)-(9)): per body K~ dU = dF + H lambda,
    H mapping each contact point's frame (n, t1, t2) to the master node (+) and the slave face
-   nodes (- weights). With dU_free = A^-1 dF and X = A^-1 H (one multi-right-hand-side solve per
-   body with its factor), the multipliers solve u = D lambda + q in the Coulomb cone with
-   D = sum_i H_i^T X_i, q = (gap, 0, 0) + sum_i H_i^T dU_free_i; then dU = dU_free + X lambda.
-   A frictionless couple's points carry the normal multiplier only (fp.off gives each point's
-   first column).
+   nodes (- weights). With dU_free = A^-1 dF, the multipliers solve u = D lambda + q in the
+   Coulomb cone with D = sum_i H_i^T A_i^-1 H_i, q = (gap, 0, 0) + sum_i H_i^T dU_free_i; then
+   dU = dU_free + A^-1 H lambda (one more solve per body). A frictionless couple's points carry
+   the normal multiplier only.
+
+   Distributed: the search (and the per-point bookkeeping, in couple order) is replicated; the
+   multiplier problem is not. A point's rows of W = D / dscale, q and lambda live on a rank of
+   the body holding its master node (rank order); H_i has columns only for the multipliers of
+   the points touching body i, and D_i = H_i^T A_i^-1 H_i, built by blocks of columns on the
+   body's ranks, is added into W where its rows live. A star forest maps body columns to rows.
 
    Complementarity is imposed on the step's mean contact force z = theta lambda_n+1 +
    (1 - theta) lambda_n, theta = gamma (dynamic: the weights of Newmark's velocity update, so
@@ -25,11 +30,93 @@ static PetscInt NumContacts(MBCContact c)
   return n;
 }
 
-/* H of one body: 3 columns per contact point (1 if frictionless), the point's frame times its
-   master (+) and slave (-) node weights (MBCCoupleIntegrate); rows of constrained DOFs are
+/* Body of the master node of point j of couple cp: the point's rows live there. */
+static PetscInt PointBody(const MBCCouple *cp, PetscInt j)
+{
+  return cp->master.nbody[cp->points[j].master];
+}
+
+/* Does the constraint of point j of cp involve body b? */
+static PetscBool PointTouches(const MBCCouple *cp, PetscInt j, PetscInt b)
+{
+  for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++)
+    if (cp->master.nbody[cp->mnode[l]] == b) return PETSC_TRUE;
+  for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++)
+    if (cp->slave.nbody[cp->snode[l]] == b) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/* Rank order: each point on a rank of its master body (a body's points split evenly over its
+   ranks, in couple order), points stably sorted by rank; the same on every rank. */
+static PetscErrorCode SolverContactRankOrder(MBCSolver s, const PetscInt dims[])
+{
+  MBCContact  c  = s->contact;
+  PetscInt    nc = s->ncontact, *owner, *count, *seen;
+  PetscMPIInt P, rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(s->comm, &P));
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscMalloc3(nc + 1, &owner, s->nbodies, &count, s->nbodies, &seen));
+  PetscCall(PetscArrayzero(count, s->nbodies));
+  PetscCall(PetscArrayzero(seen, s->nbodies));
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) count[PointBody(&c->couples[i], j)]++;
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const PetscInt b = PointBody(&c->couples[i], j);
+      owner[k] = s->body_first_rank[b] + (seen[b]++ * s->body_nranks[b]) / count[b];
+    }
+  PetscCall(PetscMalloc4(nc + 1, &s->perm, nc + 1, &s->order, nc + 1, &s->coff, nc + 1, &s->poff));
+  s->coff[0] = 0;
+  for (PetscInt k = 0; k < nc; k++) s->coff[k + 1] = s->coff[k] + dims[k];
+  {
+    PetscInt p = 0;
+    for (PetscMPIInt r = 0; r < P; r++) {
+      if (r == rank) s->pfirst = p;
+      for (PetscInt k = 0; k < nc; k++)
+        if (owner[k] == r) s->order[p] = k, s->perm[k] = p++;
+      if (r == rank) s->plast = p;
+    }
+  }
+  s->poff[0] = 0;
+  for (PetscInt p = 0; p < nc; p++) s->poff[p + 1] = s->poff[p] + dims[s->order[p]];
+  PetscCall(PetscFree3(owner, count, seen));
+  PetscFunctionReturn(0);
+}
+
+/* bcols[b]: the W rows (rank order, ascending) of the multipliers of the points touching body b;
+   first[k]: the first H column of point k in body b, or -1. On every rank, for every body. */
+static PetscErrorCode BodyColumns(MBCSolver s, PetscInt b, PetscInt first[])
+{
+  MBCContact c = s->contact;
+  PetscInt   n = 0;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree(s->bcols[b]));
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) first[k] = PointTouches(&c->couples[i], j, b) ? 0 : -1;
+  for (PetscInt p = 0; p < s->ncontact; p++) {
+    const PetscInt k = s->order[p];
+    if (first[k] < 0) continue;
+    first[k] = n;
+    n += s->coff[k + 1] - s->coff[k];
+  }
+  s->nbcols[b] = n;
+  PetscCall(PetscMalloc1(n + 1, &s->bcols[b]));
+  for (PetscInt p = 0; p < s->ncontact; p++) {
+    const PetscInt k = s->order[p];
+    if (first[k] < 0) continue;
+    for (PetscInt a = 0; a < s->coff[k + 1] - s->coff[k]; a++) s->bcols[b][first[k] + a] = s->poff[p] + a;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* H of one body: the point's frame times its master (+) and slave (-) node weights
+   (MBCCoupleIntegrate) in the columns first[k] + (0, 1, 2); rows of constrained DOFs are
    zero (a prescribed DOF takes no contact force; the PGS treats a contact with no free DOF as
    inactive). */
-static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, Mat *H)
+static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, const PetscInt first[], Mat *H)
 {
   MBCContact  c = s->contact;
   PetscMPIInt brank;
@@ -38,7 +125,7 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, Mat *H)
   PetscFunctionBegin;
   PetscCall(VecGetSize(body->u, &ndof));
   PetscCall(VecGetLocalSize(body->u, &nloc));
-  PetscCall(MatCreateAIJ(body->comm, nloc, PETSC_DECIDE, ndof, s->fp.off[s->fp.nc], 24, NULL, 24, NULL, H));
+  PetscCall(MatCreateAIJ(body->comm, nloc, PETSC_DECIDE, ndof, s->nbcols[body->index], 24, NULL, 24, NULL, H));
   PetscCall(MatSetOption(*H, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
   PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
   for (PetscInt i = 0; i < c->ncouples; i++) {
@@ -47,9 +134,9 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, Mat *H)
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
       const MBCContactPoint *p = &cp->points[j];
       const PetscReal       *e[3] = {p->n, p->t1, p->t2};
-      if (brank) continue; /* rank 0 of the body inserts; assembly sends rows to their owners */
-      for (PetscInt a = 0; a < s->fp.off[k + 1] - s->fp.off[k]; a++) {
-        const PetscInt col = s->fp.off[k] + a;
+      if (brank || first[k] < 0) continue; /* rank 0 of the body inserts; assembly sends rows to their owners */
+      for (PetscInt a = 0; a < s->coff[k + 1] - s->coff[k]; a++) {
+        const PetscInt col = first[k] + a;
         for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
           const PetscInt node = cp->mnode[l];
           if (m->nbody[node] != body->index) continue;
@@ -69,20 +156,28 @@ static PetscErrorCode BodyContactMatrix(MBCSolver s, MBCBody body, Mat *H)
   PetscFunctionReturn(0);
 }
 
-/* Per-body work of the contact step, rebuilt with H: H^T du, its copy on every rank of the
-   body, the scatter between them, and lambda in X's column layout. */
+/* Everything built with H: per body H, its vectors and column lists; the star forest; W, q,
+   lambda; the gathered copies. */
 static PetscErrorCode SolverContactReset(MBCSolver s)
 {
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     PetscCall(MatDestroy(&s->H[b]));
-    PetscCall(MatDestroy(&s->X[b]));
     PetscCall(VecDestroy(&s->Hu[b]));
-    PetscCall(VecDestroy(&s->Hus[b]));
     PetscCall(VecDestroy(&s->lam[b]));
-    PetscCall(VecScatterDestroy(&s->hsc[b]));
+    PetscCall(VecDestroy(&s->Hl[b]));
+    PetscCall(VecDestroy(&s->Xl[b]));
+    PetscCall(PetscFree(s->bcols[b]));
+    s->nbcols[b] = 0;
   }
+  PetscCall(PetscSFDestroy(&s->csf));
+  PetscCall(PetscFree(s->leaf));
+  PetscCall(VecScatterDestroy(&s->gather));
+  PetscCall(VecDestroy(&s->gathered));
+  PetscCall(PetscFree2(s->rall, s->uall));
+  PetscCall(PetscFree4(s->perm, s->order, s->coff, s->poff));
   PetscCall(MBCFrictionProblemDestroy(&s->fp));
+  PetscCall(MBCPGSReset(&s->pgs));
   PetscCall(VecDestroy(&s->lambda));
   PetscCall(VecDestroy(&s->ucontact));
   PetscCall(VecDestroy(&s->lamprev));
@@ -125,20 +220,137 @@ static PetscErrorCode CarryFields(PetscInt nf, PetscInt nold, const PetscInt old
   PetscFunctionReturn(0);
 }
 
-/* lambda (replicated, s->lamprev) into the owned part of body b's column layout of H and X. */
-static PetscErrorCode SolverLambdaToBody(MBCSolver s, PetscInt b)
+/* The star forest between the bodies' H columns on this rank (leaves, body after body, in each
+   body's column layout) and the rows of W (roots, this rank's in rank order). */
+static PetscErrorCode SolverContactForest(MBCSolver s)
 {
-  const PetscScalar *l;
-  PetscScalar       *la;
-  PetscInt           lo, hi;
+  PetscInt    nleaf = 0, *remote;
+  PetscLayout layout;
 
   PetscFunctionBegin;
-  PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
-  PetscCall(VecGetArrayRead(s->lamprev, &l));
-  PetscCall(VecGetArray(s->lam[b], &la));
-  for (PetscInt i = lo; i < hi; i++) la[i - lo] = l[i];
-  PetscCall(VecRestoreArray(s->lam[b], &la));
-  PetscCall(VecRestoreArrayRead(s->lamprev, &l));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscInt lo, hi;
+    if (!s->lam[b]) continue;
+    PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
+    nleaf += hi - lo;
+  }
+  PetscCall(PetscMalloc1(nleaf + 1, &remote));
+  PetscCall(PetscMalloc1(nleaf + 1, &s->leaf));
+  nleaf = 0;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscInt lo, hi;
+    if (!s->lam[b]) continue;
+    PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
+    for (PetscInt j = lo; j < hi; j++) remote[nleaf++] = s->bcols[b][j];
+  }
+  PetscCall(VecGetLayout(s->lambda, &layout));
+  PetscCall(PetscSFCreate(s->comm, &s->csf));
+  PetscCall(PetscSFSetGraphLayout(s->csf, layout, nleaf, NULL, PETSC_OWN_POINTER, remote));
+  PetscCall(PetscSFSetUp(s->csf));
+  PetscCall(PetscFree(remote));
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) into every body's lam[b] on this rank. */
+PetscErrorCode MBCSolverContactToBodies(MBCSolver s, Vec v)
+{
+  const PetscScalar *a;
+  PetscInt           l = 0;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetArrayRead(v, &a));
+  PetscCall(PetscSFBcastBegin(s->csf, MPIU_SCALAR, a, s->leaf, MPI_REPLACE));
+  PetscCall(PetscSFBcastEnd(s->csf, MPIU_SCALAR, a, s->leaf, MPI_REPLACE));
+  PetscCall(VecRestoreArrayRead(v, &a));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscScalar *la;
+    PetscInt     n;
+    if (!s->lam[b]) continue;
+    PetscCall(VecGetLocalSize(s->lam[b], &n));
+    PetscCall(VecGetArray(s->lam[b], &la));
+    PetscCall(PetscArraycpy(la, s->leaf + l, n));
+    PetscCall(VecRestoreArray(s->lam[b], &la));
+    l += n;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) = the sum over bodies of Hu[b]. */
+static PetscErrorCode SolverContactFromBodies(MBCSolver s, Vec v)
+{
+  PetscScalar *a;
+  PetscInt     l = 0;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    const PetscScalar *ha;
+    PetscInt           n;
+    if (!s->Hu[b]) continue;
+    PetscCall(VecGetLocalSize(s->Hu[b], &n));
+    PetscCall(VecGetArrayRead(s->Hu[b], &ha));
+    PetscCall(PetscArraycpy(s->leaf + l, ha, n));
+    PetscCall(VecRestoreArrayRead(s->Hu[b], &ha));
+    l += n;
+  }
+  PetscCall(VecZeroEntries(v));
+  PetscCall(VecGetArray(v, &a));
+  PetscCall(PetscSFReduceBegin(s->csf, MPIU_SCALAR, s->leaf, a, MPIU_SUM));
+  PetscCall(PetscSFReduceEnd(s->csf, MPIU_SCALAR, s->leaf, a, MPIU_SUM));
+  PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(0);
+}
+
+/* q = sum_i H_i^T du_i + (gap, 0, 0): this rank's rows. */
+PetscErrorCode MBCSolverContactGapRate(MBCSolver s, Vec q)
+{
+  MBCContact   c = s->contact;
+  PetscScalar *a;
+  PetscInt     k = 0, rstart;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->H[b]) PetscCall(MatMultTranspose(s->H[b], s->bodies[b]->du, s->Hu[b]));
+  PetscCall(SolverContactFromBodies(s, q));
+  PetscCall(VecGetOwnershipRange(q, &rstart, NULL));
+  PetscCall(VecGetArray(q, &a));
+  for (PetscInt i = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const PetscInt p = s->perm[k];
+      if (p >= s->pfirst && p < s->plast) a[s->poff[p] - rstart] += c->couples[i].igap[j];
+    }
+  PetscCall(VecRestoreArray(q, &a));
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) on every rank in couple order (out: coff layout). */
+PetscErrorCode MBCSolverContactGather(MBCSolver s, Vec v, PetscReal out[])
+{
+  const PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCall(VecScatterBegin(s->gather, v, s->gathered, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(s->gather, v, s->gathered, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(s->gathered, &a));
+  for (PetscInt k = 0; k < s->ncontact; k++)
+    for (PetscInt d = 0; d < s->coff[k + 1] - s->coff[k]; d++) out[s->coff[k] + d] = PetscRealPart(a[s->poff[s->perm[k]] + d]);
+  PetscCall(VecRestoreArrayRead(s->gathered, &a));
+  PetscFunctionReturn(0);
+}
+
+/* Couple-order values (coff layout, every rank) into this rank's rows of v. */
+static PetscErrorCode SolverContactScatterLocal(MBCSolver s, const PetscReal in[], Vec v)
+{
+  PetscScalar *a;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(v, &rstart, NULL));
+  PetscCall(VecGetArray(v, &a));
+  for (PetscInt p = s->pfirst; p < s->plast; p++) {
+    const PetscInt k = s->order[p];
+    for (PetscInt d = 0; d < s->coff[k + 1] - s->coff[k]; d++) a[s->poff[p] + d - rstart] = in[s->coff[k] + d];
+  }
+  PetscCall(VecRestoreArray(v, &a));
   PetscFunctionReturn(0);
 }
 
@@ -149,15 +361,13 @@ static PetscErrorCode SolverLambdaToBody(MBCSolver s, PetscInt b)
 static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
 {
   PetscFunctionBegin;
+  if (s->csf) PetscCall(MBCSolverContactToBodies(s, s->lamprev));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody   body = s->bodies[b];
     PetscReal norm;
     if (!body) continue;
     PetscCall(VecScale(body->fcontact, -1.0));
-    if (s->H[b]) {
-      PetscCall(SolverLambdaToBody(s, b));
-      PetscCall(MatMultAdd(s->H[b], s->lam[b], body->fcontact, body->fcontact));
-    }
+    if (s->H[b]) PetscCall(MatMultAdd(s->H[b], s->lam[b], body->fcontact, body->fcontact));
     PetscCall(VecNorm(body->fcontact, NORM_INFINITY, &norm));
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &norm, 1, MPIU_REAL, MPIU_MAX, body->comm));
     if (norm == 0) continue;
@@ -169,99 +379,132 @@ static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* H_i, X_i = A_i^-1 H_i and the per-body work vectors for every body, and W = D / dscale with
-   D = sum_i H_i^T X_i (m x m), replicated on every rank. */
-static PetscErrorCode SolverContactBuildD(MBCSolver s, PetscInt m)
+/* W's preallocation: a point's row couples to the multipliers of the bodies its constraint
+   touches (the master body, the slave body). */
+static PetscErrorCode SolverContactPreallocation(MBCSolver s, PetscInt rstart, PetscInt rend, PetscInt dnz[], PetscInt onz[])
 {
-  PetscScalar *Dl, *Dg;
+  MBCContact c = s->contact;
+  PetscInt  *k2c, *k2j;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc2(m * m, &Dl, m * m, &Dg));
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody     body = s->bodies[b];
-    Mat         Hd, D;
-    PetscMPIInt brank;
-    if (!body) continue;
-    PetscCall(BodyContactMatrix(s, body, &s->H[b]));
-    PetscCall(MatConvert(s->H[b], MATDENSE, MAT_INITIAL_MATRIX, &Hd));
-    PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &s->X[b]));
-    PetscCall(KSPMatSolve(body->ksp, Hd, s->X[b]));
-    PetscCall(MatDestroy(&Hd));
-    /* D_i = H^T X with H sparse (a dozen entries per column): the dense product would cost
-       2 N m^2 flops, this one 2 nnz(H) m */
-    PetscCall(MatTransposeMatMult(s->H[b], s->X[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
-    { /* D_i (m x m) to every rank of the body, then summed over bodies */
-      Mat               *Dseq;
-      IS                 all;
-      const PetscScalar *a;
-      PetscInt           lda;
-      PetscCall(ISCreateStride(PETSC_COMM_SELF, m, 0, 1, &all));
-      PetscCall(MatCreateSubMatrices(D, 1, &all, &all, MAT_INITIAL_MATRIX, &Dseq));
-      PetscCall(ISDestroy(&all));
-      PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
-      PetscCall(MatDenseGetLDA(Dseq[0], &lda));
-      PetscCall(MatDenseGetArrayRead(Dseq[0], &a));
-      if (!brank)
-        for (PetscInt i = 0; i < m; i++)
-          for (PetscInt j = 0; j < m; j++) Dl[i * m + j] += a[i + j * lda]; /* row-major */
-      PetscCall(MatDenseRestoreArrayRead(Dseq[0], &a));
-      PetscCall(MatDestroySubMatrices(1, &Dseq));
+  PetscCall(PetscMalloc2(s->ncontact + 1, &k2c, s->ncontact + 1, &k2j));
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) k2c[k] = i, k2j[k] = j;
+  for (PetscInt p = s->pfirst; p < s->plast; p++) {
+    const PetscInt   k = s->order[p];
+    const MBCCouple *cp = &c->couples[k2c[k]];
+    PetscInt         bs[2], nb = 0, d = 0, o = 0;
+    for (PetscInt b = 0; b < s->nbodies && nb < 2; b++) /* at most two: a master node, a slave face */
+      if (PointTouches(cp, k2j[k], b)) bs[nb++] = b;
+    if (nb == 1) {
+      for (PetscInt j = 0; j < s->nbcols[bs[0]]; j++) (s->bcols[bs[0]][j] >= rstart && s->bcols[bs[0]][j] < rend) ? d++ : o++;
+    } else if (nb == 2) { /* the union of two ascending lists */
+      const PetscInt *x = s->bcols[bs[0]], *y = s->bcols[bs[1]], nx = s->nbcols[bs[0]], ny = s->nbcols[bs[1]];
+      PetscInt        ix = 0, iy = 0;
+      while (ix < nx || iy < ny) {
+        PetscInt v;
+        if (iy >= ny || (ix < nx && x[ix] < y[iy])) v = x[ix++];
+        else if (ix >= nx || y[iy] < x[ix]) v = y[iy++];
+        else v = x[ix++], iy++;
+        (v >= rstart && v < rend) ? d++ : o++;
+      }
     }
-    PetscCall(MatDestroy(&D));
-    PetscCall(MatCreateVecs(s->X[b], &s->lam[b], NULL));
-    PetscCall(MatCreateVecs(s->H[b], &s->Hu[b], NULL));
-    PetscCall(VecScatterCreateToAll(s->Hu[b], &s->hsc[b], &s->Hus[b]));
+    for (PetscInt a = 0; a < s->coff[k + 1] - s->coff[k]; a++) dnz[s->poff[p] + a - rstart] = d, onz[s->poff[p] + a - rstart] = o;
   }
-  PetscCallMPI(MPI_Allreduce(Dl, Dg, (PetscMPIInt)(m * m), MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
-  { /* W = D / dbar as SeqAIJ, dbar the mean diagonal: r = dbar lambda has the units of u, so the
-       FCLIB merit weighs forces and displacements alike; the same on every rank (the PGS runs
-       redundantly, deterministically) */
-    PetscInt *nnz;
-    s->dscale = 0;
-    for (PetscInt i = 0; i < m; i++) s->dscale += PetscRealPart(Dg[i * m + i]) / m;
-    PetscCheck(s->dscale > 0, s->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
-    for (PetscInt i = 0; i < m * m; i++) Dg[i] /= s->dscale;
-    PetscCall(PetscCalloc1(m, &nnz));
-    for (PetscInt i = 0; i < m; i++)
-      for (PetscInt j = 0; j < m; j++) nnz[i] += Dg[i * m + j] != 0.0;
-    PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, m, m, 0, nnz, &s->fp.W));
-    for (PetscInt i = 0; i < m; i++)
-      for (PetscInt j = 0; j < m; j++)
-        if (Dg[i * m + j] != 0.0) PetscCall(MatSetValue(s->fp.W, i, j, Dg[i * m + j], INSERT_VALUES));
-    PetscCall(MatAssemblyBegin(s->fp.W, MAT_FINAL_ASSEMBLY));
-    PetscCall(MatAssemblyEnd(s->fp.W, MAT_FINAL_ASSEMBLY));
-    PetscCall(PetscFree(nnz));
-  }
-  PetscCall(PetscFree2(Dl, Dg));
+  PetscCall(PetscFree2(k2c, k2j));
   PetscFunctionReturn(0);
 }
 
-/* Builds H, X = A^-1 H and D for the contact points of pairs (couple, master, face per point),
-   and carries the last step's contact forces and the PGS warm start over to them. */
+/* D_i = H_i^T A_i^-1 H_i of the bodies on this rank, by blocks of -mbc_contact_block columns
+   (memory: DOFs x block, not DOFs x multipliers), added into W (rows where they live); then
+   W = D / dscale with dscale the mean diagonal: r = dscale lambda has the units of u, so the
+   FCLIB merit weighs forces and displacements alike. */
+static PetscErrorCode SolverContactBuildD(MBCSolver s, PetscInt m, PetscInt mloc)
+{
+  PetscInt *dnz, *onz, rstart;
+  Vec       diag;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Scan(&mloc, &rstart, 1, MPIU_INT, MPI_SUM, s->comm));
+  rstart -= mloc;
+  PetscCall(PetscMalloc2(mloc + 1, &dnz, mloc + 1, &onz));
+  PetscCall(SolverContactPreallocation(s, rstart, rstart + mloc, dnz, onz));
+  PetscCall(MatCreateAIJ(s->comm, mloc, mloc, m, m, 0, dnz, 0, onz, &s->fp.W));
+  PetscCall(MatSetOption(s->fp.W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+  PetscCall(PetscFree2(dnz, onz));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody   body = s->bodies[b];
+    PetscInt  nb = s->nbcols[b], rlo, rhi, clo, chi;
+    if (!body || !nb) continue;
+    PetscCall(MatGetOwnershipRange(s->H[b], &rlo, &rhi));
+    PetscCall(MatGetOwnershipRangeColumn(s->H[b], &clo, &chi));
+    for (PetscInt j0 = 0; j0 < nb; j0 += s->dblock) {
+      const PetscInt     j1 = PetscMin(nb, j0 + s->dblock), w = j1 - j0;
+      Mat                Hd, X, D;
+      PetscScalar       *h;
+      const PetscScalar *a;
+      PetscInt           lda;
+      PetscCall(MatCreateDense(body->comm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, w, NULL, &Hd));
+      PetscCall(MatDenseGetArrayWrite(Hd, &h));
+      PetscCall(MatDenseGetLDA(Hd, &lda));
+      PetscCall(PetscArrayzero(h, lda * w));
+      for (PetscInt row = rlo; row < rhi; row++) { /* columns j0..j1 of H, dense */
+        PetscInt           ncols;
+        const PetscInt    *cols;
+        const PetscScalar *vals;
+        PetscCall(MatGetRow(s->H[b], row, &ncols, &cols, &vals));
+        for (PetscInt k = 0; k < ncols; k++)
+          if (cols[k] >= j0 && cols[k] < j1) h[(row - rlo) + (cols[k] - j0) * lda] = vals[k];
+        PetscCall(MatRestoreRow(s->H[b], row, &ncols, &cols, &vals));
+      }
+      PetscCall(MatDenseRestoreArrayWrite(Hd, &h));
+      PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &X));
+      PetscCall(KSPMatSolve(body->ksp, Hd, X));
+      PetscCall(MatDestroy(&Hd));
+      /* H^T X with H sparse (a dozen entries per column): 2 nnz(H) w flops, not 2 N m w */
+      PetscCall(MatTransposeMatMult(s->H[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
+      PetscCall(MatDestroy(&X));
+      PetscCall(MatDenseGetArrayRead(D, &a));
+      PetscCall(MatDenseGetLDA(D, &lda));
+      for (PetscInt i = clo; i < chi; i++) /* this rank's rows of D_i (H's column layout) */
+        for (PetscInt j = 0; j < w; j++)
+          if (a[(i - clo) + j * lda] != 0.0) PetscCall(MatSetValue(s->fp.W, s->bcols[b][i], s->bcols[b][j0 + j], a[(i - clo) + j * lda], ADD_VALUES));
+      PetscCall(MatDenseRestoreArrayRead(D, &a));
+      PetscCall(MatDestroy(&D));
+    }
+  }
+  PetscCall(MatAssemblyBegin(s->fp.W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(s->fp.W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatCreateVecs(s->fp.W, &diag, NULL));
+  PetscCall(MatGetDiagonal(s->fp.W, diag));
+  PetscCall(VecSum(diag, &s->dscale));
+  PetscCall(VecDestroy(&diag));
+  s->dscale /= m;
+  PetscCheck(s->dscale > 0, s->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
+  PetscCall(MatScale(s->fp.W, 1.0 / s->dscale));
+  PetscFunctionReturn(0);
+}
+
+/* Builds H and D for the contact points of pairs (couple, master, face per point), and carries
+   the last step's contact forces, the PGS warm start and the slip over to them. */
 PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
 {
-  MBCContact   c  = s->contact;
-  PetscInt     nc = NumContacts(c), m, *dims, nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL;
-  PetscReal   *oldframes = s->frames, *oldlam = NULL, *oldr = NULL, *oldslip = s->slip;
+  MBCContact c  = s->contact;
+  PetscInt   nc = NumContacts(c), nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL, *dims, m, mloc;
+  PetscReal *oldframes = s->frames, *oldlam = NULL, *oldr = NULL, *oldslip = s->slip;
 
   PetscFunctionBegin;
   PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
   PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
-  if (nold && s->lamprev) { /* keep what the new points inherit */
-    const PetscScalar *a, *l;
-    PetscInt           mold = s->fp.off[nold];
-    PetscCall(PetscMalloc3(nold + 1, &oldoff, mold, &oldlam, mold, &oldr));
-    PetscCall(PetscArraycpy(oldoff, s->fp.off, nold + 1));
-    PetscCall(VecGetArrayRead(s->lamprev, &a));
-    PetscCall(VecGetArrayRead(s->lambda, &l));
-    for (PetscInt i = 0; i < mold; i++) {
-      oldlam[i] = PetscRealPart(a[i]);
-      oldr[i]   = PetscRealPart(l[i]) / s->dscale;
-    }
-    PetscCall(VecRestoreArrayRead(s->lambda, &l));
-    PetscCall(VecRestoreArrayRead(s->lamprev, &a));
+  if (nold && s->lamprev) { /* keep what the new points inherit, in couple order */
+    const PetscInt mold = s->coff[nold];
+    PetscCall(PetscMalloc3(nold + 1, &oldoff, mold + 1, &oldlam, mold + 1, &oldr));
+    PetscCall(PetscArraycpy(oldoff, s->coff, nold + 1));
+    PetscCall(MBCSolverContactGather(s, s->lamprev, oldlam));
+    for (PetscInt i = 0; i < mold; i++) oldr[i] = s->rall[i] / s->dscale;
   }
-  if (s->analysis == MBC_ANALYSIS_DYNAMIC) /* the contact force H lambda_n inside the acceleration */
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) { /* the contact force H lambda_n inside the acceleration */
+    if (s->csf) PetscCall(MBCSolverContactToBodies(s, s->lamprev));
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody body = s->bodies[b];
       if (!body) continue;
@@ -269,47 +512,75 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
       if (s->H[b]) PetscCall(MatMult(s->H[b], s->lam[b], body->fcontact));
       else PetscCall(VecZeroEntries(body->fcontact));
     }
+  }
   s->frames = NULL;
   s->slip   = NULL;
   PetscCall(SolverContactReset(s));
   s->pairs_built  = pairs;
   s->npairs_built = n;
-  s->fp.nc = nc;
-  PetscCall(PetscMalloc1(nc, &s->fp.mu));
-  PetscCall(PetscMalloc1(nc, &dims));
+  s->ncontact     = nc;
+  PetscCall(PetscMalloc1(nc + 1, &dims));
   PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
   PetscCall(PetscCalloc1(3 * nc + 1, &s->slip));
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const MBCContactPoint *p = &c->couples[i].points[j];
-      s->fp.mu[k] = c->couples[i].mu;
-      dims[k]     = c->couples[i].mu > 0 ? 3 : 1;
+      dims[k] = c->couples[i].mu > 0 ? 3 : 1;
       for (PetscInt e = 0; e < 3; e++) {
         s->frames[9 * k + e]     = p->n[e];
         s->frames[9 * k + 3 + e] = p->t1[e];
         s->frames[9 * k + 6 + e] = p->t2[e];
       }
     }
-  PetscCall(MBCFrictionProblemSetBlocks(&s->fp, dims));
+  PetscCall(SolverContactRankOrder(s, dims));
+  m = s->coff[nc];
+  mloc = s->poff[s->plast] - s->poff[s->pfirst];
+  { /* this rank's contacts of the multiplier problem */
+    PetscInt *ldims;
+    s->fp.nc = s->plast - s->pfirst;
+    PetscCall(PetscMalloc1(s->fp.nc + 1, &s->fp.mu));
+    PetscCall(PetscMalloc1(s->fp.nc + 1, &ldims));
+    for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+      for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++)
+        if (s->perm[k] >= s->pfirst && s->perm[k] < s->plast) s->fp.mu[s->perm[k] - s->pfirst] = c->couples[i].mu, ldims[s->perm[k] - s->pfirst] = dims[k];
+    PetscCall(MBCFrictionProblemSetBlocks(&s->fp, ldims));
+    PetscCall(PetscFree(ldims));
+  }
   PetscCall(PetscFree(dims));
-  m = s->fp.off[nc];
+  PetscCall(PetscMalloc2(m + 1, &s->rall, m + 1, &s->uall));
+  PetscCall(PetscArrayzero(s->rall, m + 1));
+  PetscCall(PetscArrayzero(s->uall, m + 1));
   if (nc) {
+    PetscInt  *first;
     PetscReal *v[2];
-    PetscCall(SolverContactBuildD(s, m));
-    PetscCall(VecCreateSeq(PETSC_COMM_SELF, m, &s->fp.q));
+    PetscCall(PetscMalloc1(nc + 1, &first));
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      PetscCall(BodyColumns(s, b, first));
+      if (!s->bodies[b] || !s->nbcols[b]) continue;
+      PetscCall(BodyContactMatrix(s, s->bodies[b], first, &s->H[b]));
+      PetscCall(MatCreateVecs(s->H[b], &s->Hu[b], &s->Hl[b]));
+      PetscCall(VecDuplicate(s->Hu[b], &s->lam[b]));
+      PetscCall(VecDuplicate(s->Hl[b], &s->Xl[b]));
+    }
+    PetscCall(PetscFree(first));
+    PetscCall(SolverContactBuildD(s, m, mloc));
+    PetscCall(MatCreateVecs(s->fp.W, &s->fp.q, NULL));
     PetscCall(VecDuplicate(s->fp.q, &s->lambda));
     PetscCall(VecDuplicate(s->fp.q, &s->ucontact));
     PetscCall(VecDuplicate(s->fp.q, &s->lamprev));
+    PetscCall(SolverContactForest(s));
+    PetscCall(VecScatterCreateToAll(s->lambda, &s->gather, &s->gathered));
     /* carry lambda_n and the warm start r (physical, then scaled) over to the new points */
-    PetscCall(VecGetArray(s->lamprev, &v[0]));
-    PetscCall(VecGetArray(s->lambda, &v[1]));
+    PetscCall(PetscMalloc2(m + 1, &v[0], m + 1, &v[1]));
     {
       const PetscReal *old[2] = {oldlam, oldr};
-      PetscCall(CarryFields(2, oldoff ? nold : 0, oldpairs, oldframes, oldoff, old, nc, pairs, s->frames, s->fp.off, v));
+      PetscCall(CarryFields(2, oldoff ? nold : 0, oldpairs, oldframes, oldoff, old, nc, pairs, s->frames, s->coff, v));
     }
     for (PetscInt i = 0; i < m; i++) v[1][i] *= s->dscale;
-    PetscCall(VecRestoreArray(s->lambda, &v[1]));
-    PetscCall(VecRestoreArray(s->lamprev, &v[0]));
+    PetscCall(PetscArraycpy(s->rall, v[1], m));
+    PetscCall(SolverContactScatterLocal(s, v[0], s->lamprev));
+    PetscCall(SolverContactScatterLocal(s, v[1], s->lambda));
+    PetscCall(PetscFree2(v[0], v[1]));
     if (oldslip && nold) { /* the slip so far, (0, t1, t2) in each point's frame */
       PetscInt        *off3;
       const PetscReal *old[1] = {oldslip};
@@ -334,126 +605,10 @@ PetscErrorCode MBCSolverContactDestroy(MBCSolver s)
   PetscFunctionBegin;
   if (!s->H) PetscFunctionReturn(0);
   PetscCall(SolverContactReset(s));
-  PetscCall(PetscFree6(s->H, s->X, s->Hu, s->Hus, s->lam, s->hsc));
+  PetscCall(PetscFree6(s->H, s->Hu, s->lam, s->Hl, s->Xl, s->nbcols));
+  PetscCall(PetscFree(s->bcols));
   PetscCall(PetscFree(s->frames));
   PetscCall(PetscFree(s->slip));
   PetscCall(PetscFree(s->pairs_built));
-  PetscFunctionReturn(0);
-}
-
-/* -mbc_fclib_write FILE at step -mbc_fclib_write_step: the scaled problem (W = D / dscale,
-   r = dscale lambda) and its solution as an FCLIB local problem, written by rank 0. */
-static PetscErrorCode SolverContactWriteFclib(MBCSolver s)
-{
-  PetscMPIInt rank;
-
-  PetscFunctionBegin;
-  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-  PetscCall(PetscSNPrintf(s->fp.title, sizeof(s->fp.title), "%s, step %" PetscInt_FMT, s->scene->filename, s->step));
-  if (!rank) PetscCall(MBCFclibWriteLocal(s->fclib_file, &s->fp, s->lambda, s->ucontact));
-  PetscCallMPI(MPI_Barrier(s->comm));
-  PetscFunctionReturn(0);
-}
-
-/* Given every body's free increment in body->du, solves for the multipliers and adds X lambda. */
-PetscErrorCode MBCSolverContactSolve(MBCSolver s)
-{
-  MBCContact   c  = s->contact;
-  PetscInt     nc = s->fp.nc, m;
-  PetscScalar *ql, *qg, *q;
-
-  PetscFunctionBegin;
-  if (!nc) PetscFunctionReturn(0);
-  m = s->fp.off[nc];
-  PetscCall(PetscCalloc2(m, &ql, m, &qg));
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody            body = s->bodies[b];
-    PetscMPIInt        brank;
-    const PetscScalar *a;
-    if (!body) continue;
-    PetscCall(MatMultTranspose(s->H[b], body->du, s->Hu[b]));
-    PetscCall(VecScatterBegin(s->hsc[b], s->Hu[b], s->Hus[b], INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(s->hsc[b], s->Hu[b], s->Hus[b], INSERT_VALUES, SCATTER_FORWARD));
-    PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
-    PetscCall(VecGetArrayRead(s->Hus[b], &a));
-    if (!brank)
-      for (PetscInt i = 0; i < m; i++) ql[i] += a[i];
-    PetscCall(VecRestoreArrayRead(s->Hus[b], &a));
-  }
-  PetscCallMPI(MPI_Allreduce(ql, qg, (PetscMPIInt)m, MPIU_SCALAR, MPIU_SUM, s->comm)); /* sum over bodies */
-  PetscCall(VecGetArray(s->fp.q, &q));
-  for (PetscInt i = 0; i < m; i++) q[i] = qg[i];
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) q[s->fp.off[k]] += c->couples[i].igap[j];
-  PetscCall(VecRestoreArray(s->fp.q, &q));
-  PetscCall(PetscFree2(ql, qg));
-  if (s->carry != 0) { /* q' = q - c D lambda_n (scaled: W = D / dscale) */
-    Vec t;
-    PetscCall(VecDuplicate(s->lamprev, &t));
-    PetscCall(VecAXPBY(t, s->dscale, 0.0, s->lamprev));
-    PetscCall(MatMult(s->fp.W, t, s->ucontact));
-    PetscCall(VecAXPY(s->fp.q, -s->carry, s->ucontact));
-    PetscCall(VecDestroy(&t));
-  }
-  { /* solve with q scaled to unit norm: the FCLIB merit |r - proj(..)| / (1 + |q|) then is
-       relative, and -mbc_pgs_rtol means the same in m or mm (absolute in the scene's length
-       unit, 1e-8 would be 10 nm in m and 10 pm in mm) */
-    PetscReal L;
-    PetscCall(VecNorm(s->fp.q, NORM_2, &L));
-    if (!(L > 0)) L = 1;
-    PetscCall(VecScale(s->fp.q, 1 / L));
-    PetscCall(VecScale(s->lambda, 1 / L));
-    PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: r of the last step */
-    PetscCall(VecScale(s->fp.q, L));
-    PetscCall(VecScale(s->lambda, L));
-    PetscCall(VecScale(s->ucontact, L));
-  }
-  if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
-  PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
-  PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
-  { /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the step's slip
-       (H's master weight is 1, so in length units) */
-    const PetscScalar *u;
-    PetscCall(VecGetArrayRead(s->ucontact, &u));
-    for (PetscInt k = 0; k < nc; k++)
-      if (s->fp.off[k + 1] - s->fp.off[k] == 3)
-        for (PetscInt d = 1; d < 3; d++) s->slip[3 * k + d] += PetscRealPart(u[s->fp.off[k] + d]);
-    PetscCall(VecRestoreArrayRead(s->ucontact, &u));
-  }
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    if (!body) continue;
-    PetscCall(SolverLambdaToBody(s, b));
-    PetscCall(MatMultAdd(s->X[b], s->lam[b], body->du, body->du));
-  }
-  PetscFunctionReturn(0);
-}
-
-/* Per contact point (in couple order): its state and the step's mean contact force z = theta r
-   (in the frame n, t1, t2; tangents 0 where frictionless); counts of each state. state and
-   lambda may be NULL. */
-PetscErrorCode MBCSolverContactStates(MBCSolver s, PetscInt count[3], PetscInt state[], PetscReal lambda[])
-{
-  const PetscScalar *l;
-
-  PetscFunctionBegin;
-  count[0] = count[1] = count[2] = 0;
-  if (!s->fp.nc) PetscFunctionReturn(0);
-  PetscCall(VecGetArrayRead(s->lambda, &l));
-  for (PetscInt i = 0; i < s->fp.nc; i++) {
-    const PetscInt o = s->fp.off[i], dim = s->fp.off[i + 1] - o;
-    PetscReal      lam[3] = {0, 0, 0}, rt;
-    PetscInt       st;
-    for (PetscInt d = 0; d < dim; d++) lam[d] = s->theta * PetscRealPart(l[o + d]) / s->dscale;
-    rt = PetscSqrtReal(lam[1] * lam[1] + lam[2] * lam[2]);
-    if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
-    else if (dim == 3 && rt < s->fp.mu[i] * lam[0] * (1 - 1e-6)) st = MBC_CONTACT_STICK;
-    else st = MBC_CONTACT_SLIP;
-    count[st]++;
-    if (state) state[i] = st;
-    if (lambda)
-      for (PetscInt d = 0; d < 3; d++) lambda[3 * i + d] = lam[d];
-  }
-  PetscCall(VecRestoreArrayRead(s->lambda, &l));
   PetscFunctionReturn(0);
 }

@@ -37,7 +37,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   PetscCall(PetscCalloc6(3 * np + 1, &lam, 3 * np + 1, &x, 3 * np + 1, &nrm, 3 * np + 1, &force, 3 * np + 1, &traction, np + 1, &state));
   PetscCall(PetscCalloc5(np + 1, &pressure, np + 1, &gap, np + 1, &area, np + 1, &couple, np + 1, &istate));
   PetscCall(PetscCalloc2(3 * np + 1, &x0, 3 * np + 1, &slip));
-  if (np == s->fp.nc) PetscCall(MBCSolverContactStates(s, count, state, lam)); /* else: no forces yet */
+  if (np == s->ncontact) PetscCall(MBCSolverContactStates(s, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
     PetscReal  sum[5] = {0, 0, 0, 0, 0}; /* -, the three states, normal force */
@@ -56,7 +56,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
         nrm[3 * k + d]      = p->n[d];
         force[3 * k + d]    = z[0] * p->n[d] + z[1] * p->t1[d] + z[2] * p->t2[d];
         traction[3 * k + d] = area[k] > 0 ? (z[1] * p->t1[d] + z[2] * p->t2[d]) / area[k] : 0;
-        slip[3 * k + d]     = cp->mu > 0 && np == s->fp.nc ? s->slip[3 * k + 1] * p->t1[d] + s->slip[3 * k + 2] * p->t2[d] : (cp->mu > 0 ? 0 : NAN);
+        slip[3 * k + d]     = cp->mu > 0 && np == s->ncontact ? s->slip[3 * k + 1] * p->t1[d] + s->slip[3 * k + 2] * p->t2[d] : (cp->mu > 0 ? 0 : NAN);
         f[d] += force[3 * k + d];
       }
       maxslip = PetscMax(maxslip, PetscSqrtReal(PetscSqr(slip[3 * k]) + PetscSqr(slip[3 * k + 1]) + PetscSqr(slip[3 * k + 2])));

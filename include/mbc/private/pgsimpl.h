@@ -6,10 +6,12 @@
 #include <mbcontact.h>
 #include <petscblaslapack.h>
 
+/* Distributed: each rank holds the rows of its contacts (nc, off, mu are this rank's; W is
+   SeqAIJ on one rank, MPIAIJ on several, its row layout that of q). */
 typedef struct {
-  PetscInt   nc;   /* contacts */
-  PetscInt  *off;  /* nc + 1: first row of each contact; off[i+1] - off[i] is 3, or 1 (frictionless) */
-  Mat        W;    /* off[nc] x off[nc], SeqAIJ */
+  PetscInt   nc;   /* contacts on this rank */
+  PetscInt  *off;  /* nc + 1: first local row of each contact; off[i+1] - off[i] is 3, or 1 (frictionless) */
+  Mat        W;
   Vec        q;
   PetscReal *mu;
   char       title[256];
@@ -29,11 +31,16 @@ typedef struct {
   MBCPGSReason reason;
   PetscReal    error;          /* FCLIB merit at exit */
   PetscLogDouble time;
+  PetscInt       sweeps_local; /* -mbc_pgs_local_sweeps: Gauss-Seidel sweeps over a rank's contacts between exchanges */
+  /* per W: its diagonal and off-diagonal parts (MPIAIJ), the other ranks' r it needs */
+  Mat            Wc, Ad, Ao;   /* Wc: a reference to the W these belong to */
+  Vec            rg, cg, eg;   /* ghost values of r, of the active-set column map and coefficients */
+  VecScatter     gsc;
+  PetscReal     *diag;
   /* the last factor of the active-set step with no contact slipping, kept for the next steps */
-  PetscScalar     *lu;
-  PetscBLASInt    *lupiv;
-  PetscInt        *luS, lun;
-  PetscObjectId    luW;        /* id of the W it factors */
+  KSP            ksp;
+  PetscInt      *luS, lun;
+  PetscBool      kept;
 } MBCPGS;
 
 PETSC_EXTERN PetscLogEvent MBC_PGSSolve, MBC_FlexibilityAssemble;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mbc/private/contactimpl.h>
+#include <petscsf.h>
 #include <mbc/private/pgsimpl.h>
 #include <stdint.h>
 
@@ -47,10 +48,23 @@ struct _n_MBCSolver {
   PetscBool monitor, view;
 
   MBCContact contact;     /* NULL when the scene has no couples */
-  Mat       *H, *X;       /* per body: contact matrix and A^-1 H (NULL off the body) */
-  Vec       *Hu, *Hus, *lam; /* per body: H^T du, its copy on every rank of the body, lambda in X's column layout */
-  VecScatter *hsc;        /* per body: Hu -> Hus */
-  MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem, replicated on every rank */
+  /* the multiplier problem: points in couple order (search, output) on every rank; the rows of
+     W, q, lambda in rank order, each point on a rank of the body holding its master node */
+  PetscInt   ncontact;    /* contact points of the last build */
+  PetscInt  *coff, *poff; /* ncontact + 1: first multiplier of each point in couple order / in rank order */
+  PetscInt  *perm, *order; /* couple order k -> rank order perm[k]; rank order p -> couple order order[p] */
+  PetscInt   pfirst, plast; /* this rank's points [pfirst, plast) in rank order */
+  Mat       *H;           /* per body: contact matrix, the columns of the multipliers touching it (NULL off the body) */
+  PetscInt **bcols, *nbcols; /* per body (every rank): the W rows (rank order) of H's columns */
+  Vec       *Hu, *lam;    /* per body: H^T du, lambda, in H's column layout */
+  Vec       *Hl, *Xl;     /* per body: H lambda and A^-1 H lambda */
+  PetscSF    csf;         /* leaves: the H columns on this rank, body after body; roots: the rows of W */
+  PetscScalar *leaf;
+  VecScatter gather;      /* all multipliers to every rank (rank order), for the output */
+  Vec        gathered;
+  PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
+  PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
+  MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
   MBCPGS     pgs;
   PetscReal  dscale;      /* D is scaled by 1/dscale for the PGS: lambda = r / dscale */
   Vec        lambda, ucontact; /* PGS unknown r (scaled) and u = W r + q */
@@ -83,4 +97,7 @@ PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactDestroy(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactToBodies(MBCSolver, Vec);
+PETSC_INTERN PetscErrorCode MBCSolverContactGapRate(MBCSolver, Vec);
+PETSC_INTERN PetscErrorCode MBCSolverContactGather(MBCSolver, Vec, PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactStates(MBCSolver, PetscInt[3], PetscInt[], PetscReal[]);

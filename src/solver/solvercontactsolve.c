@@ -1,0 +1,134 @@
+/* The multipliers of a step (the set-up and the distribution: solvercontact.c): q from every
+   body's free increment, the PGS on the rows of each rank, dU += A^-1 H lambda. */
+#include <mbc/private/solverimpl.h>
+#include <mbc/private/pgsimpl.h>
+
+/* -mbc_fclib_write FILE at step -mbc_fclib_write_step: the scaled problem (W = D / dscale,
+   r = dscale lambda) and its solution as an FCLIB local problem in rank order, gathered to and
+   written by rank 0. */
+static PetscErrorCode SolverContactWriteFclib(MBCSolver s)
+{
+  MBCContact         c = s->contact;
+  PetscMPIInt        rank;
+  PetscInt           m = s->coff[s->ncontact];
+  IS                 is;
+  Mat               *W0;
+  Vec                v[3], v0[3];
+  VecScatter         sc;
+  MBCFrictionProblem fp0;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, rank ? 0 : m, 0, 1, &is));
+  PetscCall(MatCreateSubMatrices(s->fp.W, 1, &is, &is, MAT_INITIAL_MATRIX, &W0));
+  PetscCall(ISDestroy(&is));
+  v[0] = s->fp.q, v[1] = s->lambda, v[2] = s->ucontact;
+  for (PetscInt i = 0; i < 3; i++) {
+    PetscCall(VecScatterCreateToZero(v[i], &sc, &v0[i]));
+    PetscCall(VecScatterBegin(sc, v[i], v0[i], INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(sc, v[i], v0[i], INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterDestroy(&sc));
+  }
+  if (!rank) {
+    PetscInt *dims, *k2c;
+    PetscCall(PetscMemzero(&fp0, sizeof(fp0)));
+    fp0.nc = s->ncontact;
+    fp0.W  = W0[0];
+    fp0.q  = v0[0];
+    PetscCall(PetscMalloc3(fp0.nc + 1, &fp0.mu, fp0.nc + 1, &dims, fp0.nc + 1, &k2c));
+    for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+      for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) k2c[k] = i;
+    for (PetscInt p = 0; p < fp0.nc; p++) {
+      fp0.mu[p] = c->couples[k2c[s->order[p]]].mu;
+      dims[p]   = s->poff[p + 1] - s->poff[p];
+    }
+    PetscCall(MBCFrictionProblemSetBlocks(&fp0, dims));
+    PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, s->scene->filename, s->step));
+    PetscCall(MBCFclibWriteLocal(s->fclib_file, &fp0, v0[1], v0[2]));
+    PetscCall(PetscFree(fp0.off));
+    PetscCall(PetscFree3(fp0.mu, dims, k2c));
+  }
+  for (PetscInt i = 0; i < 3; i++) PetscCall(VecDestroy(&v0[i]));
+  PetscCall(MatDestroySubMatrices(1, &W0));
+  PetscCallMPI(MPI_Barrier(s->comm));
+  PetscFunctionReturn(0);
+}
+
+/* Given every body's free increment in body->du, solves for the multipliers and adds
+   A^-1 H lambda. */
+PetscErrorCode MBCSolverContactSolve(MBCSolver s)
+{
+  const PetscInt nc = s->ncontact;
+
+  PetscFunctionBegin;
+  if (!nc) PetscFunctionReturn(0);
+  PetscCall(MBCSolverContactGapRate(s, s->fp.q));
+  if (s->carry != 0) { /* q' = q - c D lambda_n (scaled: W = D / dscale) */
+    Vec t;
+    PetscCall(VecDuplicate(s->lamprev, &t));
+    PetscCall(VecAXPBY(t, s->dscale, 0.0, s->lamprev));
+    PetscCall(MatMult(s->fp.W, t, s->ucontact));
+    PetscCall(VecAXPY(s->fp.q, -s->carry, s->ucontact));
+    PetscCall(VecDestroy(&t));
+  }
+  { /* solve with q scaled to unit norm: the FCLIB merit |r - proj(..)| / (1 + |q|) then is
+       relative, and -mbc_pgs_rtol means the same in m or mm (absolute in the scene's length
+       unit, 1e-8 would be 10 nm in m and 10 pm in mm) */
+    PetscReal L;
+    PetscCall(VecNorm(s->fp.q, NORM_2, &L));
+    if (!(L > 0)) L = 1;
+    PetscCall(VecScale(s->fp.q, 1 / L));
+    PetscCall(VecScale(s->lambda, 1 / L));
+    PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: r of the last step */
+    PetscCall(VecScale(s->fp.q, L));
+    PetscCall(VecScale(s->lambda, L));
+    PetscCall(VecScale(s->ucontact, L));
+  }
+  if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
+  PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
+  PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
+  PetscCall(MBCSolverContactGather(s, s->lambda, s->rall));
+  PetscCall(MBCSolverContactGather(s, s->ucontact, s->uall));
+  /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the step's slip
+     (H's master weight is 1, so in length units) */
+  for (PetscInt k = 0; k < nc; k++)
+    if (s->coff[k + 1] - s->coff[k] == 3)
+      for (PetscInt d = 1; d < 3; d++) s->slip[3 * k + d] += s->uall[s->coff[k] + d];
+  PetscCall(MBCSolverContactToBodies(s, s->lamprev));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body || !s->H[b]) continue;
+    PetscCall(MatMult(s->H[b], s->lam[b], s->Hl[b]));
+    PetscCall(KSPSolve(body->ksp, s->Hl[b], s->Xl[b]));
+    PetscCall(VecAXPY(body->du, 1.0, s->Xl[b]));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Per contact point (in couple order): its state and the step's mean contact force z = theta r
+   (in the frame n, t1, t2; tangents 0 where frictionless); counts of each state. state and
+   lambda may be NULL. The same on every rank. */
+PetscErrorCode MBCSolverContactStates(MBCSolver s, PetscInt count[3], PetscInt state[], PetscReal lambda[])
+{
+  MBCContact c = s->contact;
+
+  PetscFunctionBegin;
+  count[0] = count[1] = count[2] = 0;
+  if (!s->ncontact) PetscFunctionReturn(0);
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const PetscInt o = s->coff[k], dim = s->coff[k + 1] - o;
+      PetscReal      lam[3] = {0, 0, 0}, rt;
+      PetscInt       st;
+      for (PetscInt d = 0; d < dim; d++) lam[d] = s->theta * s->rall[o + d] / s->dscale;
+      rt = PetscSqrtReal(lam[1] * lam[1] + lam[2] * lam[2]);
+      if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
+      else if (dim == 3 && rt < c->couples[i].mu * lam[0] * (1 - 1e-6)) st = MBC_CONTACT_STICK;
+      else st = MBC_CONTACT_SLIP;
+      count[st]++;
+      if (state) state[k] = st;
+      if (lambda)
+        for (PetscInt d = 0; d < 3; d++) lambda[3 * k + d] = lam[d];
+    }
+  PetscFunctionReturn(0);
+}
