@@ -139,69 +139,113 @@ static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscIn
   PetscFunctionReturn(0);
 }
 
-/* Maps of every body, and /bodies/<name>/vertices and cells. Collective on the solver's
-   communicator. */
-PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
+/* The maps of a body this rank is in, and its vertices and cells in this rank's rows. */
+static PetscErrorCode BodyOutputSetUp(MBCBody body, MBCBodyOutput *o, PetscReal **x, int **cells)
 {
-  MBCScene scene = s->scene;
-  hid_t    bodies;
-  int      count = (int)s->nbodies;
+  PetscInt vStart, vEnd, cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1(s->nbodies, &s->bout));
-  PetscCall(MBCH5GroupCreate((hid_t)s->h5, "bodies", PETSC_TRUE, &bodies));
-  PetscCall(MBCH5WriteAttribute(bodies, "count", H5T_NATIVE_INT, 1, &count));
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody        body = s->bodies[b];
-    MBCBodyOutput *o    = &s->bout[b];
-    PetscReal     *x    = NULL;
-    int           *cells = NULL, index = (int)b;
-    hid_t          g;
-
-    o->nv   = scene->bodies[b].num_vertices;
-    o->nc   = scene->bodies[b].num_cells;
-    o->nvpc = strcmp(scene->bodies[b].cell_type, "hex8") ? 4 : 8;
-    PetscCheck(o->nv < PETSC_MAX_INT / 8 && o->nc < PETSC_MAX_INT / 8, s->comm, PETSC_ERR_SUP, "Body '%s': too large for 32-bit cell indices in the result file", scene->bodies[b].name);
-    if (body) {
-      PetscInt vStart, vEnd, cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
-      PetscCall(SplitRows(body->comm, o->nv, &o->vstart, &o->nvrows));
-      PetscCall(SplitRows(body->comm, o->nc, &o->cstart, &o->ncrows));
-      PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
-      PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-      PetscCall(OwnedPoints(body->dm, vStart, vEnd, body->vnum, &o->nvown, &vpoint, &o->vrow, &vscene));
-      PetscCall(OwnedPoints(body->dmStress, cStart, cEnd, body->cnum, &o->ncown, &cpoint, &o->crow, &cscene));
-      PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vscene, 3, body->name, "vertex", &o->vsf));
-      PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, 6, body->name, "cell", &o->csf));
-      PetscCall(PetscMalloc2(6 * PetscMax(o->nvown, o->ncown), &o->leaf, PetscMax(3 * o->nvrows, 6 * o->ncrows), &o->root));
-      PetscCall(PetscMalloc2(3 * o->nvrows, &x, o->nvpc * o->ncrows, &cells));
-      PetscCall(BodyGeometry(body, o, vpoint, vscene, cpoint, cscene, x, cells));
-      PetscCall(PetscFree(vpoint));
-      PetscCall(PetscFree(vscene));
-      PetscCall(PetscFree(cpoint));
-      PetscCall(PetscFree(cscene));
-    }
-    PetscCall(MBCH5GroupCreate(bodies, scene->bodies[b].name, PETSC_FALSE, &g));
-    PetscCall(MBCH5WriteAttributeString(g, "cell_type", scene->bodies[b].cell_type));
-    PetscCall(MBCH5WriteAttribute(g, "index", H5T_NATIVE_INT, 1, &index));
-    PetscCall(MBCH5WriteRows(g, "vertices", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, x));
-    PetscCall(MBCH5WriteRows(g, "cells", H5T_NATIVE_INT, o->nc, o->nvpc, o->cstart, o->ncrows, cells));
-    PetscCall(MBCH5GroupClose(&g));
-    PetscCall(PetscFree2(x, cells));
-  }
-  PetscCall(MBCH5GroupClose(&bodies));
+  PetscCall(SplitRows(body->comm, o->nv, &o->vstart, &o->nvrows));
+  PetscCall(SplitRows(body->comm, o->nc, &o->cstart, &o->ncrows));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  PetscCall(OwnedPoints(body->dm, vStart, vEnd, body->vnum, &o->nvown, &vpoint, &o->vrow, &vscene));
+  PetscCall(OwnedPoints(body->dmStress, cStart, cEnd, body->cnum, &o->ncown, &cpoint, &o->crow, &cscene));
+  PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vscene, 3, body->name, "vertex", &o->vsf));
+  PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, 6, body->name, "cell", &o->csf));
+  PetscCall(PetscMalloc2(6 * PetscMax(o->nvown, o->ncown), &o->leaf, 3 * o->nvrows + 6 * o->ncrows, &o->root));
+  PetscCall(PetscMalloc1(3 * o->nvrows, x));
+  PetscCall(PetscMalloc1(o->nvpc * o->ncrows, cells));
+  PetscCall(BodyGeometry(body, o, vpoint, vscene, cpoint, cscene, *x, *cells));
+  PetscCall(PetscFree(vpoint));
+  PetscCall(PetscFree(vscene));
+  PetscCall(PetscFree(cpoint));
+  PetscCall(PetscFree(cscene));
   PetscFunctionReturn(0);
 }
 
-/* /bodies/<name>/step_<k>/displacement and stress of output k = s->noutputs. Collective. */
+/* The maps of every body, then /bodies/<name>/vertices and cells: first every rank sets up its
+   bodies (in parallel), then all write body after body. Collective on the solver's communicator. */
+PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
+{
+  MBCScene    scene = s->scene;
+  hid_t       bodies;
+  int         count = (int)s->nbodies, **cells;
+  PetscReal **x;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(s->nbodies, &s->bout));
+  PetscCall(PetscCalloc2(s->nbodies, &x, s->nbodies, &cells));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBodyOutput *o = &s->bout[b];
+    o->nv   = scene->bodies[b].num_vertices;
+    o->nc   = scene->bodies[b].num_cells;
+    o->nvpc = strcmp(scene->bodies[b].cell_type, "hex8") ? 4 : 8;
+    PetscCheck(o->nv < PETSC_MAX_INT / 8 && o->nc < PETSC_MAX_INT / 8, s->comm, PETSC_ERR_SUP, "Body '%s': too large for the 32-bit cell indices of the result file", scene->bodies[b].name);
+    if (s->bodies[b]) PetscCall(BodyOutputSetUp(s->bodies[b], o, &x[b], &cells[b]));
+  }
+  PetscCall(MBCH5GroupCreate((hid_t)s->h5, "bodies", PETSC_TRUE, &bodies));
+  PetscCall(MBCH5WriteAttribute(bodies, "count", H5T_NATIVE_INT, 1, &count));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBodyOutput *o     = &s->bout[b];
+    int            index = (int)b;
+    hid_t          g;
+    PetscCall(MBCH5GroupCreate(bodies, scene->bodies[b].name, PETSC_FALSE, &g));
+    PetscCall(MBCH5WriteAttributeString(g, "cell_type", scene->bodies[b].cell_type));
+    PetscCall(MBCH5WriteAttribute(g, "index", H5T_NATIVE_INT, 1, &index));
+    PetscCall(MBCH5WriteRows(g, "vertices", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, x[b]));
+    PetscCall(MBCH5WriteRows(g, "cells", H5T_NATIVE_INT, o->nc, o->nvpc, o->cstart, o->ncrows, cells[b]));
+    PetscCall(MBCH5GroupClose(&g));
+    PetscCall(PetscFree(x[b]));
+    PetscCall(PetscFree(cells[b]));
+  }
+  PetscCall(MBCH5GroupClose(&bodies));
+  PetscCall(PetscFree2(x, cells));
+  PetscFunctionReturn(0);
+}
+
+/* Displacement and stress of the bodies this rank is in, in its rows (o->root: displacement,
+   then stress). */
+static PetscErrorCode BodyFields(MBCScene scene, MBCBody body, MBCBodyOutput *o)
+{
+  PetscFunctionBegin;
+  if (scene->output_displacement) {
+    const PetscScalar *u;
+    PetscCall(VecGetArrayRead(body->u, &u));
+    for (PetscInt i = 0; i < o->nvown; i++)
+      for (PetscInt c = 0; c < 3; c++) o->leaf[3 * i + c] = PetscRealPart(u[o->vrow[i] + c]);
+    PetscCall(VecRestoreArrayRead(body->u, &u));
+    PetscCall(PetscSFReduceBegin(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
+    PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
+  }
+  if (scene->output_stress) {
+    const PetscScalar *sa;
+    Vec                stress;
+    PetscCall(DMGetGlobalVector(body->dmStress, &stress));
+    PetscCall(MBCBodyComputeStress(body, body->u, stress));
+    PetscCall(VecGetArrayRead(stress, &sa));
+    for (PetscInt i = 0; i < o->ncown; i++)
+      for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(sa[o->crow[i] + c]);
+    PetscCall(VecRestoreArrayRead(stress, &sa));
+    PetscCall(DMRestoreGlobalVector(body->dmStress, &stress));
+    PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));
+    PetscCall(PetscSFReduceEnd(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* /bodies/<name>/step_<k>/displacement and stress of output k = s->noutputs: every rank computes
+   its bodies' rows, then all write body after body. Collective. */
 PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver s)
 {
   MBCScene scene = s->scene;
   int      step  = (int)s->step;
 
   PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(BodyFields(scene, s->bodies[b], &s->bout[b]));
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody        body = s->bodies[b];
-    MBCBodyOutput *o    = &s->bout[b];
+    MBCBodyOutput *o = &s->bout[b];
     char           path[MBC_NAME_LEN + 64];
     hid_t          g;
 
@@ -209,34 +253,8 @@ PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver s)
     PetscCall(MBCH5GroupCreate((hid_t)s->h5, path, PETSC_FALSE, &g));
     PetscCall(MBCH5WriteAttribute(g, "time", H5T_NATIVE_DOUBLE, 1, &s->time));
     PetscCall(MBCH5WriteAttribute(g, "step", H5T_NATIVE_INT, 1, &step));
-    if (scene->output_displacement) {
-      if (body) {
-        const PetscScalar *u;
-        PetscCall(VecGetArrayRead(body->u, &u));
-        for (PetscInt i = 0; i < o->nvown; i++)
-          for (PetscInt c = 0; c < 3; c++) o->leaf[3 * i + c] = PetscRealPart(u[o->vrow[i] + c]);
-        PetscCall(VecRestoreArrayRead(body->u, &u));
-        PetscCall(PetscSFReduceBegin(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
-        PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
-      }
-      PetscCall(MBCH5WriteRows(g, "displacement", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, o->root));
-    }
-    if (scene->output_stress) {
-      if (body) {
-        const PetscScalar *sa;
-        Vec                stress;
-        PetscCall(DMGetGlobalVector(body->dmStress, &stress));
-        PetscCall(MBCBodyComputeStress(body, body->u, stress));
-        PetscCall(VecGetArrayRead(stress, &sa));
-        for (PetscInt i = 0; i < o->ncown; i++)
-          for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(sa[o->crow[i] + c]);
-        PetscCall(VecRestoreArrayRead(stress, &sa));
-        PetscCall(DMRestoreGlobalVector(body->dmStress, &stress));
-        PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
-        PetscCall(PetscSFReduceEnd(o->csf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
-      }
-      PetscCall(MBCH5WriteRows(g, "stress", H5T_NATIVE_DOUBLE, o->nc, 6, o->cstart, o->ncrows, o->root));
-    }
+    if (scene->output_displacement) PetscCall(MBCH5WriteRows(g, "displacement", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, o->root));
+    if (scene->output_stress) PetscCall(MBCH5WriteRows(g, "stress", H5T_NATIVE_DOUBLE, o->nc, 6, o->cstart, o->ncrows, o->root ? o->root + 3 * o->nvrows : NULL));
     PetscCall(MBCH5GroupClose(&g));
   }
   PetscFunctionReturn(0);
