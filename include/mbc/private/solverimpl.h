@@ -21,7 +21,7 @@ typedef struct {
   PetscSF    vsf, csf;       /* values of owned vertices (3 each) and cells (6 each) -> their rows; NULL off the body */
   PetscInt   nvown, *vrow;   /* owned vertices: local row of each in the displacement Vec */
   PetscInt   ncown, *crow;   /* owned cells: local row of each in the stress Vec */
-  PetscReal *leaf, *root;    /* work: 6 values per owned cell or vertex, per row */
+  PetscReal *leaf, *root;    /* work: values of the owned points; this rank's rows (displacement, then stress) */
 } MBCBodyOutput;
 
 #define MBC_PAIR_SIZE 4
