@@ -7,12 +7,11 @@ import petsc4py beside it).
 import os
 import sys
 
-import h5py
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "python"))
-from mbcontact.results import read_body, read_csv  # noqa: E402
+from mbcontact.results import read_body, read_contact, read_csv  # noqa: E402
 
 R, E, NU, LENGTH = 5.0, 210000.0, 0.3, 1.0
 X_PAPER = np.array([0.0, 0.0626, 0.1252, 0.1877, 0.2503])
@@ -48,14 +47,12 @@ def half_width(x, p):
 
 
 def contact_points(prefix, step=-1):
-    with h5py.File(prefix + "_contact.h5", "r") as f:
-        names = sorted(f, key=lambda n: int(n.split("_")[1]))
-        return {k: v[...] for k, v in f[names[step]].items()}
+    return read_contact(prefix + ".h5", step)
 
 
 def surface_uy(prefix, body, x):
     """u_y of a body's arc (z = 0) at abscissae x, interpolated between its nodes."""
-    b = read_body(f"{prefix}_{body}.h5")
+    b = read_body(prefix + ".h5", body)
     v, u = b["vertices"], b["displacement"]
     centre = np.array([0.0, R if body == "upper" else -R])
     on = (np.abs(np.linalg.norm(v[:, :2] - centre, axis=1) - R) < 1e-6) & (np.abs(v[:, 2]) < 1e-9)

@@ -1,4 +1,10 @@
-"""Readers for mbcontact's result files (h5py only: never import petsc4py beside it)."""
+"""Readers for mbcontact's result files (h5py only: never import petsc4py beside it).
+
+The solver writes one HDF5 file `<output>.h5` (layout in docs/scene.md, Output): per body
+`/bodies/<name>/vertices`, `cells` and `step_<k>/displacement`, `stress`; per output step the
+contact points in `/contact/step_<k>`; the output times in `/time`. Vertices and cells are in the
+scene's order (as mbcontact-prep wrote them), whatever the rank count.
+"""
 import csv
 
 import numpy as np
@@ -12,22 +18,60 @@ def read_csv(path):
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
-def _dataset(group, prefix):
-    names = [n for n in group if n.startswith(prefix)]
-    if not names:
-        raise KeyError(f"no dataset named {prefix}* in {group.name}")
-    return group[names[0]]
+def _steps(group):
+    """The step_<k> subgroups of a group, by k."""
+    return sorted((n for n in group if n.startswith("step_")), key=lambda n: int(n[5:]))
 
 
-def read_body(path, step=-1):
-    """Vertices, cells, displacement (nv, 3) and stress (nc, 6) of one body's result file at an output step."""
+def output_times(path):
+    """Times of the output steps."""
     import h5py
 
     with h5py.File(path, "r") as f:
-        out = {"vertices": f["geometry/vertices"][...], "cells": f["viz/topology/cells"][...]}
-        if "vertex_fields" in f:
-            out["displacement"] = _dataset(f["vertex_fields"], "displacement")[step]
-            out["num_steps"] = _dataset(f["vertex_fields"], "displacement").shape[0]
-        if "cell_fields" in f:
-            out["stress"] = _dataset(f["cell_fields"], "stress")[step]
+        return f["time"][...]
+
+
+def body_names(path):
+    """Names of the bodies in the result file, in the scene's order."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        if "bodies" not in f:
+            return []
+        return sorted(f["bodies"], key=lambda n: int(f["bodies"][n].attrs["index"]))
+
+
+def read_body(path, body, step=-1):
+    """Vertices (nv, 3), cells (nc, 4|8; XDMF/VTK vertex order), displacement (nv, 3) and stress
+    (nc, 6: xx yy zz xy yz xz) of one body at an output step (index into the output steps,
+    negative from the end), with its time and the number of output steps."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        if f"bodies/{body}" not in f:
+            raise KeyError(f"{path}: no body '{body}' (bodies: {', '.join(f['bodies']) if 'bodies' in f else 'none'})")
+        g = f["bodies"][body]
+        steps = _steps(g)
+        out = {"vertices": g["vertices"][...], "cells": g["cells"][...], "cell_type": g.attrs["cell_type"].decode(),
+               "num_steps": len(steps)}
+        if steps:
+            s = g[steps[step]]
+            out["time"] = float(s.attrs["time"])
+            for name in ("displacement", "stress"):
+                if name in s:
+                    out[name] = s[name][...]
+    return out
+
+
+def read_contact(path, step=-1):
+    """Datasets of the contact points at an output step (position, reference, normal, force,
+    multiplier, pressure, traction, gap, slip, area, state, couple) as numpy arrays, with the
+    step's time."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        steps = _steps(f["contact"])
+        g = f["contact"][steps[step]]
+        out = {k: v[...] for k, v in g.items()}
+        out["time"] = float(g.attrs["time"])
     return out

@@ -1,6 +1,7 @@
 /* A body: its DMPlex, loaded and distributed by PETSc from the scene file, on its own communicator. */
 #include <mbc/private/bodyimpl.h>
 #include <mbc/private/pointwise.h>
+#include <petscsf.h>
 
 /* Every cell must have a positive Jacobian determinant at every quadrature point. */
 static PetscErrorCode BodyCheckGeometry(MBCBody body)
@@ -34,30 +35,84 @@ static PetscErrorCode BodyCheckGeometry(MBCBody body)
   PetscFunctionReturn(0);
 }
 
+/* Scene index of every local vertex and cell from sfXC, the SF from the file's point numbers
+   (roots, in chunks over the body's ranks) to this rank's points (leaves). mbcontact-prep writes
+   each body serially from its cell list: cells are points 0..nc-1 and vertices nc..nc+nv-1, both
+   in the scene's order (docs/scene-h5.md); anything else is not a scene file of ours. */
+static PetscErrorCode BodySceneNumbering(MBCBody body, PetscSF sfXC)
+{
+  const PetscInt     nc = body->desc.num_cells, nv = body->desc.num_vertices;
+  const PetscInt    *ilocal;
+  const PetscSFNode *iremote;
+  PetscInt           nroots, nleaves, cStart, cEnd, vStart, vEnd, *offset, bad = -1;
+  PetscMPIInt        size;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(body->comm, &size));
+  PetscCall(PetscSFGetGraph(sfXC, &nroots, &nleaves, &ilocal, &iremote));
+  PetscCall(PetscMalloc1(size + 1, &offset));
+  offset[0] = 0;
+  PetscCallMPI(MPI_Allgather(&nroots, 1, MPIU_INT, offset + 1, 1, MPIU_INT, body->comm));
+  for (PetscMPIInt r = 0; r < size; r++) offset[r + 1] += offset[r];
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(PetscMalloc2(vEnd - vStart, &body->vnum, cEnd - cStart, &body->cnum));
+  for (PetscInt v = vStart; v < vEnd; v++) body->vnum[v - vStart] = -1;
+  for (PetscInt c = cStart; c < cEnd; c++) body->cnum[c - cStart] = -1;
+  for (PetscInt l = 0; l < nleaves; l++) {
+    const PetscInt p = ilocal ? ilocal[l] : l, x = offset[iremote[l].rank] + iremote[l].index;
+    if (p >= cStart && p < cEnd) {
+      body->cnum[p - cStart] = x;
+      if (x < 0 || x >= nc) bad = x;
+    } else if (p >= vStart && p < vEnd) {
+      body->vnum[p - vStart] = x - nc;
+      if (x < nc || x >= nc + nv) bad = x;
+    }
+  }
+  for (PetscInt v = vStart; v < vEnd && bad < 0; v++)
+    if (body->vnum[v - vStart] < 0) bad = PETSC_MAX_INT;
+  for (PetscInt c = cStart; c < cEnd && bad < 0; c++)
+    if (body->cnum[c - cStart] < 0) bad = PETSC_MAX_INT;
+  PetscCall(PetscFree(offset));
+  PetscCheck(bad < 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s': the mesh does not number its %" PetscInt_FMT " cells first and then its %" PetscInt_FMT " vertices (point %" PetscInt_FMT "), as mbcontact-prep writes it; make the scene file again with mbcontact-prep", body->scene->filename, body->name, nc, nv, bad);
+  PetscFunctionReturn(0);
+}
+
+/* The mesh as DMLoad reads it, in its steps (PETSc's DMPlexTopologyLoad, DMPlexCoordinatesLoad,
+   DMPlexLabelsLoad): the topology, its distribution inside the body's communicator, then
+   coordinates and labels straight onto the distributed mesh, through the SF from the file's
+   point numbers to the distributed points, which also gives every point its scene index. */
 static PetscErrorCode BodyLoadMesh(MBCBody body)
 {
   PetscViewer viewer;
-  DM          dmDist = NULL;
+  PetscSF     sfXC;
   PetscMPIInt size;
-  PetscBool   isPlex;
 
   PetscFunctionBegin;
   PetscCall(DMCreate(body->comm, &body->dm));
   PetscCall(DMSetType(body->dm, DMPLEX));
   PetscCall(PetscObjectSetName((PetscObject)body->dm, body->name));
   PetscCall(PetscViewerHDF5Open(body->comm, body->scene->filename, FILE_MODE_READ, &viewer));
-  PetscCall(DMLoad(body->dm, viewer));
-  PetscCall(PetscViewerDestroy(&viewer));
-  PetscCall(PetscObjectTypeCompare((PetscObject)body->dm, DMPLEX, &isPlex));
+  PetscCall(DMPlexTopologyLoad(body->dm, viewer, &sfXC));
   PetscCallMPI(MPI_Comm_size(body->comm, &size));
   if (size > 1) {
-    PetscCall(DMPlexDistribute(body->dm, 0, NULL, &dmDist));
+    DM      dmDist = NULL;
+    PetscSF sfBC   = NULL, sfXB = sfXC;
+    PetscCall(DMPlexDistribute(body->dm, 0, &sfBC, &dmDist));
     if (dmDist) {
+      PetscCall(PetscSFCompose(sfXB, sfBC, &sfXC));
+      PetscCall(PetscSFDestroy(&sfXB));
       PetscCall(DMDestroy(&body->dm));
       body->dm = dmDist;
       PetscCall(PetscObjectSetName((PetscObject)body->dm, body->name));
     }
+    PetscCall(PetscSFDestroy(&sfBC));
   }
+  PetscCall(DMPlexCoordinatesLoad(body->dm, viewer, sfXC));
+  PetscCall(DMPlexLabelsLoad(body->dm, viewer, sfXC));
+  PetscCall(PetscViewerDestroy(&viewer));
+  PetscCall(BodySceneNumbering(body, sfXC));
+  PetscCall(PetscSFDestroy(&sfXC));
   PetscCall(DMPlexIsSimplex(body->dm, &body->simplex));
   PetscFunctionReturn(0);
 }
@@ -140,6 +195,7 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(PetscFEDestroy(&b->fe));
   PetscCall(DMDestroy(&b->dmStress));
   PetscCall(DMDestroy(&b->dm));
+  PetscCall(PetscFree2(b->vnum, b->cnum));
   if (b->comm != MPI_COMM_NULL) PetscCallMPI(MPI_Comm_free(&b->comm));
   PetscCall(PetscFree(*body));
   PetscFunctionReturn(0);

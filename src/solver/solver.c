@@ -10,7 +10,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   PetscCall(MBCInitializePackage());
   PetscCall(PetscNew(&s));
   s->comm             = comm;
-  s->contact_h5       = -1;
+  s->h5               = -1;
   s->fclib_step       = -1;
   s->static_stabilize = -1;
   s->static_rtol      = 1e-6;
@@ -568,9 +568,9 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));
-  PetscCall(PetscFree(s->output_times));
+  PetscCall(MBCSolverOutputBodiesClose(s));
+  PetscCall(PetscFree2(s->output_times, s->output_npoints));
   PetscCall(PetscFree(s->points));
-  PetscCall(PetscFree(s->h5));
   PetscCall(MBCSceneDestroy(&s->scene));
   PetscCall(PetscFree(*solver));
   PetscFunctionReturn(0);

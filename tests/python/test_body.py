@@ -41,7 +41,7 @@ def test_self_weight_static_exact(tmp_path, cell, ends):
         scene["output"]["points"] = {"mid": [0.5, 0.5, L / 2]}
     h5 = prep(tmp_path, scene)
     solve(h5)
-    r = read_body(result(h5, "_col.h5"))
+    r = read_body(result(h5, ".h5"), "col")
     z = r["vertices"][:, 2]
     exact = -RHO * G * (L * z - z**2 / 2) / E if ends == "fixed-free" else -RHO * G * z * (L - z) / (2 * E)
     scale = np.abs(exact).max()
@@ -74,7 +74,7 @@ def test_patch_test_distorted_hex(tmp_path):
     }
     h5 = prep(tmp_path, scene)
     solve(h5)
-    r = read_body(result(h5, "_cube.h5"))
+    r = read_body(result(h5, ".h5"), "cube")
     x = r["vertices"]
     assert np.ptp(x[r["cells"]][:, :, 0], axis=1).std() > 0.02, "the mesh is not distorted"
     s = r["stress"]
@@ -231,7 +231,7 @@ def test_prescribed_displacement_table_static(tmp_path):
     assert np.allclose(p["t"], [0.5, 1.0, 1.5, 2.0])
     assert np.abs(p["top_uz"] - g).max() < 1e-12 and np.abs(p["mid_uz"] - g / 2).max() < 1e-12
     assert np.abs(p["top_ux"] + 0.3 * g / 4).max() < 1e-12  # lateral contraction -nu eps x
-    r = read_body(result(h5, "_bar.h5"))
+    r = read_body(result(h5, ".h5"), "bar")
     assert np.abs(r["stress"][:, 2] - 2e11 * 0.5e-3 / 4).max() < 1e-9 * 2e11 * 1e-3 / 4
 
 

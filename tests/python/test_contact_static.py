@@ -9,19 +9,12 @@ import pytest
 
 from conftest import load_script, prep, result, solve
 from mbcontact import meshgen
-from mbcontact.results import read_body, read_csv
+from mbcontact.results import read_body, read_contact, read_csv
 from test_fclib import local_problem, merit, run
 
 blocks = load_script("meshes/blocks/build.py", "blocks_build")
 
 STATIC = ("-mbc_analysis", "static", "-mbc_dt", "1", "-mbc_final_time", "1")
-
-
-def contact_step(path, step=-1):
-    """Datasets of one output of <output>_contact.h5 as numpy arrays."""
-    with h5py.File(path, "r") as f:
-        names = sorted(f, key=lambda n: int(n.split("_")[1]))
-        return {k: v[...] for k, v in f[names[step]].items()}
 
 
 def test_static_two_blocks(tmp_path):
@@ -43,7 +36,7 @@ def test_static_two_blocks(tmp_path):
     c = read_csv(result(h5, "_contact.csv"))
     assert c["stick"][-1] == 441 and c["separated"][-1] == 0
     assert abs(c["normal_force"][-1] / 1e8 - 1) < 1e-6 and abs(c["fz"][-1] / 1e8 - 1) < 1e-6
-    pts = contact_step(result(h5, "_contact.h5"))
+    pts = read_contact(result(h5, ".h5"))
     assert np.abs(pts["pressure"] / 1e4 - 1).max() < 5e-3
     assert abs(pts["area"].sum() / 1e4 - 1) < 1e-6  # block 2's base, 100 m x 100 m
     assert np.all(pts["state"] == 1)  # stick
@@ -95,17 +88,17 @@ def test_contact_patch_test(tmp_path, lower_cell, mu):
     by 11 % (printed, recorded in docs/validation.md)."""
     h5 = patch_scene(tmp_path, lower_cell, mu)
     solve(h5, "-mbc_monitor")
-    pts = contact_step(result(h5, "_contact.h5"))
+    pts = read_contact(result(h5, ".h5"))
     assert len(pts["pressure"]) == 64
     err = np.abs(pts["pressure"] / 1e6 - 1).max()
     c = read_csv(result(h5, "_contact.csv"))
     assert abs(c["normal_force"][-1] / 1e6 - 1) < 1e-6 and abs(c["fz"][-1] / 1e6 - 1) < 1e-6
     for body in ("lower", "upper"):
-        s = read_body(result(h5, f"_{body}.h5"))["stress"]
+        s = read_body(result(h5, ".h5"), body)["stress"]
         assert np.abs(s[:, 2] / -1e6 - 1).max() < 1e-2, body
         assert np.abs(s[:, [0, 1, 3, 4, 5]]).max() < 1e-2 * 1e6, body
     solve(h5, "-mbc_contact_integrate", "0", "-mbc_output", str(tmp_path / "colloc"))
-    colloc = np.abs(contact_step(str(tmp_path / "colloc_contact.h5"))["pressure"] / 1e6 - 1).max()
+    colloc = np.abs(read_contact(str(tmp_path / "colloc.h5"))["pressure"] / 1e6 - 1).max()
     print(f"\npatch test {lower_cell} mu {mu}: max pressure error integrated {err:.2e}, collocated {colloc:.2e}")
     assert err < 1e-2
 
@@ -164,6 +157,6 @@ def test_patch_test_on_four_ranks(tmp_path):
     h5 = patch_scene(tmp_path, "tet4", 0.3)
     solve(h5, "-mbc_output", str(tmp_path / "np1"))
     solve(h5, "-mbc_output", str(tmp_path / "np4"), nproc=4)
-    p1 = contact_step(str(tmp_path / "np1_contact.h5"))["pressure"]
-    p4 = contact_step(str(tmp_path / "np4_contact.h5"))["pressure"]
+    p1 = read_contact(str(tmp_path / "np1.h5"))["pressure"]
+    p4 = read_contact(str(tmp_path / "np4.h5"))["pressure"]
     assert np.abs(p4 - p1).max() <= 1e-7 * np.abs(p1).max()

@@ -152,3 +152,13 @@ def test_couple_without_faces_in_the_meshes(tmp_path):
     h5 = prep(tmp_path, scene)
     edit(h5, "mbcontact/couples/0", "k", 7)
     expect_error(h5, "k = 7", "b2_zmin", options=("-mbc_contact_search_only",))
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_result_file_cannot_be_created(tmp_path, nproc):
+    """The collective result file in a folder that does not exist: one message per rank naming the
+    file, exit status 1, no hang."""
+    h5 = good_scene(tmp_path, two=True)
+    out = tmp_path / "nowhere" / "r"
+    text = expect_error(h5, f"Cannot create the result file {out}.h5", options=("-mbc_output", str(out)), nproc=nproc)
+    assert len([l for l in text.splitlines() if "mbcontact: error:" in l]) <= nproc, text

@@ -13,6 +13,7 @@ struct _n_MBCBody {
 
   DM      dm;             /* displacement field, Lagrange P1/Q1 */
   DM      dmStress;       /* cellwise stress, 6 components (xx yy zz xy yz xz) */
+  PetscInt *vnum, *cnum;  /* scene index (the order mbcontact-prep wrote) of each local vertex and cell */
   PetscFE fe;
   PetscReal lambda, mu;   /* Lamé constants */
 

@@ -13,6 +13,18 @@ typedef struct {
   PetscReal distance, xv[3];
 } MBCPointLocation;
 
+/* One body in the result file (solveroutputbody.c): the rows of its scene-ordered datasets this
+   rank writes, and the star forests that bring them there from the distributed mesh. */
+typedef struct {
+  PetscInt   nv, nc, nvpc;   /* the scene's vertices, cells, vertices per cell */
+  PetscInt   vstart, nvrows; /* this rank writes vertex rows [vstart, vstart + nvrows) */
+  PetscInt   cstart, ncrows; /* and cell rows [cstart, cstart + ncrows) (0 rows off the body) */
+  PetscSF    vsf, csf;       /* values of owned vertices (3 each) and cells (6 each) -> their rows; NULL off the body */
+  PetscInt   nvown, *vrow;   /* owned vertices: local row of each in the displacement Vec */
+  PetscInt   ncown, *crow;   /* owned cells: local row of each in the stress Vec */
+  PetscReal *leaf, *root;    /* work: values of the owned points; this rank's rows (displacement, then stress) */
+} MBCBodyOutput;
+
 #define MBC_PAIR_SIZE 4
 
 typedef enum {
@@ -41,9 +53,11 @@ struct _n_MBCSolver {
   char      output[PETSC_MAX_PATH_LEN];
   PetscInt  output_every, noutputs;
   PetscReal *output_times;
-  PetscViewer *h5;        /* per body, NULL where the rank is not in the body */
+  PetscInt *output_npoints; /* contact points written at each output (XDMF) */
+  char      h5file[PETSC_MAX_PATH_LEN]; /* <output>.h5: every body and the contact points, written collectively */
+  int64_t   h5;           /* its hid_t on every rank, -1 when not open */
+  MBCBodyOutput *bout;    /* per body, where the file has fields */
   FILE     *points_csv, *energy_csv, *contact_csv;
-  int64_t   contact_h5;   /* hid_t of <output>_contact.h5 on rank 0, else -1 */
   MBCPointLocation *points;
   PetscBool monitor, view;
 
@@ -93,6 +107,10 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver, FILE *, PetscInt);
+PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);

@@ -1,0 +1,297 @@
+/* The bodies in the result file, in the scene's order whatever the rank count: each body's
+   vertices (reference coordinates) and cells once, its displacement and cellwise stress at every
+   output. A body's mesh is distributed over its own ranks; every local vertex and cell knows its
+   scene index (MBCBody vnum, cnum, from the load), so a star forest per body brings the values of
+   the owned points to contiguous blocks of rows in the scene's order, and each rank of the body
+   writes its block in one collective HDF5 write. Ranks off the body take part in every creation
+   and write, selecting no rows. */
+#include <mbc/private/solverimpl.h>
+#include <mbc/private/h5util.h>
+#include <petscsf.h>
+
+/* Vertex permutation between PETSc's order and XDMF's (VTK's, Gmsh's); its own inverse
+   (python/mbcontact/cells.py, TO_PETSC). */
+static const PetscInt ToXdmf[2][8] = {
+  {1, 0, 2, 3, 0, 0, 0, 0}, /* tet4 */
+  {0, 3, 2, 1, 4, 5, 6, 7}  /* hex8 */
+};
+
+/* Rows [*start, *start + *n) of N for this rank of comm: blocks in rank order. */
+static PetscErrorCode SplitRows(MPI_Comm comm, PetscInt N, PetscInt *start, PetscInt *n)
+{
+  PetscInt    nn = PETSC_DECIDE, s = 0;
+  PetscMPIInt rank;
+
+  PetscFunctionBegin;
+  PetscCall(PetscSplitOwnership(comm, &nn, &N));
+  PetscCallMPI(MPI_Exscan(&nn, &s, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  *start = rank ? s : 0; /* MPI_Exscan leaves rank 0's undefined */
+  *n     = nn;
+  PetscFunctionReturn(0);
+}
+
+/* Star forest on comm from the bs values of each of nleaves entities (leaves, in order) to the bs
+   values of its row row[i] (global; this rank holds nrows rows). Every row must get exactly one
+   entity: checked, as it is what makes the file independent of the distribution. */
+static PetscErrorCode RowSFCreate(MPI_Comm comm, PetscInt nrows, PetscInt nleaves, const PetscInt row[], PetscInt bs, const char *body, const char *what, PetscSF *sf)
+{
+  PetscLayout     map;
+  PetscInt       *remote, bad = 0;
+  const PetscInt *degree;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLayoutCreate(comm, &map));
+  PetscCall(PetscLayoutSetLocalSize(map, nrows * bs));
+  PetscCall(PetscLayoutSetUp(map));
+  PetscCall(PetscMalloc1(nleaves * bs, &remote));
+  for (PetscInt i = 0; i < nleaves; i++)
+    for (PetscInt c = 0; c < bs; c++) remote[i * bs + c] = row[i] * bs + c;
+  PetscCall(PetscSFCreate(comm, sf));
+  PetscCall(PetscSFSetGraphLayout(*sf, map, nleaves * bs, NULL, PETSC_OWN_POINTER, remote));
+  PetscCall(PetscFree(remote));
+  PetscCall(PetscLayoutDestroy(&map));
+  PetscCall(PetscSFSetUp(*sf));
+  PetscCall(PetscSFComputeDegreeBegin(*sf, &degree));
+  PetscCall(PetscSFComputeDegreeEnd(*sf, &degree));
+  for (PetscInt r = 0; r < nrows * bs; r += bs)
+    if (degree[r] != 1) bad++;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCheck(!bad, comm, PETSC_ERR_PLIB, "Result file: body '%s': %" PetscInt_FMT " %s rows would not be written exactly once", body, bad, what);
+  PetscFunctionReturn(0);
+}
+
+/* The points of [pStart, pEnd) this rank owns in dm's global section: the point, its local row
+   in dm's global Vecs, its scene index. */
+static PetscErrorCode OwnedPoints(DM dm, PetscInt pStart, PetscInt pEnd, const PetscInt num[], PetscInt *n, PetscInt **point, PetscInt **row, PetscInt **scene)
+{
+  PetscSection gsec;
+  PetscInt     off;
+
+  PetscFunctionBegin;
+  PetscCall(DMGetGlobalSection(dm, &gsec));
+  PetscCall(PetscMalloc1(pEnd - pStart, point));
+  PetscCall(PetscMalloc1(pEnd - pStart, row));
+  PetscCall(PetscMalloc1(pEnd - pStart, scene));
+  *n = 0;
+  for (PetscInt p = pStart; p < pEnd; p++) {
+    PetscCall(PetscSectionGetOffset(gsec, p, &off));
+    if (off < 0) continue;
+    (*point)[*n] = p;
+    (*row)[*n]   = off;
+    (*scene)[*n] = num[p - pStart];
+    (*n)++;
+  }
+  { /* offsets are global rows; the local ones start at the Vec's ownership range */
+    Vec      g;
+    PetscInt lo;
+    PetscCall(DMGetGlobalVector(dm, &g));
+    PetscCall(VecGetOwnershipRange(g, &lo, NULL));
+    PetscCall(DMRestoreGlobalVector(dm, &g));
+    for (PetscInt i = 0; i < *n; i++) (*row)[i] -= lo;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Reference coordinates of the owned vertices and the cells by scene vertex index (XDMF order),
+   brought to their rows. Collective on the body's communicator. */
+static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscInt vpoint[], const PetscInt vscene[], const PetscInt cpoint[], const PetscInt cscene[], PetscReal *x, int *cells)
+{
+  PetscSection       csec;
+  Vec                coords;
+  const PetscScalar *xa;
+  PetscReal         *xl;
+  PetscInt          *cl, *cr, vStart, vEnd, *closure = NULL, ncl, hex = o->nvpc == 8;
+  PetscSF            sf;
+
+  PetscFunctionBegin;
+  PetscCall(DMGetCoordinateSection(body->dm, &csec));
+  PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
+  PetscCall(VecGetArrayRead(coords, &xa));
+  PetscCall(PetscMalloc1(3 * o->nvown, &xl));
+  for (PetscInt i = 0; i < o->nvown; i++) {
+    PetscInt off;
+    PetscCall(PetscSectionGetOffset(csec, vpoint[i], &off));
+    for (PetscInt c = 0; c < 3; c++) xl[3 * i + c] = PetscRealPart(xa[off + c]);
+  }
+  PetscCall(VecRestoreArrayRead(coords, &xa));
+  PetscCall(PetscSFReduceBegin(o->vsf, MPIU_REAL, xl, x, MPI_REPLACE));
+  PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, xl, x, MPI_REPLACE));
+  PetscCall(PetscFree(xl));
+
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(PetscMalloc2(o->nvpc * o->ncown, &cl, o->nvpc * o->ncrows, &cr));
+  for (PetscInt i = 0; i < o->ncown; i++) {
+    PetscInt v[8], nv = 0;
+    PetscCall(DMPlexGetTransitiveClosure(body->dm, cpoint[i], PETSC_TRUE, &ncl, &closure));
+    for (PetscInt j = 0; j < 2 * ncl; j += 2)
+      if (closure[j] >= vStart && closure[j] < vEnd && nv < 8) v[nv++] = body->vnum[closure[j] - vStart];
+    PetscCheck(nv == o->nvpc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': cell %" PetscInt_FMT " has %" PetscInt_FMT " vertices, not %" PetscInt_FMT, body->name, cscene[i], nv, o->nvpc);
+    for (PetscInt j = 0; j < o->nvpc; j++) cl[o->nvpc * i + j] = v[ToXdmf[hex][j]];
+  }
+  if (closure) PetscCall(DMPlexRestoreTransitiveClosure(body->dm, cpoint[0], PETSC_TRUE, &ncl, &closure));
+  PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, o->nvpc, body->name, "cell", &sf));
+  PetscCall(PetscSFReduceBegin(sf, MPIU_INT, cl, cr, MPI_REPLACE));
+  PetscCall(PetscSFReduceEnd(sf, MPIU_INT, cl, cr, MPI_REPLACE));
+  PetscCall(PetscSFDestroy(&sf));
+  for (PetscInt i = 0; i < o->nvpc * o->ncrows; i++) cells[i] = (int)cr[i];
+  PetscCall(PetscFree2(cl, cr));
+  PetscFunctionReturn(0);
+}
+
+/* The maps of a body this rank is in, and its vertices and cells in this rank's rows. */
+static PetscErrorCode BodyOutputSetUp(MBCBody body, MBCBodyOutput *o, PetscReal **x, int **cells)
+{
+  PetscInt vStart, vEnd, cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
+
+  PetscFunctionBegin;
+  PetscCall(SplitRows(body->comm, o->nv, &o->vstart, &o->nvrows));
+  PetscCall(SplitRows(body->comm, o->nc, &o->cstart, &o->ncrows));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  PetscCall(OwnedPoints(body->dm, vStart, vEnd, body->vnum, &o->nvown, &vpoint, &o->vrow, &vscene));
+  PetscCall(OwnedPoints(body->dmStress, cStart, cEnd, body->cnum, &o->ncown, &cpoint, &o->crow, &cscene));
+  PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vscene, 3, body->name, "vertex", &o->vsf));
+  PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, 6, body->name, "cell", &o->csf));
+  PetscCall(PetscMalloc2(6 * PetscMax(o->nvown, o->ncown), &o->leaf, 3 * o->nvrows + 6 * o->ncrows, &o->root));
+  PetscCall(PetscMalloc1(3 * o->nvrows, x));
+  PetscCall(PetscMalloc1(o->nvpc * o->ncrows, cells));
+  PetscCall(BodyGeometry(body, o, vpoint, vscene, cpoint, cscene, *x, *cells));
+  PetscCall(PetscFree(vpoint));
+  PetscCall(PetscFree(vscene));
+  PetscCall(PetscFree(cpoint));
+  PetscCall(PetscFree(cscene));
+  PetscFunctionReturn(0);
+}
+
+/* The maps of every body, then /bodies/<name>/vertices and cells: first every rank sets up its
+   bodies (in parallel), then all write body after body. Collective on the solver's communicator. */
+PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
+{
+  MBCScene    scene = s->scene;
+  hid_t       bodies;
+  int         count = (int)s->nbodies, **cells;
+  PetscReal **x;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(s->nbodies, &s->bout));
+  PetscCall(PetscCalloc2(s->nbodies, &x, s->nbodies, &cells));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBodyOutput *o = &s->bout[b];
+    o->nv   = scene->bodies[b].num_vertices;
+    o->nc   = scene->bodies[b].num_cells;
+    o->nvpc = strcmp(scene->bodies[b].cell_type, "hex8") ? 4 : 8;
+    PetscCheck(o->nv < PETSC_MAX_INT / 8 && o->nc < PETSC_MAX_INT / 8, s->comm, PETSC_ERR_SUP, "Body '%s': too large for the 32-bit cell indices of the result file", scene->bodies[b].name);
+    if (s->bodies[b]) PetscCall(BodyOutputSetUp(s->bodies[b], o, &x[b], &cells[b]));
+  }
+  PetscCall(MBCH5GroupCreate((hid_t)s->h5, "bodies", PETSC_TRUE, &bodies));
+  PetscCall(MBCH5WriteAttribute(bodies, "count", H5T_NATIVE_INT, 1, &count));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBodyOutput *o     = &s->bout[b];
+    int            index = (int)b;
+    hid_t          g;
+    PetscCall(MBCH5GroupCreate(bodies, scene->bodies[b].name, PETSC_FALSE, &g));
+    PetscCall(MBCH5WriteAttributeString(g, "cell_type", scene->bodies[b].cell_type));
+    PetscCall(MBCH5WriteAttribute(g, "index", H5T_NATIVE_INT, 1, &index));
+    PetscCall(MBCH5WriteRows(g, "vertices", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, x[b]));
+    PetscCall(MBCH5WriteRows(g, "cells", H5T_NATIVE_INT, o->nc, o->nvpc, o->cstart, o->ncrows, cells[b]));
+    PetscCall(MBCH5GroupClose(&g));
+    PetscCall(PetscFree(x[b]));
+    PetscCall(PetscFree(cells[b]));
+  }
+  PetscCall(MBCH5GroupClose(&bodies));
+  PetscCall(PetscFree2(x, cells));
+  PetscFunctionReturn(0);
+}
+
+/* Displacement and stress of the bodies this rank is in, in its rows (o->root: displacement,
+   then stress). */
+static PetscErrorCode BodyFields(MBCScene scene, MBCBody body, MBCBodyOutput *o)
+{
+  PetscFunctionBegin;
+  if (scene->output_displacement) {
+    const PetscScalar *u;
+    PetscCall(VecGetArrayRead(body->u, &u));
+    for (PetscInt i = 0; i < o->nvown; i++)
+      for (PetscInt c = 0; c < 3; c++) o->leaf[3 * i + c] = PetscRealPart(u[o->vrow[i] + c]);
+    PetscCall(VecRestoreArrayRead(body->u, &u));
+    PetscCall(PetscSFReduceBegin(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
+    PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
+  }
+  if (scene->output_stress) {
+    const PetscScalar *sa;
+    Vec                stress;
+    PetscCall(DMGetGlobalVector(body->dmStress, &stress));
+    PetscCall(MBCBodyComputeStress(body, body->u, stress));
+    PetscCall(VecGetArrayRead(stress, &sa));
+    for (PetscInt i = 0; i < o->ncown; i++)
+      for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(sa[o->crow[i] + c]);
+    PetscCall(VecRestoreArrayRead(stress, &sa));
+    PetscCall(DMRestoreGlobalVector(body->dmStress, &stress));
+    PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));
+    PetscCall(PetscSFReduceEnd(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* /bodies/<name>/step_<k>/displacement and stress of output k = s->noutputs: every rank computes
+   its bodies' rows, then all write body after body. Collective. */
+PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver s)
+{
+  MBCScene scene = s->scene;
+  int      step  = (int)s->step;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(BodyFields(scene, s->bodies[b], &s->bout[b]));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBodyOutput *o = &s->bout[b];
+    char           path[MBC_NAME_LEN + 64];
+    hid_t          g;
+
+    PetscCall(PetscSNPrintf(path, sizeof(path), "bodies/%s/step_%" PetscInt_FMT, scene->bodies[b].name, s->noutputs));
+    PetscCall(MBCH5GroupCreate((hid_t)s->h5, path, PETSC_FALSE, &g));
+    PetscCall(MBCH5WriteAttribute(g, "time", H5T_NATIVE_DOUBLE, 1, &s->time));
+    PetscCall(MBCH5WriteAttribute(g, "step", H5T_NATIVE_INT, 1, &step));
+    if (scene->output_displacement) PetscCall(MBCH5WriteRows(g, "displacement", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, o->root));
+    if (scene->output_stress) PetscCall(MBCH5WriteRows(g, "stress", H5T_NATIVE_DOUBLE, o->nc, 6, o->cstart, o->ncrows, o->root ? o->root + 3 * o->nvrows : NULL));
+    PetscCall(MBCH5GroupClose(&g));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver s)
+{
+  PetscFunctionBegin;
+  for (PetscInt b = 0; s->bout && b < s->nbodies; b++) {
+    MBCBodyOutput *o = &s->bout[b];
+    PetscCall(PetscSFDestroy(&o->vsf));
+    PetscCall(PetscSFDestroy(&o->csf));
+    PetscCall(PetscFree(o->vrow));
+    PetscCall(PetscFree(o->crow));
+    PetscCall(PetscFree2(o->leaf, o->root));
+  }
+  PetscCall(PetscFree(s->bout));
+  PetscFunctionReturn(0);
+}
+
+/* The bodies of output k as uniform grids of the XDMF index (rank 0). */
+PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver s, FILE *fp, PetscInt k)
+{
+  MBCScene    scene = s->scene;
+  const char *h5 = strrchr(s->h5file, '/') ? strrchr(s->h5file, '/') + 1 : s->h5file;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; s->bout && b < s->nbodies; b++) {
+    const MBCBodyOutput *o    = &s->bout[b];
+    const char          *name = scene->bodies[b].name;
+    fprintf(fp, "      <Grid Name=\"%s\" GridType=\"Uniform\">\n", name);
+    fprintf(fp, "        <Topology TopologyType=\"%s\" NumberOfElements=\"%" PetscInt_FMT "\">\n", o->nvpc == 8 ? "Hexahedron" : "Tetrahedron", o->nc);
+    fprintf(fp, "          <DataItem Dimensions=\"%" PetscInt_FMT " %" PetscInt_FMT "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">%s:/bodies/%s/cells</DataItem>\n        </Topology>\n", o->nc, o->nvpc, h5, name);
+    fprintf(fp, "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/vertices</DataItem>\n        </Geometry>\n", o->nv, h5, name);
+    if (scene->output_displacement) fprintf(fp, "        <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/step_%" PetscInt_FMT "/displacement</DataItem>\n        </Attribute>\n", o->nv, h5, name, k);
+    if (scene->output_stress) fprintf(fp, "        <Attribute Name=\"stress\" AttributeType=\"Tensor6\" Center=\"Cell\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 6\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/step_%" PetscInt_FMT "/stress</DataItem>\n        </Attribute>\n", o->nc, h5, name, k);
+    fprintf(fp, "      </Grid>\n");
+  }
+  PetscFunctionReturn(0);
+}

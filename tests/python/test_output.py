@@ -1,0 +1,187 @@
+"""The result file <output>.h5, written collectively by all ranks: the same datasets at any rank
+count (each body's vertices and cells in the scene's order, the order mbcontact-prep wrote; fields
+to rounding), and an XDMF index whose every reference is a dataset of that file with its shape and
+type. This process reads with h5py; the solver (PETSc, MPI HDF5) runs in its own processes."""
+import os
+import re
+import xml.etree.ElementTree as ET
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import load_script, prep, solve
+from mbcontact import meshgen
+from mbcontact.bodies import build_bodies, read_mesh
+from mbcontact.cells import min_corner_volume
+from mbcontact.results import body_names, read_body, read_contact
+from mbcontact.scene import load_yaml, parse_scene
+
+blocks = load_script("meshes/blocks/build.py", "blocks_build_output")
+RANKS = (1, 2, 4)
+
+
+def datasets(path):
+    """Every dataset of an HDF5 file by path, as numpy arrays."""
+    out = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[...]) if isinstance(obj, h5py.Dataset) else None)
+    return out
+
+
+def prep_bodies(yml):
+    """The bodies as mbcontact-prep builds them (vertices and Gmsh/XDMF-order cells), without
+    PETSc: the scene order the result file must follow."""
+    scene = parse_scene(load_yaml(str(yml)), os.path.dirname(str(yml)))
+    meshes = {name: read_mesh(name, path) for name, path in scene.meshes.items()}
+    return {b.name: b for b in build_bodies(scene, meshes)}
+
+
+def spans(view):
+    """Number of ranks of each body, from the -mbc_view output."""
+    return {m[0]: int(m[2]) - int(m[1]) + 1 for m in re.findall(r"body (\w+): ranks (\d+)-(\d+)", view)}
+
+
+def run_ranks(tmp_path, h5, *options):
+    """Solves at 1, 2 and 4 ranks; returns {ranks: (result file, -mbc_view output)}."""
+    runs = {}
+    for n in RANKS:
+        out = tmp_path / f"np{n}"
+        r = solve(h5, "-mbc_output", str(out), "-mbc_view", *options, nproc=n)
+        runs[n] = (str(out) + ".h5", r.stdout)
+    return runs
+
+
+# scale of the comparison of each dataset: its own largest value, or a related one where the
+# dataset itself is (near) zero: tangential tractions against the pressure, slips and gaps
+# against the displacements
+SCALE_OF = {"traction": "pressure", "slip": "displacement", "gap": "displacement", "multiplier": "force"}
+
+
+def assert_same_files(runs, exact=("vertices", "cells", "couple", "state", "reference", "time")):
+    """Every dataset of every run equals the 1-rank one: integers and reference geometry exactly,
+    computed values to 1e-9 of their scale."""
+    ref = datasets(runs[1][0])
+    umax = max(np.abs(v).max() for k, v in ref.items() if k.endswith("displacement"))
+    for n in RANKS[1:]:
+        other = datasets(runs[n][0])
+        assert sorted(other) == sorted(ref), (n, set(other) ^ set(ref))
+        for name, a in ref.items():
+            b, leaf = other[name], name.split("/")[-1]
+            assert a.shape == b.shape and a.dtype == b.dtype, (n, name)
+            if leaf in exact:
+                assert np.array_equal(a, b), (n, name)
+                continue
+            if leaf in ("slip", "gap", "displacement"):
+                scale = umax
+            elif leaf in SCALE_OF:
+                scale = np.abs(ref[name.replace(leaf, SCALE_OF[leaf])]).max()
+            else:
+                scale = np.abs(a).max() if a.size else 0
+            finite = np.isfinite(a)
+            assert np.array_equal(finite, np.isfinite(b)), (n, name)  # NaN slips of frictionless couples
+            err = np.abs(a[finite] - b[finite]).max() if finite.any() else 0
+            assert err <= 1e-9 * scale, (n, name, err, scale)
+
+
+def assert_scene_order(path, bodies):
+    """Vertices and cells exactly as mbcontact-prep wrote them; cells positively oriented in the
+    XDMF (VTK) vertex order, so ParaView sees valid cells."""
+    assert body_names(path) == list(bodies)
+    for name, b in bodies.items():
+        r = read_body(path, name)
+        assert np.array_equal(r["vertices"], b.coords), name
+        assert np.array_equal(r["cells"], b.cells), name
+        assert r["cell_type"] == b.cell_type
+        assert min_corner_volume(b.cell_type, r["vertices"], r["cells"]).min() > 0, name
+
+
+@pytest.fixture(scope="module")
+def two_blocks(tmp_path_factory):
+    """The paper's two blocks (contact, friction), 3 Newmark steps, every field at every step, at
+    1, 2 (a block per rank) and 4 ranks (each block on two)."""
+    tmp_path = tmp_path_factory.mktemp("blocks")
+    meshgen.boxes(str(tmp_path / "blocks.msh"),
+                  [dict(lo=(0, 0, 0), hi=(100, 100, 100), n=(10, 10, 10), cell="hex8", name="block1"),
+                   dict(lo=(0, 0, 100), hi=(100, 100, 200), n=(20, 20, 10), cell="hex8", name="block2")])
+    scene = blocks.scene(0.01, 0.03)
+    scene["output"].update({"every": 1, "fields": ["displacement", "stress"]})
+    h5 = prep(tmp_path, scene, name="blocks")
+    runs = run_ranks(tmp_path, h5, "-mbc_pgs_rtol", "1e-12")
+    assert spans(runs[2][1]) == {"block1": 1, "block2": 1} and max(spans(runs[4][1]).values()) > 1, runs[4][1]
+    return tmp_path, runs
+
+
+def test_two_blocks_same_file_at_1_2_4_ranks(two_blocks):
+    tmp_path, runs = two_blocks
+    assert_same_files(runs)
+    assert_scene_order(runs[1][0], prep_bodies(tmp_path / "blocks.yaml"))
+    # one result file per run, no per-body or contact HDF5 files
+    assert sorted(p.name for p in tmp_path.glob("np*.h5")) == [f"np{n}.h5" for n in RANKS]
+    r = read_body(runs[4][0], "block2")
+    assert r["num_steps"] == 4 and abs(r["time"] - 0.03) < 1e-12
+    assert r["displacement"][:, 2].min() < -1e-5  # block 2 sinks under its body force
+    c = read_contact(runs[4][0])
+    assert len(c["pressure"]) == 441 and np.all(c["couple"] == 1) and c["pressure"].max() > 0
+
+
+def test_bodies_sharing_and_spanning_ranks(tmp_path):
+    """Three columns under self-weight, static, two load steps: at 2 ranks the two small ones
+    share a rank, at 4 the large one (a perturbed tet4 mesh) spans two; the file is the same."""
+    L = 10.0
+    meshgen.boxes(str(tmp_path / "three.msh"),
+                  [dict(lo=(0, 0, 0), hi=(1, 1, L), n=(3, 3, 24), cell="tet4", name="big", perturb=0.2, seed=3),
+                   dict(lo=(3, 0, 0), hi=(4, 1, L), n=(1, 1, 6), cell="hex8", name="s1"),
+                   dict(lo=(6, 0, 0), hi=(7, 1, L), n=(1, 1, 6), cell="tet4", name="s2")])
+    scene = {
+        "meshes": {"m": "three.msh"},
+        "bodies": {n: {"mesh": "m", "regions": [n], "material": {"E": 30e9, "nu": 0.2, "density": 2500.0}} for n in ("big", "s1", "s2")},
+        "dirichlet": [{"surface": f"{n}_zmin", "components": "all"} for n in ("big", "s1", "s2")],
+        "loads": [{"kind": "gravity", "vector": [0, 0, -9.81]}],
+        "analysis": {"type": "static", "dt": 0.5, "final_time": 1.0},
+        "output": {"every": 1, "fields": ["displacement", "stress"]},
+    }
+    h5 = prep(tmp_path, scene, name="three")
+    runs = run_ranks(tmp_path, h5)
+    assert re.findall(r"body s1: ranks (\d+-\d+)", runs[2][1]) == re.findall(r"body s2: ranks (\d+-\d+)", runs[2][1]), runs[2][1]
+    assert spans(runs[4][1])["big"] > 1, runs[4][1]
+    assert_same_files(runs)
+    assert_scene_order(runs[1][0], prep_bodies(tmp_path / "three.yaml"))
+    with h5py.File(runs[4][0], "r") as f:
+        assert "contact" not in f and list(f["time"][...]) == [0.5, 1.0]
+
+
+def test_xdmf_references_datasets_of_the_file(two_blocks):
+    """Each run's XDMF: a temporal collection of spatial collections (the two blocks and the
+    contact points) at the file's output times, every HDF item a dataset of the one result file
+    with the item's dimensions and number type, topologies as large as the cells datasets."""
+    tmp_path, runs = two_blocks
+    for n, (path, _) in runs.items():
+        xmf = path[:-3] + ".xmf"
+        root = ET.parse(xmf).getroot()
+        top = root.find("Domain/Grid")
+        assert top.get("CollectionType") == "Temporal"
+        steps = top.findall("Grid")
+        with h5py.File(path, "r") as f:
+            times = f["time"][...]
+            assert [float(g.find("Time").get("Value")) for g in steps] == list(times)
+            for g in steps:
+                assert g.get("CollectionType") == "Spatial"
+                assert [c.get("Name") for c in g.findall("Grid")] == ["block1", "block2", "contact"]
+            items = [d for d in root.iter("DataItem") if d.get("Format") == "HDF"]
+            assert len(items) == len(steps) * (2 * 4 + 8)
+            for d in items:
+                fname, dset = d.text.strip().split(":")
+                assert fname == os.path.basename(path), d.text
+                assert dset in f, d.text
+                assert list(f[dset].shape) == [int(v) for v in d.get("Dimensions").split()], d.text
+                kind = {"Float": "f", "Int": "i"}[d.get("NumberType")]
+                assert f[dset].dtype.kind == kind and f[dset].dtype.itemsize == int(d.get("Precision")), d.text
+            for grid in root.iter("Grid"):
+                topo = grid.find("Topology")
+                if topo is not None and topo.get("TopologyType") == "Hexahedron":
+                    cells = f[topo.find("DataItem").text.split(":")[1]]
+                    assert int(topo.get("NumberOfElements")) == cells.shape[0] and cells.shape[1] == 8
+                    for a in grid.findall("Attribute"):
+                        rows = f[a.find("DataItem").text.split(":")[1]].shape[0]
+                        assert rows == (cells.shape[0] if a.get("Center") == "Cell" else f[grid.find("Geometry/DataItem").text.split(":")[1]].shape[0])
