@@ -270,7 +270,7 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
 {
   MPI_Comm           comm = PetscObjectComm((PetscObject)fp->W);
   PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0, nstart = 0, N, tot[2];
-  PetscReal         *dir, dmax = 0;
+  PetscReal         *dir, dmax = 0, shift;
   PetscScalar       *rv, *cv, *ev;
   const PetscScalar *qv, *uv, *cgv = NULL, *egv = NULL;
   PetscBool          slips = PETSC_FALSE, reuse = PETSC_FALSE;
@@ -416,6 +416,7 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
     PetscCall(MatAssemblyBegin(A, MAT_FLUSH_ASSEMBLY)); /* rows inserted, the shift added */
     PetscCall(MatAssemblyEnd(A, MAT_FLUSH_ASSEMBLY));
     for (PetscInt e = nstart; e < nstart + n; e++) PetscCall(MatSetValue(A, e, e, 1e-10 * dmax, ADD_VALUES));
+    shift = 1e-10 * dmax;
     PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
     PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
     PetscCall(VecDestroy(&colv));
@@ -441,12 +442,28 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
       PetscCall(PetscFree(pgs->luS));
       PetscCall(PetscMalloc1(ns + 1, &pgs->luS));
       PetscCall(PetscArraycpy(pgs->luS, S, ns));
-      pgs->lun  = ns;
-      pgs->kept = PETSC_TRUE;
+      pgs->lun   = ns;
+      pgs->kept  = PETSC_TRUE;
+      pgs->shift = shift;
     }
-  } else ksp = pgs->ksp;
+  } else ksp = pgs->ksp, shift = pgs->shift;
   PetscCall(KSPSolve(ksp, b, x));
   PetscCall(KSPGetConvergedReason(ksp, &reason));
+  if (reason >= 0) { /* one step of refinement towards the unshifted system: x += A~^-1 (b - (A~ - shift I) x);
+                        the shift's 1e-10 would otherwise floor the merit near 1e-11 */
+    Mat Ash;
+    Vec res, dx;
+    PetscCall(KSPGetOperators(ksp, &Ash, NULL));
+    PetscCall(VecDuplicate(b, &res));
+    PetscCall(VecDuplicate(b, &dx));
+    PetscCall(MatMult(Ash, x, res));
+    PetscCall(VecAYPX(res, -1.0, b));
+    PetscCall(VecAXPY(res, shift, x));
+    PetscCall(KSPSolve(ksp, res, dx));
+    PetscCall(VecAXPY(x, 1.0, dx));
+    PetscCall(VecDestroy(&res));
+    PetscCall(VecDestroy(&dx));
+  }
   if (reason < 0 && ksp == pgs->ksp) pgs->kept = PETSC_FALSE;
   if (slips) PetscCall(KSPDestroy(&ksp));
   if (reason >= 0) {

@@ -41,6 +41,7 @@ typedef struct {
   KSP            ksp;
   PetscInt      *luS, lun;
   PetscBool      kept;
+  PetscReal      shift;        /* the diagonal shift of the kept factor */
 } MBCPGS;
 
 PETSC_EXTERN PetscLogEvent MBC_PGSSolve, MBC_FlexibilityAssemble;
