@@ -12,7 +12,8 @@ and mu N / |F_t| from the computed base resultant (its smallest value over a dyn
 monolith (from the contact points of the last output) the base's opening and sliding.
 
 Everything per step comes from <prefix>_contact.csv; only the per-monolith split reads the
-per-point file, through contact_points() alone (its file layout is about to change).
+per-point file, through contact_points() alone (the collective <prefix>.h5 or the older
+<prefix>_contact.h5).
 """
 import argparse
 import json
@@ -28,15 +29,23 @@ from mbcontact.results import read_csv  # noqa: E402
 
 def contact_points(prefix, step=-1):
     """Per-point datasets of one output step (reference, gap, slip, state, couple, force, ...):
-    the only access to the per-point contact file."""
+    the only access to the per-point contact file. Reads the collective result file
+    `<prefix>.h5` (group /contact/step_<k>) where it has one, else `<prefix>_contact.h5`."""
     import h5py
 
-    with h5py.File(prefix + "_contact.h5", "r") as f:
-        names = sorted(f, key=lambda n: int(n.split("_")[1]))
-        group = f[names[step]]
-        out = {k: v[...] for k, v in group.items()}
-        out["time"] = float(group.attrs["time"])
-    return out
+    for path, group in ((prefix + ".h5", "contact"), (prefix + "_contact.h5", None)):
+        if not os.path.exists(path):
+            continue
+        with h5py.File(path, "r") as f:
+            if group and group not in f:
+                continue
+            parent = f[group] if group else f
+            names = sorted((n for n in parent if n.startswith("step_")), key=lambda n: int(n.split("_")[1]))
+            g = parent[names[step]]
+            out = {k: v[...] for k, v in g.items()}
+            out["time"] = float(g.attrs["time"])
+            return out
+    raise OSError(f"no contact points under {prefix} (.h5 or _contact.h5)")
 
 
 def scene_info(prefix):
