@@ -169,8 +169,9 @@ def boxes(path, specs, prefix_surfaces=True):
     _write_gmsh(path, np.concatenate(points), regions)
 
 
-def _write_gmsh(path, points, regions):
-    """Write regions as gmsh physical groups (one tag per region, unique over dims)."""
+def _write_gmsh(path, points, regions, binary=False):
+    """Write regions as gmsh physical groups (one tag per region, unique over dims); binary
+    Gmsh 2.2 writes and reads several times faster for meshes of millions of DOFs."""
     names = [r[0] for r in regions]
     if len(set(names)) != len(names):
         raise ValueError(f"duplicate region names in {names}")
@@ -181,7 +182,7 @@ def _write_gmsh(path, points, regions):
         field_data[name] = np.array([tag, dim])
     mesh = meshio.Mesh(points, cells, field_data=field_data,
                        cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical})
-    meshio.write(str(path), mesh, file_format="gmsh22", binary=False)
+    meshio.write(str(path), mesh, file_format="gmsh22", binary=binary)
 
 
 # ---------------------------------------------------------------------------

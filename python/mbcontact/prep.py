@@ -178,7 +178,9 @@ def write_metadata(path, scene, bodies, face_counts, labels=None):
         _list(root, "loads", scene.loads, lambda g, load: _attrs(
             g, kind=load.kind, vector=load.vector, value=load.value, surface=load.surface,
             surface_id=surface_ids.get(load.surface, -1), bodies=",".join(load.bodies),
-            time=load.time.kind, time_function=time_function(load.time)))
+            time=load.time.kind, time_function=time_function(load.time),
+            **(dict(level=load.level, unit_weight=load.unit_weight, axis=load.axis)
+               if load.kind == "hydrostatic" else {})))
         _list(root, "time_functions", tables, lambda g, table: (
             _attrs(g, kind="table"), g.create_dataset("table", data=table.astype(np.float64))))
 

@@ -176,15 +176,22 @@ class Time:
     table: np.ndarray = None  # (n, 2) for "table"
 
 
-def time_spec(value, where, kinds):
-    """`constant`, `sudden` or {table: [[t, f], ...]} (t strictly increasing)."""
+def time_spec(value, where, kinds, base_dir="."):
+    """`constant`, `sudden`, {table: [[t, f], ...]} or {csv: FILE, shift: s}: a table either
+    way (t strictly increasing); a CSV's path is relative to the scene's folder."""
     if value is None:
         return Time("constant")
     if isinstance(value, str):
         if value not in kinds:
             raise InputError(f"{where}: unknown time {value!r} (expected "
-                             f"{' | '.join(kinds)} | {{table: [[t, factor], ...]}})")
+                             f"{' | '.join(kinds)} | {{table: [[t, factor], ...]}} | {{csv: FILE}})")
         return Time(value)
+    if isinstance(value, dict) and "csv" in value:
+        spec = mapping(value, where, ("csv", "shift"), required=("csv",))
+        path = os.path.join(base_dir, string(spec["csv"], f"{where}.csv"))
+        table = _csv_table(path, f"{where}.csv")
+        table[:, 0] += real(spec.get("shift", 0.0), f"{where}.shift")
+        return Time("table", table)
     spec = mapping(value, where, ("table",), required=("table",))
     rows = spec["table"]
     if not isinstance(rows, list) or not rows:
@@ -200,11 +207,49 @@ def time_spec(value, where, kinds):
     return Time("table", table)
 
 
+def _csv_table(path, where):
+    """Rows `t, factor` of a CSV file (comma, semicolon or blank separated); lines starting
+    with '#' and a first line that is not numeric (a header) are skipped."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except OSError as err:
+        raise InputError(f"{where}: cannot read {path}: {err.strerror}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{where}: {path} is not a UTF-8 text file") from None
+    rows, header_seen = [], False
+    for number, line in enumerate(lines, start=1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        fields = re.split(r"[,;\s]+", text.strip(",; "))
+        try:
+            values = [float(v) for v in fields]
+        except ValueError:
+            if not rows and not header_seen:
+                header_seen = True
+                continue
+            raise InputError(f"{where}: {path} line {number}: expected two numbers 't, factor', "
+                             f"got {line.strip()!r}") from None
+        if len(values) != 2:
+            raise InputError(f"{where}: {path} line {number}: expected two columns 't, factor', "
+                             f"got {len(values)}")
+        if not all(math.isfinite(v) for v in values):
+            raise InputError(f"{where}: {path} line {number}: values must be finite, got {line.strip()!r}")
+        if rows and values[0] <= rows[-1][0]:
+            raise InputError(f"{where}: {path} line {number}: t must be strictly increasing "
+                             f"(t={values[0]:g} follows t={rows[-1][0]:g})")
+        rows.append(values)
+    if not rows:
+        raise InputError(f"{where}: {path} holds no 't, factor' rows")
+    return np.array(rows, dtype=float)
+
+
 # ---------------------------------------------------------------- scene entries
 
 MATERIAL_DEFAULTS = dict(nu=0.0, density=0.0, damping=0.0, rayleigh_alpha=0.0, rayleigh_beta=0.0)
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
-LOAD_KINDS = ("gravity", "body_force", "pressure", "traction")
+LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic")
 FIELDS = ("displacement", "stress")
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
@@ -241,6 +286,9 @@ class Load:
     surface: str
     bodies: list
     time: Time
+    level: float = 0.0        # hydrostatic: free surface coordinate along axis
+    unit_weight: float = 0.0  # hydrostatic: pressure per depth (rho_w g)
+    axis: int = 2             # hydrostatic: 0, 1, 2 = x, y, z (up)
 
 
 @dataclass
@@ -293,8 +341,8 @@ def parse_scene(doc, base_dir):
     bodies = _bodies(doc["bodies"], meshes)
     body_names = [b.name for b in bodies]
     couples = _couples(doc.get("couples"))
-    dirichlet = [_dirichlet(e, f"dirichlet[{i}]") for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
-    loads = [_load(e, f"loads[{i}]", body_names) for i, e in enumerate(entries(doc.get("loads"), "loads"))]
+    dirichlet = [_dirichlet(e, f"dirichlet[{i}]", base_dir) for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
+    loads = [_load(e, f"loads[{i}]", body_names, base_dir) for i, e in enumerate(entries(doc.get("loads"), "loads"))]
     analysis = _analysis(doc.get("analysis"))
     output = _output(doc.get("output"), body_names)
     if analysis.type == "dynamic":
@@ -358,12 +406,12 @@ def _couples(value):
     return couples
 
 
-def _dirichlet(spec, where):
+def _dirichlet(spec, where, base_dir="."):
     spec = mapping(spec, where, ("surface", "components", "value", "time"), required=("surface",))
     return Dirichlet(string(spec["surface"], f"{where}.surface"),
                      _components(spec.get("components", "all"), f"{where}.components"),
                      real(spec.get("value", 0.0), f"{where}.value"),
-                     time_spec(spec.get("time"), f"{where}.time", ("constant",)))
+                     time_spec(spec.get("time"), f"{where}.time", ("constant",), base_dir))
 
 
 def _components(value, where):
@@ -387,10 +435,11 @@ _LOAD_KEYS = {  # kind -> (required keys, optional keys) besides kind and time
     "body_force": (("vector",), ("bodies",)),
     "pressure": (("surface", "value"), ()),
     "traction": (("surface", "vector"), ()),
+    "hydrostatic": (("surface", "level", "unit_weight"), ("axis",)),
 }
 
 
-def _load(spec, where, body_names):
+def _load(spec, where, body_names, base_dir="."):
     if not isinstance(spec, dict) or "kind" not in spec:
         raise InputError(f"{where}: expected a mapping with a 'kind' ({', '.join(LOAD_KINDS)})")
     kind = string(spec["kind"], f"{where}.kind", choices=LOAD_KINDS)
@@ -400,12 +449,20 @@ def _load(spec, where, body_names):
     for b in bodies:
         if b not in body_names:
             raise InputError(f"{where}.bodies: unknown body {b!r} (bodies: {', '.join(body_names)})")
-    return Load(kind,
+    load = Load(kind,
                 vector3(spec["vector"], f"{where}.vector") if "vector" in spec else np.zeros(3),
                 real(spec["value"], f"{where}.value") if "value" in spec else 0.0,
                 string(spec["surface"], f"{where}.surface") if "surface" in spec else "",
                 bodies,
-                time_spec(spec.get("time"), f"{where}.time", ("constant", "sudden")))
+                time_spec(spec.get("time"), f"{where}.time", ("constant", "sudden"), base_dir))
+    if kind == "hydrostatic":
+        load.level = real(spec["level"], f"{where}.level")
+        load.unit_weight = real(spec["unit_weight"], f"{where}.unit_weight", ge=0)
+        axis = spec.get("axis", "z")
+        if not isinstance(axis, str) or axis not in COMPONENTS:
+            raise InputError(f"{where}.axis: expected x, y or z (the upward axis), got {axis!r}")
+        load.axis = COMPONENTS[axis]
+    return load
 
 
 def _analysis(value):

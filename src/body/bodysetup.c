@@ -45,6 +45,10 @@ static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
   PetscScalar c[MBC_NUM_CONSTANTS] = {0};
 
   PetscFunctionBegin;
+  if (load->kind == MBC_LOAD_HYDROSTATIC) { /* a linear field cut at the level: integrated by hand */
+    PetscCall(MBCBodyAssembleHydrostatic(body, load, F));
+    PetscFunctionReturn(0);
+  }
   c[0] = body->lambda;
   c[1] = body->mu;
   for (PetscInt d = 0; d < 3; d++) c[2 + d] = load->vector[d];
@@ -104,6 +108,48 @@ PetscErrorCode MBCBodyAssembleLoads(MBCBody body)
     PetscCall(BodyAssembleLoad(body, load, body->load[body->nloads]));
     body->load_index[body->nloads++] = l;
   }
+  PetscFunctionReturn(0);
+}
+
+/* This rank's share of the resultant force and moment about the origin of the body's load i
+   (unit time factor): sums over the owned vertices, r = (F, x x F). */
+PetscErrorCode MBCBodyLoadResultant(MBCBody body, PetscInt i, PetscReal r[6])
+{
+  DM                 cdm;
+  PetscSection       csec, lsec, gsec;
+  Vec                coords, Floc;
+  const PetscScalar *x, *f;
+  PetscInt           vStart, vEnd;
+
+  PetscFunctionBegin;
+  PetscCall(PetscArrayzero(r, 6));
+  PetscCall(DMGetCoordinateDM(body->dm, &cdm));
+  PetscCall(DMGetLocalSection(cdm, &csec));
+  PetscCall(DMGetLocalSection(body->dm, &lsec));
+  PetscCall(DMGetGlobalSection(body->dm, &gsec));
+  PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
+  PetscCall(DMGetLocalVector(body->dm, &Floc));
+  PetscCall(DMGlobalToLocal(body->dm, body->load[i], INSERT_VALUES, Floc));
+  PetscCall(VecGetArrayRead(coords, &x));
+  PetscCall(VecGetArrayRead(Floc, &f));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  for (PetscInt v = vStart; v < vEnd; v++) {
+    PetscInt goff, off, coff;
+    PetscCall(PetscSectionGetOffset(gsec, v, &goff));
+    if (goff < 0) continue; /* owned by another rank */
+    PetscCall(PetscSectionGetOffset(lsec, v, &off));
+    PetscCall(PetscSectionGetOffset(csec, v, &coff));
+    {
+      const PetscReal *X = (const PetscReal *)&x[coff], F[3] = {PetscRealPart(f[off]), PetscRealPart(f[off + 1]), PetscRealPart(f[off + 2])};
+      for (PetscInt c = 0; c < 3; c++) r[c] += F[c];
+      r[3] += X[1] * F[2] - X[2] * F[1];
+      r[4] += X[2] * F[0] - X[0] * F[2];
+      r[5] += X[0] * F[1] - X[1] * F[0];
+    }
+  }
+  PetscCall(VecRestoreArrayRead(Floc, &f));
+  PetscCall(VecRestoreArrayRead(coords, &x));
+  PetscCall(DMRestoreLocalVector(body->dm, &Floc));
   PetscFunctionReturn(0);
 }
 

@@ -6,7 +6,7 @@
 const char *const MBCAnalysisTypes[] = {"static", "dynamic", "MBCAnalysisType", "MBC_ANALYSIS_", NULL};
 const char *const MBCMassTypes[]     = {"consistent", "lumped", "MBCMassType", "MBC_MASS_", NULL};
 const char *const MBCTimeKinds[]     = {"constant", "sudden", "table", "MBCTimeKind", "MBC_TIME_", NULL};
-const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "MBCLoadKind", "MBC_LOAD_", NULL};
+const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "MBCLoadKind", "MBC_LOAD_", NULL};
 
 typedef struct {
   const char *file;
@@ -150,7 +150,14 @@ static PetscErrorCode H5ReadEnum(H5Node *node, const char *name, const char *con
       break;
     }
   }
-  PetscCheck(found, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s of %s is '%s', not one of %s%s%s%s%s%s%s", node->file, name, node->path, s, list[0], n > 1 ? ", " : "", n > 1 ? list[1] : "", n > 2 ? ", " : "", n > 2 ? list[2] : "", n > 3 ? ", " : "", n > 3 ? list[3] : "");
+  if (!found) {
+    char choices[MBC_NAME_LEN] = "";
+    for (PetscInt i = 0; i < n; i++) {
+      if (i) PetscCall(PetscStrlcat(choices, ", ", sizeof(choices)));
+      PetscCall(PetscStrlcat(choices, list[i], sizeof(choices)));
+    }
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s of %s is '%s', not one of %s", node->file, name, node->path, s, choices);
+  }
   PetscFunctionReturn(0);
 }
 
@@ -406,7 +413,14 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCall(H5ReadInt(&e, "surface_id", &l->surface_id, PETSC_TRUE));
     PetscCall(H5ReadString(&e, "bodies", NULL, 0, &l->bodies, PETSC_TRUE));
     PetscCall(ReadTimeKind(&e, s, &l->time, &l->time_function));
-    if (l->kind == MBC_LOAD_PRESSURE || l->kind == MBC_LOAD_TRACTION) PetscCheck(l->surface_id >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s load %s needs a surface", s->filename, MBCLoadKinds[l->kind], e.path);
+    if (l->kind == MBC_LOAD_PRESSURE || l->kind == MBC_LOAD_TRACTION || l->kind == MBC_LOAD_HYDROSTATIC) PetscCheck(l->surface_id >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s load %s needs a surface", s->filename, MBCLoadKinds[l->kind], e.path);
+    if (l->kind == MBC_LOAD_HYDROSTATIC) {
+      PetscCall(H5ReadReal(&e, "level", &l->level, PETSC_FALSE));
+      PetscCall(H5ReadReal(&e, "unit_weight", &l->unit_weight, PETSC_FALSE));
+      PetscCall(H5ReadInt(&e, "axis", &l->axis, PETSC_FALSE));
+      PetscCheck(l->axis >= 0 && l->axis < 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: hydrostatic load %s has axis %" PetscInt_FMT ", not 0, 1 or 2", s->filename, e.path, l->axis);
+      PetscCheck(l->unit_weight >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: hydrostatic load %s has unit weight %g < 0", s->filename, e.path, (double)l->unit_weight);
+    }
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -528,7 +542,8 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
   for (PetscInt i = 0; i < s->ndirichlet; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed u%c = %g on %s (%s)\n", "xyz"[s->dirichlet[i].component], (double)s->dirichlet[i].value, s->dirichlet[i].surface, MBCTimeKinds[s->dirichlet[i].time]));
   for (PetscInt i = 0; i < s->nloads; i++) {
     MBCLoadDesc *l = &s->loads[i];
-    PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
+    if (l->kind == MBC_LOAD_HYDROSTATIC) PetscCall(PetscViewerASCIIPrintf(viewer, "load hydrostatic on %s: unit weight %g, level %c = %g (%s)\n", l->surface, (double)l->unit_weight, "xyz"[l->axis], (double)l->level, MBCTimeKinds[l->time]));
+    else PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
   }
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);

@@ -537,6 +537,16 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
     }
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_MAX, s->comm));
     PetscCall(PetscViewerASCIIPrintf(viewer, "  body %s: ranks %d-%d, %" PetscInt_FMT " DOFs, %" PetscInt_FMT " prescribed\n", s->scene->bodies[b].name, s->body_first_rank[b], s->body_first_rank[b] + s->body_nranks[b] - 1, ndof, nbc));
+    for (PetscInt l = 0; l < s->scene->nloads; l++) { /* what each load amounts to, to check a scene against hand values */
+      PetscReal r[7] = {0, 0, 0, 0, 0, 0, 0};
+      for (PetscInt i = 0; s->bodies[b] && i < s->bodies[b]->nloads; i++)
+        if (s->bodies[b]->load_index[i] == l) {
+          PetscCall(MBCBodyLoadResultant(s->bodies[b], i, r));
+          r[6] = 1;
+        }
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, r, 7, MPIU_REAL, MPIU_SUM, s->comm));
+      if (r[6] > 0) PetscCall(PetscViewerASCIIPrintf(viewer, "    load %" PetscInt_FMT " (%s): resultant %.10e %.10e %.10e, moment about the origin %.10e %.10e %.10e\n", l, MBCLoadKinds[s->scene->loads[l].kind], (double)r[0], (double)r[1], (double)r[2], (double)r[3], (double)r[4], (double)r[5]));
+    }
   }
   PetscFunctionReturn(0);
 }

@@ -300,6 +300,7 @@ def setter(*path, value=None, delete=False):
 
 
 MATERIAL = ("bodies", "block1", "material")
+HYDROSTATIC = {"kind": "hydrostatic", "surface": "b2_xmax", "level": 1.5, "unit_weight": 9810.0}
 SCENE_ERRORS = [
     ("unknown top key", setter("bodys", value={}), ["bodys", "unknown key"]),
     ("unknown nested key", setter(*MATERIAL, "Young", value=1), ["material.Young"]),
@@ -344,6 +345,13 @@ SCENE_ERRORS = [
     ("surface off bodies", lambda s: [s["bodies"].pop("block2"), s["loads"].pop(0),
                                       s["output"].pop("points")], ["'b2_zmin'", "k=1", "boundary"]),
     ("master is slave", setter("couples", 0, "slave", value="b1_zmax"), ["k=1", "master", "slave"]),
+    ("hydrostatic level", setter("loads", 2, value={"kind": "hydrostatic", "surface": "b2_xmax", "unit_weight": 9810.0}),
+     ["loads[2]", "'level'"]),
+    ("hydrostatic unit weight", setter("loads", 2, value=HYDROSTATIC | {"unit_weight": -1.0}), ["loads[2].unit_weight", ">= 0"]),
+    ("hydrostatic axis", setter("loads", 2, value=HYDROSTATIC | {"axis": "up"}), ["loads[2].axis", "'up'"]),
+    ("hydrostatic value", setter("loads", 2, value=HYDROSTATIC | {"value": 1.0}), ["loads[2].value", "unknown key"]),
+    ("time csv absent", setter("loads", 3, "time", value={"csv": "nothere.csv"}), ["loads[3].time.csv", "nothere.csv"]),
+    ("time csv key", setter("loads", 3, "time", value={"csv": "a.csv", "scale": 2}), ["loads[3].time.scale", "unknown key"]),
 ]
 
 
@@ -362,6 +370,39 @@ def assert_error(result, expected):
     assert "Traceback" not in err
     for piece in expected:
         assert piece in err, f"{piece!r} not in {err!r}"
+
+
+CSV_ERRORS = [
+    ("t,factor\n0,0\n1,x\n", ["line 3", "two numbers"]),
+    ("0,0\n1,1,2\n", ["line 2", "two columns"]),
+    ("0,0\n0,1\n", ["line 2", "increasing"]),
+    ("0,0\n1,nan\n", ["line 2", "finite"]),
+    ("# only a comment\n", ["no 't, factor' rows"]),
+]
+
+
+@pytest.mark.parametrize("text, expected", CSV_ERRORS, ids=["text", "columns", "order", "nan", "empty"])
+def test_time_csv_errors(case, text, expected):
+    """A bad `time: {csv: FILE}` names the key path, the file and the line."""
+    (case.dir / "record.csv").write_text(text)
+    scene = base_scene()
+    scene["loads"][3]["time"] = {"csv": "record.csv"}
+    assert_error(case(scene), ["loads[3].time.csv", "record.csv"] + expected)
+
+
+def test_hydrostatic_and_csv_written(case):
+    """A hydrostatic load's level, unit weight and axis, and a CSV time table (shifted), in the file."""
+    (case.dir / "record.csv").write_text("time [s]; a [m/s2]\n0; 0\n0.01; 0.5\n0.02; -0.25\n")
+    scene = base_scene()
+    scene["loads"][2] = HYDROSTATIC | {"axis": "y"}
+    scene["loads"][3]["time"] = {"csv": "record.csv", "shift": 2.0}
+    status, _, err = case(scene)
+    assert status == 0, err
+    with h5py.File(case.dir / "scene.h5", "r") as f:
+        loads = read_list(f["mbcontact/loads"])
+        assert (loads[2]["kind"], loads[2]["level"], loads[2]["unit_weight"], loads[2]["axis"]) == ("hydrostatic", 1.5, 9810.0, 1)
+        assert loads[2]["axis"].dtype == np.int32 and "level" not in loads[3]
+        assert np.array_equal(f["mbcontact/time_functions/1/table"][()], [[2, 0], [2.01, 0.5], [2.02, -0.25]])
 
 
 def test_missing_scene_file(tmp_path):

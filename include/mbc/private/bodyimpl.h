@@ -46,6 +46,8 @@ PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, MBCBody 
 PETSC_INTERN PetscErrorCode MBCBodySetUp(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyDestroy(MBCBody *);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleLoads(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody, MBCLoadDesc *, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyLoadResultant(MBCBody, PetscInt, PetscReal[6]);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleElasticity(MBCBody, Mat, Mat);
 PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);
 PETSC_INTERN PetscErrorCode MBCBodyExternalForce(MBCBody, PetscReal, PetscBool, Vec);

@@ -18,7 +18,8 @@ typedef enum {
   MBC_LOAD_GRAVITY,
   MBC_LOAD_BODY_FORCE,
   MBC_LOAD_PRESSURE,
-  MBC_LOAD_TRACTION
+  MBC_LOAD_TRACTION,
+  MBC_LOAD_HYDROSTATIC /* p = unit_weight (level - x_axis) below the level, against the outward normal */
 } MBCLoadKind;
 PETSC_INTERN const char *const MBCLoadKinds[];
 
@@ -55,6 +56,8 @@ typedef struct {
 typedef struct {
   MBCLoadKind kind;
   PetscReal   vector[3], value;
+  PetscReal   level, unit_weight; /* hydrostatic */
+  PetscInt    axis;               /* hydrostatic: 0, 1, 2 for x, y, z (up) */
   char        surface[MBC_NAME_LEN];
   PetscInt    surface_id, time_function;
   char       *bodies; /* body names joined by ",", "" for all */

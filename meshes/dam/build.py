@@ -1,0 +1,403 @@
+#!/usr/bin/python3
+"""A concrete gravity dam of several monoliths on a rock foundation (docs/dam.md).
+
+Axes: x downstream (the upstream face is x = 0), y along the dam axis, z up (the foundation's top
+is z = 0). Every monolith is a body with a gravity-dam cross-section: vertical upstream face,
+crest of width `crest`, downstream face of slope `slope` (H:V) from the knee down to the toe,
+base width B = crest + slope z_knee (z_knee = H - crest / slope). Neighbouring monoliths touch at
+contraction joints (couples 2, 3, ..., friction `mu_joint`); the monoliths' bases rest on the
+foundation block (couple 1, friction `mu_base`). The foundation extends `upstream` H upstream,
+`downstream` H downstream, `abutment` H beyond the end monoliths and `depth` H down, graded away
+from the dam; its bottom is fixed, its sides on rollers (`sides`). Loads: the monoliths'
+self-weight (the foundation's own weight is its in-situ state and is left out), the reservoir's
+hydrostatic pressure on the upstream faces and on the reservoir floor (level `level`), and in a
+dynamic analysis a horizontal ground acceleration record along x in the relative-motion form
+(body force -density a_g(t) on every body; meshes/dam/ground_motion.csv, made by
+ground_motion.py), after the static loads are ramped.
+
+Meshes are structured hex8, one vertex set per body (like meshgen.boxes), vectorised numpy. The
+interfaces do not match on purpose (layout()): the monoliths' base faces are the master side
+(their nodes carry the contact points) over a finer foundation surface that reaches beyond the
+footprint; at a joint the odd (coarser) monolith is the master, its border rows left out so
+every master node lies inside the slave face. Size: element size `h`, or `target_dofs` (a few
+thousand to millions).
+
+  meshes/dam/build.py OUTDIR [--h 5 | --dofs 1e6] [--monoliths 4] [--mu-base 0.8] [--mu-joint 0.8]
+                      [--level 95] [--dynamic [--eq-duration 20] | --quasi-static] [--[no-]joints] [--binary]
+
+writes dam.msh, dam.yaml, dam.json (parameters, W, T for report.py), ground_motion.csv when
+dynamic, and dam.h5 (mbcontact-prep); then
+  build/mbcontact -scene OUTDIR/dam.h5 && meshes/dam/report.py OUTDIR/dam_result
+"""
+import argparse
+import json
+import os
+import shutil
+import sys
+import time
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "python"))
+from mbcontact import meshgen  # noqa: E402
+from mbcontact.cells import min_corner_volume  # noqa: E402
+from mbcontact.prep import prepare  # noqa: E402
+
+G = 9.81
+WATER = 9810.0  # unit weight of water, N/m3
+RECORD = os.path.join(HERE, "ground_motion.csv")
+
+
+@dataclass
+class Dam:
+    """Parameters (SI units). Lengths in m; upstream, downstream, depth in units of the height."""
+    monoliths: int = 4
+    height: float = 100.0
+    crest: float = 8.0
+    slope: float = 0.78           # downstream face, horizontal : vertical
+    width: float = 20.0           # of a monolith along the dam axis (joint spacing)
+    upstream: float = 1.0         # foundation extent upstream of the heel / height
+    downstream: float = 1.5       # downstream of the toe / height
+    depth: float = 1.0            # / height
+    abutment: float = 0.25        # beyond each end monolith along the axis / height
+    h: float = 5.0                # element size in the dam and under it
+    growth: float = 1.3           # foundation grading away from the dam
+    hmax: float = 0.0             # largest foundation element (0: 4 h)
+    level: float = 0.0            # reservoir level above the base (0: 0.95 height)
+    mu_base: float = 0.8
+    mu_joint: float = 0.8
+    ring: int = 2                 # foundation contact surface: elements beyond the dam's footprint
+    joints: bool = None           # contraction joints as contact couples (default: dynamic only, docs/dam.md)
+    joint_base_rows: int = 1      # element rows above the base left out of the joint surfaces (see monolith())
+    sides: str = "normal"         # foundation sides: normal (rollers) | all | none
+    floor: bool = True            # hydrostatic pressure on the reservoir floor too
+    E: float = 25e9               # concrete
+    nu: float = 0.2
+    density: float = 2400.0
+    rock_E: float = 20e9
+    rock_nu: float = 0.25
+    rock_density: float = 2700.0  # used by dynamic analyses only (no rock self-weight)
+
+    @property
+    def z_knee(self):
+        return self.height - self.crest / self.slope
+
+    @property
+    def base(self):
+        return self.crest + self.slope * self.z_knee
+
+    @property
+    def water(self):
+        return self.level if self.level > 0 else 0.95 * self.height
+
+    def section_area(self):
+        return self.crest * self.height + 0.5 * (self.base - self.crest) * self.z_knee
+
+    def weight(self):
+        """Self-weight of one monolith, N."""
+        return self.density * G * self.section_area() * self.width
+
+    def thrust(self):
+        """Hydrostatic thrust on one monolith's upstream face, N."""
+        return WATER * min(self.water, self.height) ** 2 / 2 * self.width
+
+    def check(self):
+        if self.monoliths < 1 or self.height <= 0 or self.width <= 0 or self.h <= 0:
+            raise ValueError("monoliths >= 1, height, width and h > 0 needed")
+        if not (0 < self.crest and 0 < self.slope and self.z_knee > 0):
+            raise ValueError(f"crest {self.crest} and slope {self.slope}: the downstream face must start below "
+                             f"the crest (crest / slope < height)")
+        if self.sides not in ("normal", "all", "none"):
+            raise ValueError(f"sides must be normal, all or none, got {self.sides!r}")
+        return self
+
+
+def graded(h0, length, growth, hmax):
+    """Node offsets 0 .. length: steps h0, h0 growth, ... capped at hmax; the steps are scaled
+    (by less than half a step overall) so the last node lands on length."""
+    steps, total = [], 0.0
+    while total < length - 1e-9 * length:
+        steps.append(min(h0 * growth ** len(steps), hmax))
+        total += steps[-1]
+    if len(steps) > 1 and total - length > 0.5 * steps[-1]:
+        total -= steps.pop()
+    return np.concatenate([[0.0], np.cumsum(steps) * length / total])
+
+
+def divisions(length, h):
+    return max(1, int(round(length / h)))
+
+
+def layout(p):
+    """The mesh axes. The interfaces do not match: odd monoliths have nx x ny x nz elements, even
+    ones one more along x and z (a joint pairs a coarser master with a finer slave), and the
+    foundation under the dam is finer than both, with no node on a joint line. A master node
+    then projects into a slave face rather than onto a vertex shared by four, whose choice
+    flips with rounding from step to step and makes the solver rebuild D."""
+    hmax = p.hmax or 4 * p.h
+    nz1, nz2 = divisions(p.z_knee, p.h), divisions(p.height - p.z_knee, p.h)
+    nx, ny = max(2, divisions(p.base, p.h)), divisions(p.width, p.h)
+    mono = []
+    for k in range(1, p.monoliths + 1):
+        r = 1 - k % 2  # 0 for odd monoliths (masters of their joints), 1 for even ones
+        z = np.concatenate([np.linspace(0, p.z_knee, nz1 + r + 1), np.linspace(p.z_knee, p.height, nz2 + 1)[1:]])
+        mono.append(dict(nx=nx + r, ny=ny, z=z))
+    nfx = nx + 2
+    dx = p.base / nfx
+    up = graded(dx, p.upstream * p.height, p.growth, hmax)
+    down = graded(dx, p.downstream * p.height, p.growth, hmax)
+    fx = np.concatenate([-up[::-1], np.linspace(0, p.base, nfx + 1)[1:], p.base + down[1:]])
+    span, m = p.monoliths * p.width, p.monoliths * (ny + 1) - 1
+    ends = graded(span / m, p.abutment * p.height, p.growth, hmax) if p.abutment > 0 else np.zeros(1)
+    fy = np.concatenate([-ends[::-1], np.linspace(0, span, m + 1)[1:], span + ends[1:]])
+    fz = -graded(mono[0]["z"][1], p.depth * p.height, p.growth, hmax)[::-1]
+    return dict(mono=mono, nx=nx, ny=ny, nz=nz1 + nz2, fx=fx, fy=fy, fz=fz)
+
+
+def count_dofs(p):
+    a = layout(p)
+    dams = sum((m["nx"] + 1) * (m["ny"] + 1) * len(m["z"]) for m in a["mono"])
+    return 3 * (dams + len(a["fx"]) * len(a["fy"]) * len(a["fz"]))
+
+
+def size_for_dofs(p, target):
+    """The element size whose mesh has the DOF count nearest to target (bisection on log h)."""
+    lo, hi = np.log(p.height / 2000), np.log(p.height)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if count_dofs(replace(p, h=np.exp(mid))) > target:
+            lo = mid
+        else:
+            hi = mid
+    candidates = [np.exp(lo), np.exp(hi)]
+    return min(candidates, key=lambda h: abs(count_dofs(replace(p, h=h)) - target))
+
+
+def _lattice(n):
+    """Integer lattice [0, n] as points (i fastest), hex8 cells and outward boundary faces per side."""
+    return meshgen._box_arrays((0, 0, 0), tuple(n), tuple(n), "hex8", 0.0, 0)
+
+
+def monolith(p, a, k):
+    """Points, cells and surfaces of monolith k (1-based): x = x_d(z) i / nx on every z level."""
+    m = a["mono"][k - 1]
+    ref, cells, sides = _lattice((m["nx"], m["ny"], len(m["z"]) - 1))
+    i, j, kz = ref[:, 0], ref[:, 1], ref[:, 2].astype(int)
+    z = m["z"][kz]
+    xd = np.where(z <= p.z_knee, p.crest + p.slope * (p.z_knee - z), p.crest)
+    points = np.stack([xd * i / m["nx"], (k - 1) * p.width + j * p.width / m["ny"], z], axis=1)
+    # Joint surfaces. The faces of the lowest rows are left out: a base node on a joint would
+    # carry a point of the base couple and one of the joint, and with the neighbour's base point
+    # the three constraints are linearly dependent (A_y - F_y, A_y - A'_y, A'_y - F_y for a
+    # foundation face F under both), which stalls the multiplier solve. On the master side (odd
+    # monoliths) the faces along the upstream, downstream and crest edges are left out too, so
+    # every master node lies inside the slave surface: a node on its border enters and leaves
+    # it with rounding-level motions, changing the contact pairs (and rebuilding D) every step.
+    rows = max(p.joint_base_rows, 0)
+    joint = {}
+    for side in ("ymin", "ymax"):
+        f = sides[side]
+        keep = ref[f][:, :, 2].min(axis=1) >= rows
+        if k % 2:
+            keep &= (ref[f][:, :, 0].min(axis=1) > 0) & (ref[f][:, :, 0].max(axis=1) < m["nx"]) & (ref[f][:, :, 2].max(axis=1) < len(m["z"]) - 1)
+        joint[side] = f[keep]
+    surfaces = {f"m{k}_base": sides["zmin"], f"m{k}_ymin": joint["ymin"], f"m{k}_ymax": joint["ymax"],
+                "upstream": sides["xmin"]}
+    return points, cells, surfaces
+
+
+def foundation(p, a):
+    """Points, cells and surfaces of the foundation block. Its top: the contact surface under the
+    dam with `ring` elements beyond the footprint on every side (a base node moved off the
+    footprint by a micrometre would lose its contact point), split into the wet part upstream of
+    the heel (heel_ring: also loaded by the water) and the dry rest (foundation_contact), the
+    reservoir floor upstream (floor) and the dry rest downstream (not a surface)."""
+    fx, fy, fz = a["fx"], a["fy"], a["fz"]
+    ref, cells, sides = _lattice((len(fx) - 1, len(fy) - 1, len(fz) - 1))
+    idx = ref.astype(int)
+    points = np.stack([fx[idx[:, 0]], fy[idx[:, 1]], fz[idx[:, 2]]], axis=1)
+    top = sides["zmax"]
+    cx, cy = points[top][:, :, 0].mean(axis=1), points[top][:, :, 1].mean(axis=1)
+
+    def beyond(axis, lo, hi):  # coordinates `ring` elements outside [lo, hi]
+        i, j = np.searchsorted(axis, lo - 1e-9 * abs(hi - lo)), np.searchsorted(axis, hi - 1e-9 * abs(hi - lo))
+        return axis[max(i - p.ring, 0)], axis[min(j + p.ring, len(axis) - 1)]
+
+    x0, x1 = beyond(fx, 0.0, p.base)
+    y0, y1 = beyond(fy, 0.0, p.monoliths * p.width)
+    footprint = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+    surfaces = {"foundation_contact": top[footprint & (cx > 0)], "heel_ring": top[footprint & (cx < 0)],
+                "floor": top[~footprint & (cx < 0)], "foundation_bottom": sides["zmin"],
+                "foundation_xsides": np.concatenate([sides["xmin"], sides["xmax"]]),
+                "foundation_ysides": np.concatenate([sides["ymin"], sides["ymax"]])}
+    return points, cells, surfaces
+
+
+def write_mesh(path, p, a, binary=False):
+    """All bodies into one Gmsh 2.2 file, each with its own vertices; a surface name used by
+    several bodies (upstream) is one region."""
+    parts = [(f"m{k}", *monolith(p, a, k)) for k in range(1, p.monoliths + 1)] + [("foundation", *foundation(p, a))]
+    points, regions, surfaces, offset = [], [], {}, 0
+    for name, pts, cells, surf in parts:
+        bad = np.count_nonzero(min_corner_volume("hex8", pts, cells) <= 0)
+        if bad:
+            raise ValueError(f"{name}: {bad} inverted or flat hex8 cells (crest {p.crest}, slope {p.slope}, h {p.h})")
+        points.append(pts)
+        regions.append((name, 3, "hexahedron", cells + offset))
+        for sname, faces in surf.items():
+            surfaces.setdefault(sname, []).append(faces + offset)
+        offset += len(pts)
+    regions += [(name, 2, "quad", np.concatenate(faces)) for name, faces in surfaces.items()]
+    meshgen._write_gmsh(path, np.concatenate(points), regions, binary=binary)
+    return offset
+
+
+def couple_names(p):
+    """{k: name} of the scene's couples: 1 the base, 1 + k the joint between monoliths k and k + 1."""
+    names = {1: "base"}
+    if p.joints:
+        names.update({1 + k: f"joint m{k}|m{k + 1}" for k in range(1, p.monoliths)})
+    return names
+
+
+def rayleigh(p, zeta=0.05, ratio=5.0):
+    """alpha, beta of C = alpha M + beta K giving zeta at the dam's first frequency (Fenves and
+    Chopra's estimate T1 = 1.4 H / sqrt(E) with H in ft and E in psi) and at ratio times it."""
+    t1 = 1.4 * (p.height / 0.3048) / np.sqrt(p.E / 6894.757)
+    w1 = 2 * np.pi / t1
+    w2 = ratio * w1
+    return float(2 * zeta * w1 * w2 / (w1 + w2)), float(2 * zeta / (w1 + w2))
+
+
+def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.0, record="ground_motion.csv",
+          every=10):
+    """The scene dict. Static: self-weight and water at once, one step, the monoliths held by
+    contact (static stabilisation). Dynamic: self-weight and water ramped over `ramp` s (bodies
+    held only by contact cannot take `constant` loads: docs/scene.md), the record from eq_start."""
+    n = p.monoliths
+    dams = [f"m{k}" for k in range(1, n + 1)]
+    concrete = {"E": p.E, "nu": p.nu, "density": p.density}
+    rock = {"E": p.rock_E, "nu": p.rock_nu}
+    if analysis == "dynamic":
+        alpha, beta = rayleigh(p)
+        concrete.update(rayleigh_alpha=alpha, rayleigh_beta=beta)
+        rock.update(density=p.rock_density, rayleigh_alpha=alpha, rayleigh_beta=beta)
+    bodies = {d: {"mesh": "m", "regions": d, "material": dict(concrete)} for d in dams}
+    bodies["foundation"] = {"mesh": "m", "regions": "foundation", "material": rock}
+    couples = [{"k": 1, "master": [f"m{k}_base" for k in range(1, n + 1)], "slave": ["foundation_contact", "heel_ring"],
+                "mu": p.mu_base}]
+    if p.joints:  # joint k between monoliths k and k + 1: the odd (coarser) one is the master
+        couples += [{"k": 1 + k, "master": f"m{k}_ymax" if k % 2 else f"m{k + 1}_ymin",
+                     "slave": f"m{k + 1}_ymin" if k % 2 else f"m{k}_ymax", "mu": p.mu_joint} for k in range(1, n)]
+    dirichlet = [{"surface": "foundation_bottom", "components": "all"}]
+    if p.sides == "normal":
+        dirichlet += [{"surface": "foundation_xsides", "components": ["x"]}, {"surface": "foundation_ysides", "components": ["y"]}]
+    elif p.sides == "all":
+        dirichlet += [{"surface": "foundation_xsides"}, {"surface": "foundation_ysides"}]
+    ramped = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else "constant"
+    loads = [{"kind": "gravity", "vector": [0, 0, -G], "bodies": dams, "time": ramped},
+             {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": ramped}]
+    if p.floor:
+        loads += [{"kind": "hydrostatic", "surface": name, "level": p.water, "unit_weight": WATER, "time": ramped}
+                  for name in ("floor", "heel_ring")]
+    mid = [(k - 0.5) * p.width for k in range(1, n + 1)]
+    points = {}
+    for k, y in enumerate(mid, start=1):
+        points[f"crest_m{k}"] = {"x": [0, y, p.height], "body": f"m{k}"}
+        points[f"heel_m{k}"] = {"x": [0, y, 0], "body": f"m{k}"}
+        points[f"toe_m{k}"] = {"x": [p.base, y, 0], "body": f"m{k}"}
+    out = {"title": f"gravity dam: {n} monoliths, H = {p.height:g} m, {analysis}",
+           "meshes": {"m": "dam.msh"}, "bodies": bodies, "couples": couples, "dirichlet": dirichlet, "loads": loads,
+           "output": {"fields": ["displacement", "stress"], "points": points}}
+    if analysis == "dynamic":
+        loads.append({"kind": "gravity", "vector": [-1.0, 0, 0], "time": {"csv": record, "shift": eq_start}})
+        out["analysis"] = {"type": "dynamic", "dt": dt, "final_time": eq_start + eq_duration,
+                           "newmark": {"beta": 0.3025, "gamma": 0.6}}
+        out["output"]["every"] = every
+    else:
+        out["analysis"] = {"type": "static"}
+    return out
+
+
+def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, dt=0.01, ramp=1.0, eq_start=2.0,
+          eq_duration=20.0, record_from=0.0, every=10, **params):
+    """Writes OUTDIR/dam.msh, dam.yaml, dam.h5 (and the record for a dynamic analysis); returns
+    the scene file. params: the fields of Dam; target_dofs overrides h. Dynamic: the loads are
+    ramped over `ramp` s, the record starts at eq_start and runs eq_duration s; record_from > 0
+    copies the record from that time on (its first value set to 0: from rest), to put a short
+    run into the strong motion. build.info (also OUTDIR/dam.json) holds the parameters, DOF
+    count, weight, thrust and times of the last call."""
+    p = Dam(**params).check()
+    if p.joints is None:  # a static analysis with contact between two bodies held only by contact does not converge yet
+        p = replace(p, joints=analysis == "dynamic")
+    if target_dofs:
+        p = replace(p, h=size_for_dofs(p, target_dofs))
+    os.makedirs(outdir, exist_ok=True)
+    a = layout(p)
+    dofs = count_dofs(p)
+    binary = dofs > 200000 if binary is None else binary
+    t0 = time.perf_counter()
+    vertices = write_mesh(os.path.join(outdir, "dam.msh"), p, a, binary)
+    t1 = time.perf_counter()
+    record = "ground_motion.csv"
+    if analysis == "dynamic" and record_from > 0:
+        with open(RECORD) as f:
+            rows = [line for line in f if line[:1] not in ("#", "t")]
+        data = np.array([r.split(",") for r in rows], dtype=float)
+        data = data[data[:, 0] >= record_from - 1e-9]
+        data[:, 0] -= data[0, 0]
+        data[0, 1] = 0.0
+        with open(os.path.join(outdir, record), "w") as f:
+            f.write(f"# meshes/dam/ground_motion.csv from t = {record_from:g} s, shifted to 0, starting from rest\nt,a_g\n")
+            f.write("".join(f"{t:.4f},{v:.7e}\n" for t, v in data))
+    elif analysis == "dynamic":
+        shutil.copy(RECORD, os.path.join(outdir, record))
+    h5 = prepare(outdir, "dam", scene(p, analysis, dt, ramp, eq_start, eq_duration, record, every))
+    t2 = time.perf_counter()
+    build.info = dict(params=asdict(p), analysis=analysis, dofs=dofs, vertices=vertices, h=p.h, nx=a["nx"], ny=a["ny"],
+                      nz=a["nz"], mesh_seconds=t1 - t0, prep_seconds=t2 - t1, weight=p.weight(), thrust=p.thrust(),
+                      couples=couple_names(p), eq_start=eq_start if analysis == "dynamic" else None)
+    with open(os.path.join(outdir, "dam.json"), "w") as f:  # for meshes/dam/report.py
+        json.dump(build.info, f, indent=1)
+    if not quiet:
+        print(f"{dofs} DOFs ({vertices} vertices), h = {p.h:.4g} m: monolith {a['nx']} x {a['ny']} x {a['nz']}, "
+              f"foundation {len(a['fx']) - 1} x {len(a['fy']) - 1} x {len(a['fz']) - 1}; mesh {t1 - t0:.1f} s, prep {t2 - t1:.1f} s")
+    return h5
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("outdir")
+    size = ap.add_mutually_exclusive_group()
+    size.add_argument("--h", type=float, help="element size in the dam, m (default 5)")
+    size.add_argument("--dofs", type=float, help="target number of DOFs instead of --h")
+    ap.add_argument("--monoliths", type=int, default=Dam.monoliths)
+    ap.add_argument("--height", type=float, default=Dam.height)
+    ap.add_argument("--crest", type=float, default=Dam.crest)
+    ap.add_argument("--slope", type=float, default=Dam.slope, help="downstream face H:V")
+    ap.add_argument("--width", type=float, default=Dam.width, help="monolith length along the axis")
+    ap.add_argument("--level", type=float, default=0.0, help="reservoir level above the base (default 0.95 height)")
+    ap.add_argument("--mu-base", type=float, default=Dam.mu_base)
+    ap.add_argument("--mu-joint", type=float, default=Dam.mu_joint)
+    ap.add_argument("--sides", choices=("normal", "all", "none"), default=Dam.sides)
+    ap.add_argument("--no-floor", action="store_true", help="no water pressure on the reservoir floor")
+    ap.add_argument("--dynamic", action="store_true", help="ramp the static loads, then the ground motion record")
+    ap.add_argument("--quasi-static", action="store_true",
+                    help="dynamic, the static loads ramped over 1 s and held to 2 s, no record: the static state "
+                         "with joints and partial slip (docs/dam.md)")
+    ap.add_argument("--eq-duration", type=float, default=20.0, help="s of the record to run")
+    ap.add_argument("--joints", action=argparse.BooleanOptionalAction, default=None,
+                    help="contraction joints as contact couples (default: in dynamic analyses only)")
+    ap.add_argument("--binary", action="store_true", default=None, help="binary Gmsh file (default above 200k DOFs)")
+    a = ap.parse_args()
+    params = dict(monoliths=a.monoliths, height=a.height, crest=a.crest, slope=a.slope, width=a.width, level=a.level,
+                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints)
+    if a.h:
+        params["h"] = a.h
+    extra = dict(dt=0.02, eq_duration=0.0) if a.quasi_static else dict(eq_duration=a.eq_duration)
+    h5 = build(a.outdir, "dynamic" if a.dynamic or a.quasi_static else "static", target_dofs=a.dofs, binary=a.binary,
+               quiet=False, **extra, **params)
+    print(h5)

@@ -1,0 +1,153 @@
+#!/usr/bin/python3
+"""Sliding and opening of the joints and the base of the dam (meshes/dam/build.py), from the
+solver's contact results (h5py only: never import petsc4py beside it).
+
+  meshes/dam/report.py OUTDIR/dam_result [--json]
+
+Per couple (the base, each joint), over the whole run and at the end: largest opening (gap) and
+sliding (accumulated tangential slip), the fractions of points open and slipping, the resultant
+force on the master side; for the base the vertical and horizontal resultants against the dam's
+weight W and the hydrostatic thrust T, and the sliding factor of safety mu W / T (design value)
+and mu N / |F_t| from the computed base resultant (its smallest value over a dynamic run). Per
+monolith (from the contact points of the last output) the base's opening and sliding.
+
+Everything per step comes from <prefix>_contact.csv; only the per-monolith split reads the
+per-point file, through contact_points() alone (the collective <prefix>.h5 or the older
+<prefix>_contact.h5).
+"""
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "python"))
+from mbcontact.results import read_csv  # noqa: E402
+
+
+def contact_points(prefix, step=-1):
+    """Per-point datasets of one output step (reference, gap, slip, state, couple, force, ...):
+    the only access to the per-point contact file. Reads the collective result file
+    `<prefix>.h5` (group /contact/step_<k>) where it has one, else `<prefix>_contact.h5`."""
+    import h5py
+
+    for path, group in ((prefix + ".h5", "contact"), (prefix + "_contact.h5", None)):
+        if not os.path.exists(path):
+            continue
+        with h5py.File(path, "r") as f:
+            if group and group not in f:
+                continue
+            parent = f[group] if group else f
+            names = sorted((n for n in parent if n.startswith("step_")), key=lambda n: int(n.split("_")[1]))
+            g = parent[names[step]]
+            out = {k: v[...] for k, v in g.items()}
+            out["time"] = float(g.attrs["time"])
+            return out
+    raise OSError(f"no contact points under {prefix} (.h5 or _contact.h5)")
+
+
+def scene_info(prefix):
+    """The parameters build.py wrote beside the scene (dam.json): loads, couples, friction."""
+    folder = os.path.dirname(os.path.abspath(prefix))
+    with open(os.path.join(folder, "dam.json")) as f:
+        info = json.load(f)
+    info["couples"] = {int(k): v for k, v in info["couples"].items()}
+    return info
+
+
+def couple_histories(prefix):
+    """{k: {column: array over the steps}} from the contact CSV."""
+    c = read_csv(prefix + "_contact.csv")
+    return {int(k): {name: col[c["couple"] == k] for name, col in c.items()} for k in np.unique(c["couple"])}
+
+
+def summarize(prefix):
+    """The report as a dict (see the module docstring)."""
+    info = scene_info(prefix)
+    p = info["params"]
+    n = p["monoliths"]
+    W, T = n * info["weight"], n * info["thrust"]
+    hist = couple_histories(prefix)
+    eq = info.get("eq_start")
+    out = {"dofs": info["dofs"], "analysis": info["analysis"], "weight": W, "thrust": T, "couples": {}}
+    for k, h in hist.items():
+        pts = np.maximum(h["points"], 1)
+        with np.errstate(invalid="ignore"):
+            slip = np.nan_to_num(h["max_slip"], nan=0.0)
+        row = {"name": info["couples"].get(k, f"couple {k}"),
+               "mu": p["mu_base"] if k == 1 else p["mu_joint"],
+               "points": int(h["points"][-1]),
+               "max_opening": float(np.max(h["max_opening"])), "max_sliding": float(np.max(slip)),
+               "final_opening": float(h["max_opening"][-1]), "final_sliding": float(slip[-1]),
+               "open_fraction": float(h["separated"][-1] / pts[-1]), "slip_fraction": float(h["slip"][-1] / pts[-1]),
+               "max_open_fraction": float(np.max(h["separated"] / pts)), "max_slip_fraction": float(np.max(h["slip"] / pts)),
+               "force": [float(h["fx"][-1]), float(h["fy"][-1]), float(h["fz"][-1])],
+               "normal_force": float(h["normal_force"][-1])}
+        if k == 1:
+            N, Ft = h["fz"], np.hypot(h["fx"], h["fy"])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                fs = np.where(Ft > 0, row["mu"] * N / Ft, np.inf)
+            during = h["t"] >= eq if eq is not None else np.ones_like(N, bool)
+            row.update(vertical_over_weight=float(N[-1] / W), horizontal_over_thrust=float(-h["fx"][-1] / T),
+                       design_safety=row["mu"] * W / T, safety_final=float(fs[-1]),
+                       safety_min=float(np.min(fs[during])) if during.any() else float(fs[-1]),
+                       safety_min_time=float(h["t"][during][np.argmin(fs[during])]) if during.any() else float(h["t"][-1]))
+        out["couples"][k] = row
+    out["monoliths"] = _per_monolith(prefix, p)
+    return out
+
+
+def _per_monolith(prefix, p):
+    """Base opening and sliding per monolith at the last output, from the contact points of the
+    base couple: a point belongs to the monolith whose span holds its reference y (points on a
+    joint line, one per neighbour, count for both)."""
+    try:
+        pts = contact_points(prefix)
+    except (OSError, KeyError, IndexError):
+        return []
+    base = pts["couple"].reshape(-1) == 1
+    y = pts["reference"][base][:, 1]
+    gap, state = pts["gap"].reshape(-1)[base], pts["state"].reshape(-1)[base]
+    slip = np.linalg.norm(np.nan_to_num(pts["slip"][base]), axis=1)
+    rows = []
+    for k in range(1, p["monoliths"] + 1):
+        lo, hi = (k - 1) * p["width"], k * p["width"]
+        m = (y >= lo - 1e-9 * hi) & (y <= hi + 1e-9 * hi)
+        rows.append({"monolith": k, "points": int(m.sum()), "max_opening": float(gap[m].max()) if m.any() else 0.0,
+                     "max_sliding": float(slip[m].max()) if m.any() else 0.0,
+                     "open_fraction": float(np.mean(state[m] == 0)) if m.any() else 0.0,
+                     "slip_fraction": float(np.mean(state[m] == 2)) if m.any() else 0.0})
+    return rows
+
+
+def text(r):
+    lines = [f"dam: {len(r['monoliths']) or '?'} monoliths, {r['dofs']} DOFs, {r['analysis']} analysis; "
+             f"W = {r['weight']:.6e} N, T = {r['thrust']:.6e} N (W / T = {r['weight'] / r['thrust']:.3f})",
+             f"{'couple':<16} {'mu':>5} {'points':>6} {'max open [m]':>13} {'max slide [m]':>14} "
+             f"{'open %':>7} {'slip %':>7} {'Fx [N]':>13} {'Fy [N]':>13} {'Fz [N]':>13}"]
+    for k, c in sorted(r["couples"].items()):
+        lines.append(f"{c['name']:<16} {c['mu']:5.2f} {c['points']:6d} {c['max_opening']:13.4e} {c['max_sliding']:14.4e} "
+                     f"{100 * c['open_fraction']:7.1f} {100 * c['slip_fraction']:7.1f} "
+                     f"{c['force'][0]:13.5e} {c['force'][1]:13.5e} {c['force'][2]:13.5e}")
+    b = r["couples"].get(1)
+    if b:
+        lines += [f"base: vertical resultant / W = {b['vertical_over_weight']:.6f}, horizontal / T = {b['horizontal_over_thrust']:.6f}",
+                  f"sliding factor of safety: design mu W / T = {b['design_safety']:.3f}; computed mu N / |F_t| = "
+                  f"{b['safety_final']:.3f} at the end, {b['safety_min']:.3f} at its smallest (t = {b['safety_min_time']:.3f} s)"]
+    if r["monoliths"]:
+        lines.append(f"{'monolith':<9} {'points':>6} {'base open [m]':>14} {'base slide [m]':>15} {'open %':>7} {'slip %':>7}  (last output)")
+        for m in r["monoliths"]:
+            lines.append(f"m{m['monolith']:<8} {m['points']:6d} {m['max_opening']:14.4e} {m['max_sliding']:15.4e} "
+                         f"{100 * m['open_fraction']:7.1f} {100 * m['slip_fraction']:7.1f}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("prefix", help="result prefix, e.g. OUTDIR/dam_result")
+    ap.add_argument("--json", action="store_true", help="print the report as JSON")
+    a = ap.parse_args()
+    r = summarize(a.prefix)
+    print(json.dumps(r, indent=1) if a.json else text(r))
