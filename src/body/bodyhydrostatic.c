@@ -140,7 +140,7 @@ PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody body, MBCLoadDesc *load, Vec F
   PetscCall(VecZeroEntries(F));
   PetscCall(DMGetLabel(dm, "Face Sets", &label));
   if (label) PetscCall(DMLabelGetStratumIS(label, load->surface_id, &faceIS));
-  if (!faceIS) PetscFunctionReturn(0);
+  /* no early return for a rank without wet faces: the coordinates and DMLocalToGlobal() are collective */
   PetscCall(DMGetCoordinateDM(dm, &cdm));
   PetscCall(DMGetLocalSection(cdm, &csec));
   PetscCall(DMGetLocalSection(dm, &lsec));
@@ -155,8 +155,10 @@ PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody body, MBCLoadDesc *load, Vec F
   PetscCall(VecZeroEntries(Floc));
   PetscCall(VecGetArray(Floc, &fl));
   PetscCall(VecGetArrayRead(coords, &x));
-  PetscCall(ISGetLocalSize(faceIS, &nfaces));
-  PetscCall(ISGetIndices(faceIS, &faces));
+  nfaces = 0;
+  faces  = NULL;
+  if (faceIS) PetscCall(ISGetLocalSize(faceIS, &nfaces));
+  if (faceIS) PetscCall(ISGetIndices(faceIS, &faces));
   for (PetscInt fi = 0; fi < nfaces; fi++) {
     const PetscInt  face = faces[fi];
     PetscInt       *closure = NULL, nclosure, nv = 0, vert[4], ns, ncv = 0;
@@ -219,7 +221,7 @@ PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody body, MBCLoadDesc *load, Vec F
       for (PetscInt c = 0; c < 3; c++) fl[off + c] += f[v][c];
     }
   }
-  PetscCall(ISRestoreIndices(faceIS, &faces));
+  if (faceIS) PetscCall(ISRestoreIndices(faceIS, &faces));
   PetscCall(ISDestroy(&faceIS));
   PetscCall(VecRestoreArrayRead(coords, &x));
   PetscCall(VecRestoreArray(Floc, &fl));
