@@ -1,0 +1,181 @@
+#!/usr/bin/python3
+"""The dam scene (meshes/dam/build.py, static analysis, no joints) against its size: DOFs, contact
+points, multipliers, run time split by phase (-log_view events: assembly, factorization, search,
+D = H^T A^-1 H, PGS, body solves, output), wall time, peak RSS of the solver (os.wait4 of the
+child: on P ranks, the mpirun process tree's largest single process), and the load average;
+then a strong-scaling table 1 -> 2 ranks at one size. Writes docs/dam_bench.png (time per phase
+against DOFs, log-log).
+
+The builder's full defaults (water at 0.95 H, mu 0.8) end in DIVERGED_ITS in a static analysis
+(docs/dam.md, "Analyses"); by default this bench uses the converging static case of the tests
+(water at 0.8 H, mu_base 1.0); --defaults runs the builder's defaults (the failed runs still
+report their phases up to the failure when -log_view prints).
+
+  bench/dam.py [--dofs 5e3 2e4 5e4 1e5] [--scaling 5e4] [--ranks 2] [--defaults] [--timeout 300]
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "meshes", "dam"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import build  # noqa: E402  (meshes/dam/build.py)
+import plot  # noqa: E402  (bench/plot.py)
+
+SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
+EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch"),
+          "D": "MBCFlexibilityAssemble", "PGS": "MBCPGSSolve", "solves": "MBCBodySolve", "output": "MBCOutput"}
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+STATIC_OK = dict(level=80.0, mu_base=1.0)  # the converging static case of tests/python/test_dam.py (height 100)
+
+
+def solve(h5, ranks=1, timeout=300, *options):
+    """Runs the solver; returns dict(wall, rss MiB, rc, phases..., points, multipliers, out)."""
+    cmd = [SOLVER, "-scene", h5, "-mbc_output", os.path.join(os.path.dirname(h5), f"out{ranks}"), "-log_view", "-mbc_view", "-mbc_monitor", *options]
+    if ranks > 1:
+        cmd = ["mpirun", "-n", str(ranks)] + cmd
+    t0 = time.perf_counter()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=ENV)
+    try:
+        out, _ = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, _ = p.communicate()
+        return dict(wall=time.perf_counter() - t0, rss=float("nan"), rc="timeout", out=out.decode(errors="replace"))
+    wall = time.perf_counter() - t0
+    import resource
+    rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # largest child so far (monotone)
+    out = out.decode(errors="replace")
+    r = dict(wall=wall, rss=rss, rc=p.returncode, out=out)
+    for name, ev in EVENTS.items():
+        total = 0.0
+        for e in ev if isinstance(ev, tuple) else (ev,):
+            m = re.search(rf"^{e}\s+\d+\s+\S+\s+(\S+)", out, re.M)
+            total += float(m.group(1)) if m else 0.0
+        r[name] = total
+    r["dofs"] = sum(int(d) for d in re.findall(r"(\d+) DOFs", out))
+    m = re.findall(r"(\d+) contact points", out)
+    r["points"] = int(m[-1]) if m else -1
+    m = re.findall(r"(\d+) multipliers", out)
+    r["mult"] = int(m[-1]) if m else -1
+    r["err"] = [l for l in out.splitlines() if re.search(r"DIVERGED|[Ee]rror|not converge", l) and "PGS CONVERGED" not in l][:3]
+    r["rebuilds"] = out.count("flexibility matrix rebuilt")
+    r["iters"] = len(re.findall(r"static iteration \d+:", out))
+    return r
+
+
+def fit(x, y):
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    ok = (y > 0) & np.isfinite(y)
+    if ok.sum() < 2:
+        return float("nan")
+    return float(np.polyfit(np.log(x[ok]), np.log(y[ok]), 1)[0])
+
+
+PH = ("assemble", "factor", "search", "D", "PGS", "solves", "output")
+
+
+def row(label, r, extra=""):
+    return (f"{label:>8} {r.get('dofs', 0):8d} {r.get('points', 0):6d} {r.get('mult', 0):6d} "
+            + " ".join(f"{r.get(k, float('nan')):8.3f}" for k in PH)
+            + f" {r['wall']:8.2f} {r['rss']:8.0f} {r['load']:5.2f} {str(r['rc']):>4} {r.get('rebuilds', 0):3d}/{r.get('iters', 0):<3d}{extra}")
+
+
+HEAD = (f"{'':>8} {'DOFs':>8} {'points':>6} {'mult':>6} " + " ".join(f"{k:>8}" for k in PH)
+        + f" {'wall':>8} {'RSS MiB':>8} {'load':>5} {'rc':>4} D/it")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dofs", type=float, nargs="+", default=[5e3, 2e4, 5e4, 1e5])
+    ap.add_argument("--scaling", type=float, default=5e4, help="size of the 1 -> P ranks table (0: none)")
+    ap.add_argument("--ranks", type=int, default=2)
+    ap.add_argument("--defaults", action="store_true", help="the builder's defaults (water 0.95 H, mu 0.8: DIVERGED_ITS)")
+    ap.add_argument("--timeout", type=float, default=300)
+    ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "dam_bench.png"))
+    ap.add_argument("--json", default=None, help="also write the rows here")
+    ap.add_argument("--options", default="", help="extra solver options, e.g. '-mbc_pgs_rtol 1e-4'")
+    a = ap.parse_args()
+    params = {} if a.defaults else STATIC_OK
+    work = tempfile.mkdtemp(prefix="mbc_dam_")
+    print(f"dam, static, {'builder defaults' if a.defaults else 'water 0.8 H, mu_base 1.0'}, no joints; one rank; times [s] from -log_view; "
+          f"RSS: peak of the solver process; load: 1-min load average at the start")
+    print(f"{'target':>8}" + HEAD[8:], flush=True)
+    rows = []
+    for n in a.dofs:
+        d = os.path.join(work, f"d{int(n)}")
+        h5 = build.build(d, "static", target_dofs=int(n), **params)
+        # each size in its own python child so that RUSAGE_CHILDREN is this run's peak
+        r = child(h5, 1, a.timeout, a.options.split())
+        r["target"] = n
+        r["build_dofs"] = build.build.info["dofs"]
+        rows.append(r)
+        print(row(f"{n:.0e}", r), flush=True)
+        if r["rc"] != 0:
+            tail = "\n".join(r.get("err") or r["out"].strip().splitlines()[-3:])
+            print(f"   (exit {r['rc']}: {tail})", flush=True)
+        if r["rc"] == "timeout":
+            print(f"   stopped: over {a.timeout:.0f} s", flush=True)
+            break
+    # a run that ends in DIVERGED_ITS still prints -log_view (one rank): assembly, factorization,
+    # search and D are complete then; PGS, solves, output and wall are fitted on converged runs only
+    got = [r for r in rows if r.get("dofs", 0) > 0]
+    ok = [r for r in got if r["rc"] == 0]
+    FULL = ("assemble", "factor", "search", "D", "rss")
+    if len(got) >= 2:
+        print("\nfitted exponents (log-log least squares; assemble/factor/search/D/RSS over every size with -log_view, the rest over converged runs)")
+        for k in PH + ("wall", "rss"):
+            rr = got if k in FULL else ok
+            print(f"  {k:>8}: N^{fit([r['dofs'] for r in rr], [r[k] for r in rr]):.2f}   m^{fit([r['mult'] for r in rr], [r[k] for r in rr]):.2f}   ({len(rr)} sizes)")
+        print(f"  multipliers: N^{fit([r['dofs'] for r in got], [r['mult'] for r in got]):.2f}")
+        series = [(np.array([r["dofs"] for r in (got if k in FULL else ok)]), np.array([r[k] for r in (got if k in FULL else ok)]), s, k)
+                  for k, s in zip(PH, ("o-", "s-", "^-", "d-", "v-", "<-", ">-"))]
+        plot.loglog(a.plot, "dam (static): time per phase against DOFs (1 rank)", "DOFs", series)
+    scal = []
+    if a.options:
+        print(f"solver options: {a.options}")
+    if a.scaling:
+        d = os.path.join(work, "scaling")
+        h5 = build.build(d, "static", target_dofs=int(a.scaling), **params)
+        print(f"\nstrong scaling at {build.build.info['dofs']} DOFs: 1 -> {a.ranks} ranks (speed-up = t1 / tP per phase)")
+        print(f"{'ranks':>8}" + HEAD[8:], flush=True)
+        for p in (1, a.ranks):
+            r = child(h5, p, a.timeout, a.options.split())
+            scal.append(r)
+            print(row(str(p), r), flush=True)
+            if r["rc"] != 0:
+                print("   " + "\n   ".join(r["out"].strip().splitlines()[-3:]), flush=True)
+        if all(r["rc"] == 0 for r in scal):
+            s1, s2 = scal
+            print(f"{'speed-up':>8} {'':8} {'':6} {'':6} " + " ".join(f"{(s1[k] / s2[k] if s2[k] > 0 else float('nan')):8.2f}" for k in PH)
+                  + f" {s1['wall'] / s2['wall']:8.2f}")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(dict(sizes=[{k: v for k, v in r.items() if k != "out"} for r in rows],
+                           scaling=[{k: v for k, v in r.items() if k != "out"} for r in scal]), f, indent=1)
+
+
+def child(h5, ranks, timeout, options=()):
+    """solve() in a fresh python process so that RUSAGE_CHILDREN.ru_maxrss is the peak of this run alone."""
+    load = os.getloadavg()[0]
+    code = (f"import sys, json; sys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r}); import dam; "
+            f"r = dam.solve({h5!r}, {ranks}, {timeout}, *{list(options)!r}); print('@@JSON@@' + json.dumps(r))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV)
+    j = p.stdout.rsplit("@@JSON@@", 1)
+    if len(j) < 2:
+        return dict(wall=float("nan"), rss=float("nan"), rc=f"py{p.returncode}", out=p.stdout + p.stderr, load=load)
+    r = json.loads(j[1])
+    r["load"] = load
+    return r
+
+
+if __name__ == "__main__":
+    main()
