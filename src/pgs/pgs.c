@@ -491,10 +491,8 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
     PetscCall(VecRestoreArray(rtry, &rv));
     PetscCall(MBCFrictionError(fp, rtry, u, &etry));
     PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", N, (double)*error, (double)etry));
-    if (etry < *error) {
-      PetscCall(VecCopy(rtry, r));
-      *error = etry;
-    } else PetscCall(MBCFrictionError(fp, r, u, &etry)); /* u back to the kept r */
+    PetscCall(VecCopy(rtry, r)); /* the caller keeps the best iterate */
+    *error = etry;
     PetscCall(VecDestroy(&rtry));
   }
   PetscCall(VecDestroy(&x));
@@ -569,11 +567,23 @@ PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
       /* a few active-set (semismooth Newton) steps while they pay; the first also counts the
          contacts closed in q as active: with a body held only by contact (static), D has a huge
          rigid-mode part and the Gauss-Seidel iterate leaves most of them unloaded */
-      for (PetscInt k = 0; k < 10 && pgs->error >= pgs->rtol; k++) {
-        const PetscReal before = pgs->error;
+      /* semismooth Newton: each step's split comes from the last step's iterate, not only from
+         improving ones (an active set that slips a few heel contacts may first raise the merit);
+         the best iterate is kept, and the steps stop after 3 without a new best */
+      Vec       rbest;
+      PetscReal ebest = pgs->error;
+      PetscCall(VecDuplicate(r, &rbest));
+      PetscCall(VecCopy(r, rbest));
+      for (PetscInt k = 0, stale = 0; k < 10 && stale < 3 && ebest >= pgs->rtol; k++) {
         PetscCall(ActiveSetStep(pgs, fp, r, u, (PetscBool)(k == 0 && pgs->its > 0), &pgs->error));
-        if (!(pgs->error < 0.5 * before)) break;
+        if (pgs->error < 0.5 * ebest) {
+          ebest = pgs->error, stale = 0;
+          PetscCall(VecCopy(r, rbest));
+        } else stale++;
       }
+      PetscCall(VecCopy(rbest, r));
+      PetscCall(VecDestroy(&rbest));
+      PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
     }
     if (pgs->monitor) PetscCall(PetscPrintf(PetscObjectComm((PetscObject)fp->W), "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
     if (PetscIsInfOrNanReal(pgs->error)) pgs->reason = MBC_PGS_DIVERGED_NANORINF;
