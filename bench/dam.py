@@ -29,6 +29,8 @@ sys.path.insert(0, os.path.join(ROOT, "meshes", "dam"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import build  # noqa: E402  (meshes/dam/build.py)
 import plot  # noqa: E402  (bench/plot.py)
+sys.path.insert(0, os.path.join(ROOT, "python"))
+from mbcontact.results import log_view_times  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch"),
@@ -55,12 +57,7 @@ def solve(h5, ranks=1, timeout=300, *options):
     rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # largest child so far (monotone)
     out = out.decode(errors="replace")
     r = dict(wall=wall, rss=rss, rc=p.returncode, out=out)
-    for name, ev in EVENTS.items():
-        total = 0.0
-        for e in ev if isinstance(ev, tuple) else (ev,):
-            m = re.search(rf"^{e}\s+\d+\s+\S+\s+(\S+)", out, re.M)
-            total += float(m.group(1)) if m else 0.0
-        r[name] = total
+    r.update(log_view_times(out, EVENTS))
     r["dofs"] = sum(int(d) for d in re.findall(r"(\d+) DOFs", out))
     m = re.findall(r"(\d+) contact points", out)
     r["points"] = int(m[-1]) if m else -1

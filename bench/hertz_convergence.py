@@ -31,6 +31,7 @@ import build  # noqa: E402  (meshes/hertz/build.py)
 import plot  # noqa: E402  (bench/plot.py)
 import report  # noqa: E402  (meshes/hertz/report.py)
 from mbcontact.prep import prepare  # noqa: E402
+from mbcontact.results import log_view_times  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "D": "MBCFlexibilityAssemble", "PGS": "MBCPGSSolve",
@@ -49,13 +50,7 @@ def solve(h5, *options):
     wall = time.perf_counter() - t0
     if p.returncode:
         sys.exit(f"solver failed on {h5}:\n{err}")
-    phases = {}
-    for name, ev in EVENTS.items():
-        total = 0.0
-        for e in ev if isinstance(ev, tuple) else (ev,):
-            m = re.search(rf"^{e}\s+\d+\s+\S+\s+(\S+)", out, re.M)
-            total += float(m.group(1)) if m else 0.0
-        phases[name] = total
+    phases = log_view_times(out, EVENTS)
     dofs = sum(int(d) for d in re.findall(r"(\d+) DOFs", out))
     return wall, usage.ru_maxrss / 1024.0, phases, dofs, out
 

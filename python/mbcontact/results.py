@@ -75,3 +75,17 @@ def read_contact(path, step=-1):
         out = {k: v[...] for k, v in g.items()}
         out["time"] = float(g.attrs["time"])
     return out
+
+
+def log_view_times(text, events):
+    """Seconds per phase from a -log_view report: events maps a phase name to a PETSc event
+    name or a tuple of names (summed); absent events count 0."""
+    import re
+    times = {}
+    for name, ev in events.items():
+        total = 0.0
+        for e in ev if isinstance(ev, tuple) else (ev,):
+            m = re.search(rf"^{e}\s+\d+\s+\S+\s+(\S+)", text, re.M)
+            total += float(m.group(1)) if m else 0.0
+        times[name] = total
+    return times
