@@ -91,6 +91,14 @@ PetscErrorCode MBCSolverDecompose(MBCSolver s)
     } else small[ns++] = b;
   }
   PetscCall(BodyGraphWeights(scene, w));
+  if (!ns) /* all bodies big: the ranks the floors leave go to the most loaded (two bodies of 972 and
+              960 DOFs on 4 ranks: 2 + 1 and a rank idle, then 2 + 2) */
+    for (PetscInt extra = P - nbig; extra > 0; extra--) {
+      PetscInt best = 0;
+      for (PetscInt b = 1; b < N; b++)
+        if (3.0 * scene->bodies[b].num_vertices / s->body_nranks[b] > 3.0 * scene->bodies[best].num_vertices / s->body_nranks[best]) best = b;
+      s->body_nranks[best]++;
+    }
   if (ns) {
     const PetscInt R = P - nbig;
     PetscMPIInt    first = (PetscMPIInt)nbig;
