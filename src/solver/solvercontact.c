@@ -60,13 +60,11 @@ static PetscErrorCode SolverContactRankOrder(MBCSolver s, const PetscInt dims[])
   PetscCall(PetscMalloc3(nc + 1, &owner, s->nbodies, &count, s->nbodies, &seen));
   PetscCall(PetscArrayzero(count, s->nbodies));
   PetscCall(PetscArrayzero(seen, s->nbodies));
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) count[PointBody(&c->couples[i], j)]++;
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
-      const PetscInt b = PointBody(&c->couples[i], j);
-      owner[k] = s->body_first_rank[b] + (seen[b]++ * s->body_nranks[b]) / count[b];
-    }
+  for (PetscInt k = 0; k < nc; k++) count[PointBody(&c->couples[s->kcouple[k]], s->kpoint[k])]++;
+  for (PetscInt k = 0; k < nc; k++) {
+    const PetscInt b = PointBody(&c->couples[s->kcouple[k]], s->kpoint[k]);
+    owner[k] = s->body_first_rank[b] + (seen[b]++ * s->body_nranks[b]) / count[b];
+  }
   PetscCall(PetscMalloc4(nc + 1, &s->perm, nc + 1, &s->order, nc + 1, &s->coff, nc + 1, &s->poff));
   s->coff[0] = 0;
   for (PetscInt k = 0; k < nc; k++) s->coff[k + 1] = s->coff[k] + dims[k];
@@ -94,8 +92,7 @@ static PetscErrorCode BodyColumns(MBCSolver s, PetscInt b, PetscInt first[])
 
   PetscFunctionBegin;
   PetscCall(PetscFree(s->bcols[b]));
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) first[k] = PointTouches(&c->couples[i], j, b) ? 0 : -1;
+  for (PetscInt k = 0; k < s->ncontact; k++) first[k] = PointTouches(&c->couples[s->kcouple[k]], s->kpoint[k], b) ? 0 : -1;
   for (PetscInt p = 0; p < s->ncontact; p++) {
     const PetscInt k = s->order[p];
     if (first[k] < 0) continue;
@@ -176,6 +173,7 @@ static PetscErrorCode SolverContactReset(MBCSolver s)
   PetscCall(VecDestroy(&s->gathered));
   PetscCall(PetscFree2(s->rall, s->uall));
   PetscCall(PetscFree4(s->perm, s->order, s->coff, s->poff));
+  PetscCall(PetscFree2(s->kcouple, s->kpoint));
   PetscCall(MBCFrictionProblemDestroy(&s->fp));
   PetscCall(MBCPGSReset(&s->pgs));
   PetscCall(VecDestroy(&s->lambda));
@@ -305,7 +303,7 @@ PetscErrorCode MBCSolverContactGapRate(MBCSolver s, Vec q)
 {
   MBCContact   c = s->contact;
   PetscScalar *a;
-  PetscInt     k = 0, rstart;
+  PetscInt     rstart;
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++)
@@ -313,11 +311,10 @@ PetscErrorCode MBCSolverContactGapRate(MBCSolver s, Vec q)
   PetscCall(SolverContactFromBodies(s, q));
   PetscCall(VecGetOwnershipRange(q, &rstart, NULL));
   PetscCall(VecGetArray(q, &a));
-  for (PetscInt i = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
-      const PetscInt p = s->perm[k];
-      if (p >= s->pfirst && p < s->plast) a[s->poff[p] - rstart] += c->couples[i].igap[j];
-    }
+  for (PetscInt p = s->pfirst; p < s->plast; p++) { /* this rank's points */
+    const PetscInt k = s->order[p];
+    a[s->poff[p] - rstart] += c->couples[s->kcouple[k]].igap[s->kpoint[k]];
+  }
   PetscCall(VecRestoreArray(q, &a));
   PetscFunctionReturn(0);
 }
@@ -384,18 +381,14 @@ static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
 static PetscErrorCode SolverContactPreallocation(MBCSolver s, PetscInt rstart, PetscInt rend, PetscInt dnz[], PetscInt onz[])
 {
   MBCContact c = s->contact;
-  PetscInt  *k2c, *k2j;
 
   PetscFunctionBegin;
-  PetscCall(PetscMalloc2(s->ncontact + 1, &k2c, s->ncontact + 1, &k2j));
-  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) k2c[k] = i, k2j[k] = j;
   for (PetscInt p = s->pfirst; p < s->plast; p++) {
     const PetscInt   k = s->order[p];
-    const MBCCouple *cp = &c->couples[k2c[k]];
+    const MBCCouple *cp = &c->couples[s->kcouple[k]];
     PetscInt         bs[2], nb = 0, d = 0, o = 0;
     for (PetscInt b = 0; b < s->nbodies && nb < 2; b++) /* at most two: a master node, a slave face */
-      if (PointTouches(cp, k2j[k], b)) bs[nb++] = b;
+      if (PointTouches(cp, s->kpoint[k], b)) bs[nb++] = b;
     if (nb == 1) {
       for (PetscInt j = 0; j < s->nbcols[bs[0]]; j++) (s->bcols[bs[0]][j] >= rstart && s->bcols[bs[0]][j] < rend) ? d++ : o++;
     } else if (nb == 2) { /* the union of two ascending lists */
@@ -411,7 +404,6 @@ static PetscErrorCode SolverContactPreallocation(MBCSolver s, PetscInt rstart, P
     }
     for (PetscInt a = 0; a < s->coff[k + 1] - s->coff[k]; a++) dnz[s->poff[p] + a - rstart] = d, onz[s->poff[p] + a - rstart] = o;
   }
-  PetscCall(PetscFree2(k2c, k2j));
   PetscFunctionReturn(0);
 }
 
@@ -520,11 +512,13 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
   s->npairs_built = n;
   s->ncontact     = nc;
   PetscCall(PetscMalloc1(nc + 1, &dims));
+  PetscCall(PetscMalloc2(nc + 1, &s->kcouple, nc + 1, &s->kpoint));
   PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
   PetscCall(PetscCalloc1(3 * nc + 1, &s->slip));
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const MBCContactPoint *p = &c->couples[i].points[j];
+      s->kcouple[k] = i, s->kpoint[k] = j;
       dims[k] = c->couples[i].mu > 0 ? 3 : 1;
       for (PetscInt e = 0; e < 3; e++) {
         s->frames[9 * k + e]     = p->n[e];
@@ -540,9 +534,10 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     s->fp.nc = s->plast - s->pfirst;
     PetscCall(PetscMalloc1(s->fp.nc + 1, &s->fp.mu));
     PetscCall(PetscMalloc1(s->fp.nc + 1, &ldims));
-    for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-      for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++)
-        if (s->perm[k] >= s->pfirst && s->perm[k] < s->plast) s->fp.mu[s->perm[k] - s->pfirst] = c->couples[i].mu, ldims[s->perm[k] - s->pfirst] = dims[k];
+    for (PetscInt p = s->pfirst; p < s->plast; p++) {
+      s->fp.mu[p - s->pfirst] = c->couples[s->kcouple[s->order[p]]].mu;
+      ldims[p - s->pfirst]    = s->poff[p + 1] - s->poff[p];
+    }
     PetscCall(MBCFrictionProblemSetBlocks(&s->fp, ldims));
     PetscCall(PetscFree(ldims));
   }

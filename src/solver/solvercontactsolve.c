@@ -30,23 +30,21 @@ static PetscErrorCode SolverContactWriteFclib(MBCSolver s)
     PetscCall(VecScatterDestroy(&sc));
   }
   if (!rank) {
-    PetscInt *dims, *k2c;
+    PetscInt *dims;
     PetscCall(PetscMemzero(&fp0, sizeof(fp0)));
     fp0.nc = s->ncontact;
     fp0.W  = W0[0];
     fp0.q  = v0[0];
-    PetscCall(PetscMalloc3(fp0.nc + 1, &fp0.mu, fp0.nc + 1, &dims, fp0.nc + 1, &k2c));
-    for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
-      for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) k2c[k] = i;
+    PetscCall(PetscMalloc2(fp0.nc + 1, &fp0.mu, fp0.nc + 1, &dims));
     for (PetscInt p = 0; p < fp0.nc; p++) {
-      fp0.mu[p] = c->couples[k2c[s->order[p]]].mu;
+      fp0.mu[p] = c->couples[s->kcouple[s->order[p]]].mu;
       dims[p]   = s->poff[p + 1] - s->poff[p];
     }
     PetscCall(MBCFrictionProblemSetBlocks(&fp0, dims));
     PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, s->scene->filename, s->step));
     PetscCall(MBCFclibWriteLocal(s->fclib_file, &fp0, v0[1], v0[2]));
     PetscCall(PetscFree(fp0.off));
-    PetscCall(PetscFree3(fp0.mu, dims, k2c));
+    PetscCall(PetscFree2(fp0.mu, dims));
   }
   for (PetscInt i = 0; i < 3; i++) PetscCall(VecDestroy(&v0[i]));
   PetscCall(MatDestroySubMatrices(1, &W0));

@@ -67,6 +67,7 @@ struct _n_MBCSolver {
   PetscInt   ncontact;    /* contact points of the last build */
   PetscInt  *coff, *poff; /* ncontact + 1: first multiplier of each point in couple order / in rank order */
   PetscInt  *perm, *order; /* couple order k -> rank order perm[k]; rank order p -> couple order order[p] */
+  PetscInt  *kcouple, *kpoint; /* couple order k -> its couple and its index there */
   PetscInt   pfirst, plast; /* this rank's points [pfirst, plast) in rank order */
   Mat       *H;           /* per body: contact matrix, the columns of the multipliers touching it (NULL off the body) */
   PetscInt **bcols, *nbcols; /* per body (every rank): the W rows (rank order) of H's columns */
