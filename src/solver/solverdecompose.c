@@ -67,18 +67,29 @@ static PetscErrorCode PartitionSmallBodies(MBCScene scene, const PetscReal w[], 
   PetscFunctionReturn(0);
 }
 
+/* extra more ranks, one at a time, to the body of list[] with the most DOFs per rank. */
+static void SpreadRanks(MBCScene scene, PetscMPIInt nranks[], PetscInt n, const PetscInt list[], PetscInt extra)
+{
+  for (; extra > 0 && n > 0; extra--) {
+    PetscInt best = list[0];
+    for (PetscInt i = 1; i < n; i++)
+      if (3.0 * scene->bodies[list[i]].num_vertices / nranks[list[i]] > 3.0 * scene->bodies[best].num_vertices / nranks[best]) best = list[i];
+    nranks[best]++;
+  }
+}
+
 /* Every rank computes the same decomposition from the scene alone. */
 PetscErrorCode MBCSolverDecompose(MBCSolver s)
 {
   MBCScene    scene = s->scene;
-  PetscInt    N     = scene->nbodies, ns = 0, nbig = 0, *small, *part;
-  PetscMPIInt P;
+  PetscInt    N     = scene->nbodies, ns = 0, nb = 0, nbig = 0, *small, *big, *part;
+  PetscMPIInt P, first = 0;
   PetscReal   total = 0, share, *w;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_size(s->comm, &P));
   PetscCall(PetscCalloc2(N, &s->body_first_rank, N, &s->body_nranks));
-  PetscCall(PetscMalloc3(N, &small, N, &part, N * N, &w));
+  PetscCall(PetscMalloc4(N, &small, N, &big, N, &part, N * N, &w));
   for (PetscInt b = 0; b < N; b++) total += 3.0 * scene->bodies[b].num_vertices;
   share = total / P;
   /* a body above a rank's share gets floor(DOFs / share) ranks of its own; the others share the
@@ -88,46 +99,30 @@ PetscErrorCode MBCSolverDecompose(MBCSolver s)
     if (r > 1) {
       s->body_nranks[b] = (PetscMPIInt)PetscFloorReal(r);
       nbig += s->body_nranks[b];
+      big[nb++] = b;
     } else small[ns++] = b;
   }
   PetscCall(BodyGraphWeights(scene, w));
-  if (!ns) /* all bodies big: the ranks the floors leave go to the most loaded (two bodies of 972 and
-              960 DOFs on 4 ranks: 2 + 1 and a rank idle, then 2 + 2) */
-    for (PetscInt extra = P - nbig; extra > 0; extra--) {
-      PetscInt best = 0;
-      for (PetscInt b = 1; b < N; b++)
-        if (3.0 * scene->bodies[b].num_vertices / s->body_nranks[b] > 3.0 * scene->bodies[best].num_vertices / s->body_nranks[best]) best = b;
-      s->body_nranks[best]++;
-    }
+  /* all bodies big: the ranks the floors leave go to the most loaded (two bodies of 972 and 960
+     DOFs on 4 ranks: 2 + 1 and a rank idle, then 2 + 2) */
+  if (!ns) SpreadRanks(scene, s->body_nranks, nb, big, P - nbig);
+  /* ranks in order: the big bodies, then the small ones */
+  for (PetscInt i = 0; i < nb; i++) {
+    s->body_first_rank[big[i]] = first;
+    first += s->body_nranks[big[i]];
+  }
   if (ns) {
     const PetscInt R = P - nbig;
-    PetscMPIInt    first = (PetscMPIInt)nbig;
     PetscCall(PartitionSmallBodies(scene, w, ns, small, R, part));
-    for (PetscInt i = 0; i < ns; i++) {
-      s->body_first_rank[small[i]] = first + (PetscMPIInt)part[i];
-      s->body_nranks[small[i]]     = 1;
-    }
-    if (ns < R) /* ranks left over (fewer bodies than ranks): to the bodies with most DOFs per rank */
-      for (PetscInt extra = R - ns; extra > 0; extra--) {
-        PetscInt best = small[0];
-        for (PetscInt i = 1; i < ns; i++)
-          if (3.0 * scene->bodies[small[i]].num_vertices / s->body_nranks[small[i]] > 3.0 * scene->bodies[best].num_vertices / s->body_nranks[best]) best = small[i];
-        s->body_nranks[best]++;
-      }
-  }
-  { /* ranks in order: the big bodies, then the small ones part by part (a small body given
-       extra ranks above has a rank of its own, so the ranges do not overlap) */
-    PetscMPIInt first = 0;
-    for (PetscInt b = 0; b < N; b++)
-      if (!(s->body_nranks[b] >= 1 && 3.0 * scene->bodies[b].num_vertices / share <= 1)) {
-        s->body_first_rank[b] = first;
-        first += s->body_nranks[b];
-      }
-    if (ns && ns <= P - nbig)
+    for (PetscInt i = 0; i < ns; i++) s->body_nranks[small[i]] = 1;
+    if (ns < R) { /* fewer bodies than ranks: one each, the ranks left to those with most DOFs per rank */
+      SpreadRanks(scene, s->body_nranks, ns, small, R - ns);
       for (PetscInt i = 0; i < ns; i++) {
         s->body_first_rank[small[i]] = first;
         first += s->body_nranks[small[i]];
       }
+    } else
+      for (PetscInt i = 0; i < ns; i++) s->body_first_rank[small[i]] = first + (PetscMPIInt)part[i];
   }
   /* the figures -mbc_view prints: contact faces between bodies on different ranks, load balance */
   s->decomp_cut = 0;
@@ -143,6 +138,6 @@ PetscErrorCode MBCSolverDecompose(MBCSolver s)
     s->decomp_imbalance = lmax / share;
     PetscCall(PetscFree(load));
   }
-  PetscCall(PetscFree3(small, part, w));
+  PetscCall(PetscFree4(small, big, part, w));
   PetscFunctionReturn(0);
 }
