@@ -274,9 +274,8 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
   PetscScalar       *rv, *cv, *ev;
   const PetscScalar *qv, *uv, *cgv = NULL, *egv = NULL;
   PetscBool          slips = PETSC_FALSE, reuse = PETSC_FALSE;
-  Vec                colv, coefv, x, b, rtry;
+  Vec                colv, coefv, x, b;
   KSP                ksp;
-  PetscReal          etry;
   KSPConvergedReason reason;
 
   PetscFunctionBegin;
@@ -463,14 +462,13 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
     PetscCall(VecAXPY(x, 1.0, dx));
     PetscCall(VecDestroy(&res));
     PetscCall(VecDestroy(&dx));
-  }
-  if (reason < 0 && ksp == pgs->ksp) pgs->kept = PETSC_FALSE;
+  } else if (ksp == pgs->ksp) pgs->kept = PETSC_FALSE;
   if (slips) PetscCall(KSPDestroy(&ksp));
-  if (reason >= 0) {
+  if (reason >= 0) { /* the new iterate, projected onto the cones; the caller keeps the best one */
     const PetscScalar *xv;
-    PetscCall(VecDuplicate(r, &rtry));
-    PetscCall(VecZeroEntries(rtry));
-    PetscCall(VecGetArray(rtry, &rv));
+    const PetscReal    before = *error;
+    PetscCall(VecZeroEntries(r));
+    PetscCall(VecGetArray(r, &rv));
     PetscCall(VecGetArrayRead(x, &xv));
     for (PetscInt k = 0, c = 0; k < nin; k++) {
       const PetscInt i = contact[k], o = fp->off[i], dim = fp->off[i + 1] - o;
@@ -488,12 +486,9 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
       }
     }
     PetscCall(VecRestoreArrayRead(x, &xv));
-    PetscCall(VecRestoreArray(rtry, &rv));
-    PetscCall(MBCFrictionError(fp, rtry, u, &etry));
-    PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", N, (double)*error, (double)etry));
-    PetscCall(VecCopy(rtry, r)); /* the caller keeps the best iterate */
-    *error = etry;
-    PetscCall(VecDestroy(&rtry));
+    PetscCall(VecRestoreArray(r, &rv));
+    PetscCall(MBCFrictionError(fp, r, u, error));
+    PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", N, (double)before, (double)*error));
   }
   PetscCall(VecDestroy(&x));
   PetscCall(VecDestroy(&b));
