@@ -1,9 +1,10 @@
 static const char help[] = "mbcontact: finite-element multibody contact with Coulomb friction.\n"
                            "Usage: mpirun -n P mbcontact -scene SCENE.h5 [-mbc_monitor] [-mbc_view] [-log_view]\n"
-                           "       mbcontact -fclib PROBLEM.hdf5 [-mbc_pgs_rtol 1e-8] [-fclib_write OUT.hdf5]\n"
+                           "       mbcontact -fclib PROBLEM.hdf5 [-mbc_multiplier_type newton|pgs] [-mbc_multiplier_rtol 1e-8] [-fclib_write OUT.hdf5]\n"
                            "Make SCENE.h5 with mbcontact-prep SCENE.yaml -o SCENE.h5.\n\n";
 
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/multiplierimpl.h>
+#include <mbcontact.h>
 
 /* User errors print one line that names the input; -mbc_error_traceback keeps PETSc's full report. */
 static PetscErrorCode MBCErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
@@ -23,34 +24,40 @@ static PetscErrorCode MBCErrorHandler(MPI_Comm comm, int line, const char *fun, 
   return n;
 }
 
-/* mbcontact -fclib FILE: solve a public (or our own) friction-contact problem with our PGS.
-   Sets *converged; -fclib_write OUT writes it back as a local problem with its solution. */
+/* mbcontact -fclib FILE: solve a public (or our own) friction-contact problem with our
+   multiplier solve (-mbc_multiplier_type). Sets *converged; -fclib_write OUT writes it back as a
+   local problem with its solution. */
 static PetscErrorCode RunFclib(const char *file, PetscBool *converged)
 {
   MBCFrictionProblem fp;
-  MBCPGS             pgs;
+  MBCMultiplier      mult;
+  MBCMultiplierType  type;
   PetscBool          global, set;
   Vec                r, u;
   char               out[PETSC_MAX_PATH_LEN];
 
   PetscFunctionBegin;
-  PetscCall(PetscMemzero(&pgs, sizeof(pgs)));
-  PetscCall(MBCPGSSetFromOptions(&pgs));
+  PetscCall(PetscMemzero(&fp, sizeof(fp)));
+  PetscCall(MBCMultiplierCreate(PETSC_COMM_SELF, &mult));
+  PetscCall(MBCMultiplierSetOptionsPrefix(mult, "mbc_"));
+  PetscCall(MBCMultiplierSetFromOptions(mult));
   PetscCall(MBCFclibRead(file, &fp, &global));
   PetscCall(VecDuplicate(fp.q, &r));
   PetscCall(VecDuplicate(fp.q, &u));
   PetscCall(VecZeroEntries(r));
   PetscCall(PetscOptionsHasName(NULL, NULL, "-fclib_warm_start", &set));
   if (set) PetscCall(MBCFclibReadSolution(file, r));
-  PetscCall(MBCPGSSolve(&pgs, &fp, r, u));
+  PetscCall(MBCMultiplierSetProblem(mult, &fp));
+  PetscCall(MBCMultiplierSolve(mult, r, u));
+  PetscCall(MBCMultiplierGetType(mult, &type));
   PetscCall(PetscPrintf(PETSC_COMM_SELF, "FCLIB %s: %s problem, %" PetscInt_FMT " contacts\n", file, global ? "global (condensed to local)" : "local", fp.nc));
-  PetscCall(PetscPrintf(PETSC_COMM_SELF, "PGS %s in %" PetscInt_FMT " sweeps, %.4g s, FCLIB error %.6e (rtol %.1e)\n", MBCPGSReasonName(pgs.reason), pgs.its, (double)pgs.time, (double)pgs.error, (double)pgs.rtol));
+  PetscCall(PetscPrintf(PETSC_COMM_SELF, "%s %s in %" PetscInt_FMT " iterations, %.4g s, FCLIB merit %.6e (rtol %.1e)\n", type, MBCMultiplierConvergedReasonName(mult->reason), mult->its, (double)mult->time, (double)mult->merit, (double)mult->rtol));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-fclib_write", out, sizeof(out), &set));
   if (set) PetscCall(MBCFclibWriteLocal(out, &fp, r, u));
-  *converged = (PetscBool)(pgs.reason > 0);
+  *converged = (PetscBool)(mult->reason > 0);
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&u));
-  PetscCall(MBCPGSReset(&pgs));
+  PetscCall(MBCMultiplierDestroy(&mult));
   PetscCall(MBCFrictionProblemDestroy(&fp));
   PetscFunctionReturn(0);
 }

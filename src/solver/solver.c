@@ -155,7 +155,9 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact));
-    PetscCall(MBCPGSSetFromOptions(&s->pgs));
+    PetscCall(MBCMultiplierCreate(s->comm, &s->mult));
+    PetscCall(MBCMultiplierSetOptionsPrefix(s->mult, "mbc_"));
+    PetscCall(MBCMultiplierSetFromOptions(s->mult));
     PetscCall(PetscCalloc6(s->nbodies, &s->H, s->nbodies, &s->Hu, s->nbodies, &s->lam, s->nbodies, &s->Hl, s->nbodies, &s->Xl, s->nbodies, &s->nbcols));
     PetscCall(PetscCalloc1(s->nbodies, &s->bcols));
   }
@@ -257,7 +259,9 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
   if (s->monitor && s->ncontact) {
     PetscInt count[3] = {0, 0, 0};
     PetscCall(MBCSolverContactStates(s, count, NULL, NULL));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: PGS %s in %" PetscInt_FMT " sweeps (error %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
+    MBCMultiplierType type;
+    PetscCall(MBCMultiplierGetType(s->mult, &type));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s %s in %" PetscInt_FMT " iterations (merit %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, type, MBCMultiplierConvergedReasonName(s->mult->reason), s->mult->its, (double)s->mult->merit, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
   }
   PetscFunctionReturn(0);
 }
@@ -358,7 +362,7 @@ static PetscErrorCode SolverStatic(MBCSolver s)
       PetscCall(SolverContact(s));
       if (s->monitor && (s->contact || stabilized)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
       if ((!s->contact && !stabilized) || fmax <= s->static_rtol * kumax) break;
-      PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->pgs.rtol > s->static_rtol ? "; or -mbc_pgs_rtol is looser than -mbc_static_rtol" : "");
+      PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
     }
     PetscCall(SolverMonitor(s));
     PetscCall(MBCSolverOutputStep(s));
@@ -574,7 +578,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   if (!s) PetscFunctionReturn(0);
   PetscCall(MBCSolverContactDestroy(s));
   PetscCall(MBCContactDestroy(&s->contact));
-  PetscCall(MBCPGSReset(&s->pgs));
+  PetscCall(MBCMultiplierDestroy(&s->mult));
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));

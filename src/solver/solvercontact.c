@@ -20,7 +20,9 @@
    (lambda_n . g_n+1 - lambda_n+1 . g_n) / 2, an energy gain whenever a loaded contact opens (a
    bouncing block gains energy at every bounce). */
 #include <mbc/private/solverimpl.h>
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/multiplierimpl.h>
+
+PetscLogEvent MBC_FlexibilityAssemble;
 
 /* Contact points of all couples in one list: (couple, point). */
 static PetscInt NumContacts(MBCContact c)
@@ -175,7 +177,7 @@ static PetscErrorCode SolverContactReset(MBCSolver s)
   PetscCall(PetscFree4(s->perm, s->order, s->coff, s->poff));
   PetscCall(PetscFree2(s->kcouple, s->kpoint));
   PetscCall(MBCFrictionProblemDestroy(&s->fp));
-  PetscCall(MBCPGSReset(&s->pgs));
+  PetscCall(MBCMultiplierReset(s->mult));
   PetscCall(VecDestroy(&s->lambda));
   PetscCall(VecDestroy(&s->ucontact));
   PetscCall(VecDestroy(&s->lamprev));

@@ -1,7 +1,7 @@
 /* The multipliers of a step (the set-up and the distribution: solvercontact.c): q from every
    body's free increment, the PGS on the rows of each rank, dU += A^-1 H lambda. */
 #include <mbc/private/solverimpl.h>
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/multiplierimpl.h>
 
 /* -mbc_fclib_write FILE at step -mbc_fclib_write_step: the scaled problem (W = D / dscale,
    r = dscale lambda) and its solution as an FCLIB local problem in rank order, gathered to and
@@ -77,13 +77,14 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     if (!(L > 0)) L = 1;
     PetscCall(VecScale(s->fp.q, 1 / L));
     PetscCall(VecScale(s->lambda, 1 / L));
-    PetscCall(MBCPGSSolve(&s->pgs, &s->fp, s->lambda, s->ucontact)); /* warm start: r of the last step */
+    PetscCall(MBCMultiplierSetProblem(s->mult, &s->fp));
+    PetscCall(MBCMultiplierSolve(s->mult, s->lambda, s->ucontact)); /* warm start: r of the last step */
     PetscCall(VecScale(s->fp.q, L));
     PetscCall(VecScale(s->lambda, L));
     PetscCall(VecScale(s->ucontact, L));
   }
   if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
-  PetscCheck(s->pgs.reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): projected Gauss-Seidel %s after %" PetscInt_FMT " sweeps, FCLIB error %g > -mbc_pgs_rtol %g", s->step, (double)s->time, MBCPGSReasonName(s->pgs.reason), s->pgs.its, (double)s->pgs.error, (double)s->pgs.rtol);
+  PetscCheck(s->mult->reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): %s solve %s after %" PetscInt_FMT " iterations, FCLIB merit %g > -mbc_multiplier_rtol %g", s->step, (double)s->time, ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), s->mult->its, (double)s->mult->merit, (double)s->mult->rtol);
   PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
   PetscCall(MBCSolverContactGather(s, s->lambda, s->rall));
   PetscCall(MBCSolverContactGather(s, s->ucontact, s->uall));

@@ -1,6 +1,6 @@
 /* Package registration: log events so -log_view shows where the time goes. */
 #include <mbc/private/contactimpl.h>
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/solverimpl.h>
 
 PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;
 
@@ -24,7 +24,7 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
   PetscCall(PetscLogEventRegister("MBCFlexibilityAssemble", classid, &MBC_FlexibilityAssemble));
-  PetscCall(PetscLogEventRegister("MBCPGSSolve", classid, &MBC_PGSSolve));
+  PetscCall(MBCMultiplierInitializePackage());
   PetscFunctionReturn(0);
 }
 

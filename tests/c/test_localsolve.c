@@ -1,7 +1,7 @@
 /* The exact one-contact solver: on random SPD 3x3 blocks with strong normal-tangent coupling
    its natural-map residual (De Saxce) is at rounding level in every regime (separation, stick,
    slip), while "solve the block, clamp r_n, scale r_t onto the disk" is not exact. */
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/multiplierimpl.h>
 
 static PetscReal Residual(const PetscReal A[9], const PetscReal b[3], PetscReal mu, const PetscReal r[3])
 {

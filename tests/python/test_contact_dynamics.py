@@ -22,9 +22,9 @@ DISSIPATIVE = {"beta": 0.3025, "gamma": 0.6}
 
 
 def contact_state(stdout, step=None):
-    """The monitor's "contact: PGS ..." line of a step (default: the last) and its counts
+    """The monitor's "contact: <type> ... iterations" line of a step (default: the last) and its counts
     {"separated": n, "stick": n, "slip": n, "converged": bool}."""
-    lines = [l for l in stdout.splitlines() if "contact: PGS" in l and (step is None or l.startswith(f"step {step:5d} "))]
+    lines = [l for l in stdout.splitlines() if "contact: " in l and " in " in l and "iterations (merit" in l and (step is None or l.startswith(f"step {step:5d} "))]
     line = lines[-1]
     state = {k: int(v) for k, v in re.findall(r"(separated|stick|slip) (\d+)", line)}
     state["converged"] = "CONVERGED" in line

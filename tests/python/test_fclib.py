@@ -46,7 +46,7 @@ def local_problem(path):
 
 
 def merit(W, q, mu, r):
-    """FCLIB error: |r - proj_K(r - (u + mu |u_t| e_n))| over all contacts / (1 + |q|)."""
+    """FCLIB merit (fcmer.c): |r - proj_K(r - (u + mu |u_t| e_n))| over all contacts / (1 + sqrt(|q|))."""
     u = W @ r + q
     e = 0.0
     for c in range(len(mu)):
@@ -61,11 +61,11 @@ def merit(W, q, mu, r):
             a = (x[0] + m * t) / (1 + m * m)
             p = np.array([a, m * a * x[1] / t, m * a * x[2] / t])
         e += ((rc - p) ** 2).sum()
-    return np.sqrt(e) / (1 + np.linalg.norm(q))
+    return np.sqrt(e) / (1 + np.sqrt(np.linalg.norm(q)))
 
 
 def reported_error(out):
-    return float(re.search(r"FCLIB error ([0-9.eE+-]+)", out).group(1))
+    return float(re.search(r"FCLIB merit ([0-9.eE+-]+)", out).group(1))
 
 
 @pytest.mark.parametrize("name", ["local_problem_test.hdf5", "Box_Stacks-i0122-82-5.hdf5", "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5"])
@@ -75,7 +75,7 @@ def test_round_trip_and_independent_merit(tmp_path, name):
     and has the merit the solver printed; reading it back gives the same solution."""
     src = os.path.join(FCLIB, name)
     out = tmp_path / "written.hdf5"
-    res = subprocess.run([SOLVER, "-fclib", src, "-mbc_pgs_max_it", "3000", "-fclib_write", str(out)], capture_output=True, text=True, env=env())
+    res = subprocess.run([SOLVER, "-fclib", src, "-mbc_multiplier_max_it", "3000", "-fclib_write", str(out)], capture_output=True, text=True, env=env())
     assert res.returncode in (0, 2), res.stderr
     W0, q0, mu0 = local_problem(src)
     W1, q1, mu1 = local_problem(out)
@@ -88,23 +88,23 @@ def test_round_trip_and_independent_merit(tmp_path, name):
     e = merit(W1, q1, mu1, r)
     # r - proj_K(...) cancels: the merit is only known to ~ eps |r|_max per contact (|r| reaches
     # 6e4 against a residual of 4e-9 on the LMGC problem), so compare within that bound
-    rounding = 100 * np.finfo(float).eps * np.abs(r).max() * np.sqrt(len(mu1)) / (1 + np.linalg.norm(q1))
+    rounding = 100 * np.finfo(float).eps * np.abs(r).max() * np.sqrt(len(mu1)) / (1 + np.sqrt(np.linalg.norm(q1)))
     assert abs(e - reported_error(res.stdout)) <= max(rounding, 1e-6 * e)
     # reading the written file back: the same problem, the same iterations and error
-    again = subprocess.run([SOLVER, "-fclib", str(out), "-mbc_pgs_max_it", "3000"], capture_output=True, text=True, env=env())
+    again = subprocess.run([SOLVER, "-fclib", str(out), "-mbc_multiplier_max_it", "3000"], capture_output=True, text=True, env=env())
     assert again.returncode == res.returncode
     assert reported_error(again.stdout) == pytest.approx(reported_error(res.stdout), rel=1e-6, abs=1e-15)
     # warm-started from its own solution, a converged problem needs no sweep
     if res.returncode == 0:
         warm = run("-fclib", out, "-fclib_warm_start")
-        assert "in 0 sweeps" in warm.stdout
+        assert "in 0 iterations" in warm.stdout
 
 
 def test_converges_on_capsules(tmp_path):
     """A local problem with 216 contacts (rank-deficient W from rigid capsules) reaches the
     accuracy the public collection asks for, 1e-8, checked independently."""
     out = tmp_path / "caps.hdf5"
-    res = run("-fclib", os.path.join(FCLIB, "Capsules-i97-269.hdf5"), "-mbc_pgs_max_it", 10000, "-fclib_write", out)
+    res = run("-fclib", os.path.join(FCLIB, "Capsules-i97-269.hdf5"), "-mbc_multiplier_max_it", 10000, "-fclib_write", out)
     assert "CONVERGED_RTOL" in res.stdout
     W, q, mu = local_problem(out)
     with h5py.File(out, "r") as f:
@@ -116,8 +116,8 @@ def test_converges_on_capsules(tmp_path):
 
 
 def test_not_converged_is_reported(tmp_path):
-    res = run("-fclib", os.path.join(FCLIB, "local_problem_test.hdf5"), "-mbc_pgs_max_it", 5, expect=2)
-    assert "DIVERGED_ITS in 5 sweeps" in res.stdout
+    res = run("-fclib", os.path.join(FCLIB, "local_problem_test.hdf5"), "-mbc_multiplier_max_it", 5, expect=2)
+    assert "DIVERGED_ITS in 5 iterations" in res.stdout
 
 
 def test_bad_fclib_files(tmp_path):

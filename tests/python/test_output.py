@@ -107,7 +107,7 @@ def two_blocks(tmp_path_factory):
     scene = blocks.scene(0.01, 0.03)
     scene["output"].update({"every": 1, "fields": ["displacement", "stress"]})
     h5 = prep(tmp_path, scene, name="blocks")
-    runs = run_ranks(tmp_path, h5, "-mbc_pgs_rtol", "1e-12")
+    runs = run_ranks(tmp_path, h5, "-mbc_multiplier_rtol", "1e-12")
     assert spans(runs[2][1]) == {"block1": 1, "block2": 1} and max(spans(runs[4][1]).values()) > 1, runs[4][1]
     return tmp_path, runs
 

@@ -3,7 +3,7 @@ spans two ranks, its DMPlex distributed and its factorization parallel) and a sm
 monoliths and the foundation: METIS puts the small bodies on shared ranks). The contact rows of W
 live on the ranks of their master bodies and the PGS sweeps each rank's contacts with the
 others' exchanged between sweeps, so the iterates differ from the serial sweep; the converged
-multipliers agree to the PGS tolerance. Tolerances: -mbc_pgs_rtol 1e-10 on the merit of the
+multipliers agree to the PGS tolerance. Tolerances: -mbc_multiplier_rtol 1e-10 on the merit of the
 problem scaled to |q| = 1 (so ~1e-10 relative on the multipliers, times the conditioning of W on
 the active set) and the static equilibrium tolerance 1e-6 of max|K u| on the iterations; observed
 differences are ~1e-9 and below, asserted 1e-7 of the field's scale. (The two-block example is
@@ -49,7 +49,7 @@ def run(h5, tmp_path, options=()):
     runs = {}
     for n in RANKS:
         prefix = str(tmp_path / f"np{n}")
-        r = solve(h5, "-mbc_output", prefix, "-mbc_pgs_rtol", "1e-10", "-mbc_view", *options, nproc=n)
+        r = solve(h5, "-mbc_output", prefix, "-mbc_multiplier_rtol", "1e-10", "-mbc_view", *options, nproc=n)
         runs[n] = fields(prefix)
         if n == 4:
             runs["view"] = r.stdout

@@ -3,7 +3,7 @@
 
 #include <mbc/private/contactimpl.h>
 #include <petscsf.h>
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/multiplierimpl.h>
 #include <stdint.h>
 
 typedef struct {
@@ -80,7 +80,7 @@ struct _n_MBCSolver {
   PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
   PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
   MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
-  MBCPGS     pgs;
+  MBCMultiplier mult;     /* the multiplier solve (-mbc_multiplier_type) */
   PetscReal  dscale;      /* D is scaled by 1/dscale for the PGS: lambda = r / dscale */
   Vec        lambda, ucontact; /* PGS unknown r (scaled) and u = W r + q */
   Vec        lamprev;     /* lambda_n+1 after the step (physical): carried in the acceleration */
@@ -99,6 +99,8 @@ struct _n_MBCSolver {
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
 };
+
+PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble;
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);

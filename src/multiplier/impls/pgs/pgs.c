@@ -1,234 +1,83 @@
-/* Projected Gauss-Seidel for u = W r + q, r in the Coulomb cone K (|r_t| <= mu r_n), with the
-   De Saxce complementarity K* ∋ u + mu |u_t| e_n ⟂ r. Each contact's 3x3 problem, with the
+/* MBCMULTIPLIERPGS: the paper's projected Gauss-Seidel. Each contact's 3x3 problem, with the
    other contacts' current r on the right side, is solved exactly (separation, stick, or slip
-   found by a 1D root search over the slip direction), so normal-tangent coupling of the
-   diagonal block is honoured: no solve-then-clamp. */
-#include <mbc/private/pgsimpl.h>
-#include <petscblaslapack.h>
+   found by a 1D root search over the slip direction, MBCContactLocalSolve), so normal-tangent
+   coupling of the diagonal block is honoured: no solve-then-clamp. Optional active-set
+   (semismooth Newton) steps every -mbc_pgs_active_set sweeps. Options: -mbc_pgs_omega,
+   -mbc_pgs_active_set, -mbc_pgs_local_sweeps, -mbc_pgs_merit_every. */
+#include <mbc/private/multiplierimpl.h>
 
-PetscLogEvent MBC_PGSSolve, MBC_FlexibilityAssemble;
+typedef struct {
+  PetscReal omega;
+  PetscInt  active_set;
+  PetscInt  sweeps_local; /* Gauss-Seidel sweeps over a rank's contacts between exchanges */
+  PetscInt  merit_every;  /* the merit (a product with W) every this many sweeps, or when a sweep changed r by less than the tolerance */
+  /* per W: its diagonal and off-diagonal parts (MPIAIJ), the other ranks' r it needs */
+  Mat        Ad, Ao;
+  Vec        rg, cg, eg; /* ghost values of r, of the active-set column map and coefficients */
+  VecScatter gsc;
+  PetscReal *diag;
+  /* the last factor of the active-set step with no contact slipping, kept for the next steps */
+  KSP       ksp;
+  PetscInt *luS, lun;
+  PetscBool kept;
+  PetscReal shift; /* the diagonal shift of the kept factor */
+} MBC_PGS;
 
-const char *MBCPGSReasonName(MBCPGSReason r)
+static PetscErrorCode MBCMultiplierSetFromOptions_PGS(MBCMultiplier m, PetscOptionItems *PetscOptionsObject)
 {
-  switch (r) {
-  case MBC_PGS_CONVERGED_RTOL:
-    return "CONVERGED_RTOL";
-  case MBC_PGS_DIVERGED_ITS:
-    return "DIVERGED_ITS";
-  case MBC_PGS_DIVERGED_NANORINF:
-    return "DIVERGED_NANORINF";
-  default:
-    return "ITERATING";
-  }
-}
-
-/* Projection onto K_mu = {|x_t| <= mu x_n}. */
-static void ProjectCone(const PetscReal x[3], PetscReal mu, PetscReal p[3])
-{
-  const PetscReal t = PetscSqrtReal(x[1] * x[1] + x[2] * x[2]);
-  if (t <= mu * x[0]) {
-    p[0] = x[0], p[1] = x[1], p[2] = x[2];
-  } else if (mu * t <= -x[0]) {
-    p[0] = p[1] = p[2] = 0;
-  } else {
-    const PetscReal a = (x[0] + mu * t) / (1 + mu * mu);
-    p[0] = a;
-    p[1] = mu * a * x[1] / t;
-    p[2] = mu * a * x[2] / t;
-  }
-}
-
-/* Natural-map residual of one contact with De Saxce's modified velocity. */
-static PetscReal ContactResidual2(const PetscReal r[3], const PetscReal u[3], PetscReal mu)
-{
-  const PetscReal ut = PetscSqrtReal(u[1] * u[1] + u[2] * u[2]);
-  PetscReal       x[3], p[3], e = 0;
-  x[0] = r[0] - (u[0] + mu * ut);
-  x[1] = r[1] - u[1];
-  x[2] = r[2] - u[2];
-  ProjectCone(x, mu, p);
-  for (int d = 0; d < 3; d++) e += (r[d] - p[d]) * (r[d] - p[d]);
-  return e;
-}
-
-/* FCLIB merit: sqrt(sum over contacts of |r - proj_K(r - (u + mu |u_t| e_n))|^2) / (1 + |q|);
-   a frictionless 1-block contributes (r_n - max(0, r_n - u_n))^2, the same value its 3-block
-   with mu = 0 and r_t = 0 would. Sums over the ranks. */
-PetscErrorCode MBCFrictionError(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal *error)
-{
-  const PetscScalar *rv, *uv;
-  PetscReal          e = 0, qn;
+  MBC_PGS *pgs = (MBC_PGS *)m->data;
 
   PetscFunctionBegin;
-  PetscCall(MatMult(fp->W, r, u));
-  PetscCall(VecAXPY(u, 1.0, fp->q));
-  PetscCall(VecGetArrayRead(r, &rv));
-  PetscCall(VecGetArrayRead(u, &uv));
-  for (PetscInt i = 0; i < fp->nc; i++) {
-    const PetscInt o = fp->off[i];
-    if (fp->off[i + 1] - o == 1) { /* frictionless: r_n - max(0, r_n - u_n) */
-      const PetscReal p = PetscMax(0, PetscRealPart(rv[o] - uv[o]));
-      e += PetscSqr(PetscRealPart(rv[o]) - p);
-    } else e += ContactResidual2(&rv[o], &uv[o], fp->mu[i]);
-  }
-  PetscCall(VecRestoreArrayRead(u, &uv));
-  PetscCall(VecRestoreArrayRead(r, &rv));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &e, 1, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)fp->W)));
-  PetscCall(VecNorm(fp->q, NORM_2, &qn));
-  *error = PetscSqrtReal(e) / (1 + qn);
-  PetscFunctionReturn(0);
-}
-
-/* Slip: r = rn (1, mu cos f, mu sin f) with u_n = 0 gives rn(f) = -b_n / den(f); the tangential
-   velocity must point against the friction direction d(f): u_t(f) x d(f) = 0, u_t . d <= 0.
-   Multiplied by den, G(f) = den u_t x d = ((-b_n A_tn + A_nn b_t) + M d) x d is a trigonometric
-   polynomial of degree 2 (at most 4 roots) without the poles of rn: sign changes bracket them. */
-static PetscReal SlipResidual(const PetscReal A[9], const PetscReal b[3], PetscReal mu, PetscReal f, PetscReal r[3], PetscReal *along, PetscReal *den)
-{
-  const PetscReal c = PetscCosReal(f), s = PetscSinReal(f);
-  PetscReal       w[2]; /* den * u_t */
-  *den = A[0] + mu * (A[1] * c + A[2] * s);
-  w[0] = -b[0] * (A[3] + mu * (A[4] * c + A[5] * s)) + *den * b[1];
-  w[1] = -b[0] * (A[6] + mu * (A[7] * c + A[8] * s)) + *den * b[2];
-  r[0] = -b[0] / *den, r[1] = mu * r[0] * c, r[2] = mu * r[0] * s;
-  *along = (w[0] * c + w[1] * s) / *den; /* u_t . d */
-  return w[0] * s - w[1] * c;
-}
-
-/* Exact solution of one contact: u = A r + b (A row-major 3x3, the diagonal block of W). */
-PetscErrorCode MBCContactLocalSolve(const PetscReal A[9], const PetscReal b[3], PetscReal mu, PetscReal r[3])
-{
-  PetscReal Ai[9], det;
-
-  PetscFunctionBegin;
-  if (b[0] >= 0 || !(A[0] > 0)) { /* separation, or no free DOF along the normal (all prescribed) */
-    r[0] = r[1] = r[2] = 0;
-    PetscFunctionReturn(0);
-  }
-  if (mu == 0) { /* frictionless: only the normal component */
-    r[0] = -b[0] / A[0];
-    r[1] = r[2] = 0;
-    PetscFunctionReturn(0);
-  }
-  r[0] = r[1] = r[2] = 0;
-  det = A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) + A[2] * (A[3] * A[7] - A[4] * A[6]);
-  if (det != 0) { /* stick: u = 0 */
-    Ai[0] = (A[4] * A[8] - A[5] * A[7]) / det, Ai[1] = (A[2] * A[7] - A[1] * A[8]) / det, Ai[2] = (A[1] * A[5] - A[2] * A[4]) / det;
-    Ai[3] = (A[5] * A[6] - A[3] * A[8]) / det, Ai[4] = (A[0] * A[8] - A[2] * A[6]) / det, Ai[5] = (A[2] * A[3] - A[0] * A[5]) / det;
-    Ai[6] = (A[3] * A[7] - A[4] * A[6]) / det, Ai[7] = (A[1] * A[6] - A[0] * A[7]) / det, Ai[8] = (A[0] * A[4] - A[1] * A[3]) / det;
-    for (int i = 0; i < 3; i++) r[i] = -(Ai[3 * i] * b[0] + Ai[3 * i + 1] * b[1] + Ai[3 * i + 2] * b[2]);
-    if (r[0] >= 0 && PetscSqrtReal(r[1] * r[1] + r[2] * r[2]) <= mu * r[0] * (1 + 1e-14)) PetscFunctionReturn(0);
-  }
-  { /* slip: sample G over the direction, bisect its sign changes, keep valid roots (den > 0,
-       u_t . d <= 0); among several, the one whose friction force is closest to the stick trial's */
-    const int N = 72;
-    PetscReal best[3] = {0, 0, 0}, bestScore = PETSC_MAX_REAL, f0 = 0, G0, along, den, rr[3];
-    G0 = SlipResidual(A, b, mu, f0, rr, &along, &den);
-    for (int k = 1; k <= N; k++) {
-      PetscReal f1 = 2 * PETSC_PI * k / N, G1 = SlipResidual(A, b, mu, f1, rr, &along, &den);
-      if ((G0 <= 0 && G1 >= 0) || (G0 >= 0 && G1 <= 0)) {
-        PetscReal lo = f0, hi = f1, Glo = G0, fm = f0;
-        for (int it = 0; it < 200 && hi - lo > 4 * PETSC_MACHINE_EPSILON; it++) {
-          PetscReal Gm;
-          fm = 0.5 * (lo + hi);
-          Gm = SlipResidual(A, b, mu, fm, rr, &along, &den);
-          if ((Glo <= 0 && Gm <= 0) || (Glo >= 0 && Gm >= 0)) lo = fm, Glo = Gm;
-          else hi = fm;
-        }
-        (void)SlipResidual(A, b, mu, fm, rr, &along, &den);
-        if (den > 0 && along <= 0) {
-          const PetscReal score = PetscSqr(rr[1] - r[1]) + PetscSqr(rr[2] - r[2]);
-          if (score < bestScore) {
-            bestScore = score;
-            best[0] = rr[0], best[1] = rr[1], best[2] = rr[2];
-          }
-        }
-      }
-      f0 = f1, G0 = G1;
-    }
-    if (bestScore < PETSC_MAX_REAL) {
-      r[0] = best[0], r[1] = best[1], r[2] = best[2];
-      PetscFunctionReturn(0);
-    }
-  }
-  /* no exact slip state (a singular or strongly non-symmetric block): projected fixed point */
-  {
-    PetscReal rho = 1.0 / PetscMax(PetscMax(A[0], A[4]), A[8]), x[3], u[3];
-    for (int it = 0; it < 200; it++) {
-      for (int i = 0; i < 3; i++) u[i] = A[3 * i] * r[0] + A[3 * i + 1] * r[1] + A[3 * i + 2] * r[2] + b[i];
-      x[0] = r[0] - rho * (u[0] + mu * PetscSqrtReal(u[1] * u[1] + u[2] * u[2]));
-      x[1] = r[1] - rho * u[1];
-      x[2] = r[2] - rho * u[2];
-      ProjectCone(x, mu, r);
-    }
-  }
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode MBCPGSSetFromOptions(MBCPGS *pgs)
-{
-  PetscFunctionBegin;
-  pgs->rtol         = 1e-8;
-  pgs->omega        = 1.0;
-  pgs->max_it       = 1000;
-  pgs->active_set   = 20;
-  pgs->sweeps_local = 1;
-  PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Projected Gauss-Seidel for the contact multipliers", "MBCPGS");
-  PetscCall(PetscOptionsReal("-mbc_pgs_rtol", "Tolerance on the FCLIB merit (in a simulation: of the step problem scaled to |q| = 1, so relative)", "MBCPGSSetFromOptions", pgs->rtol, &pgs->rtol, NULL));
-  PetscCall(PetscOptionsInt("-mbc_pgs_max_it", "Maximum sweeps", "MBCPGSSetFromOptions", pgs->max_it, &pgs->max_it, NULL));
-  PetscCall(PetscOptionsReal("-mbc_pgs_omega", "Relaxation factor (0, 2)", "MBCPGSSetFromOptions", pgs->omega, &pgs->omega, NULL));
-  PetscCall(PetscOptionsInt("-mbc_pgs_active_set", "Every this many sweeps, try the direct solve on the contacts in contact (0: never)", "MBCPGSSetFromOptions", pgs->active_set, &pgs->active_set, NULL));
-  PetscCall(PetscOptionsInt("-mbc_pgs_local_sweeps", "Gauss-Seidel sweeps over a rank's own contacts between two exchanges of the others' (parallel)", "MBCPGSSetFromOptions", pgs->sweeps_local, &pgs->sweeps_local, NULL));
-  PetscCall(PetscOptionsBool("-mbc_pgs_monitor", "Print the merit every sweep", "MBCPGSSetFromOptions", pgs->monitor, &pgs->monitor, NULL));
-  PetscOptionsEnd();
-  PetscCheck(pgs->rtol > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_rtol %g must be positive", (double)pgs->rtol);
-  PetscCheck(pgs->max_it > 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_max_it %" PetscInt_FMT " must be positive", pgs->max_it);
-  PetscCheck(pgs->omega > 0 && pgs->omega < 2, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_omega %g must lie in (0, 2)", (double)pgs->omega);
-  PetscCheck(pgs->active_set >= 0, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_active_set %" PetscInt_FMT " must be >= 0", pgs->active_set);
-  PetscCheck(pgs->sweeps_local >= 1, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_local_sweeps %" PetscInt_FMT " must be at least 1", pgs->sweeps_local);
+  PetscOptionsHeadBegin(PetscOptionsObject, "Projected Gauss-Seidel (-mbc_multiplier_type pgs)");
+  PetscCall(PetscOptionsReal("-pgs_omega", "Relaxation factor (0, 2)", "MBCMultiplierSetFromOptions", pgs->omega, &pgs->omega, NULL));
+  PetscCall(PetscOptionsInt("-pgs_active_set", "Every this many sweeps, try the direct solve on the contacts in contact (0: never)", "MBCMultiplierSetFromOptions", pgs->active_set, &pgs->active_set, NULL));
+  PetscCall(PetscOptionsInt("-pgs_local_sweeps", "Gauss-Seidel sweeps over a rank's own contacts between two exchanges of the others' (parallel)", "MBCMultiplierSetFromOptions", pgs->sweeps_local, &pgs->sweeps_local, NULL));
+  PetscCall(PetscOptionsInt("-pgs_merit_every", "Compute the merit (one product with W) every this many sweeps, and whenever a sweep changed r by less than the tolerance", "MBCMultiplierSetFromOptions", pgs->merit_every, &pgs->merit_every, NULL));
+  PetscOptionsHeadEnd();
+  PetscCheck(pgs->omega > 0 && pgs->omega < 2, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_omega %g must lie in (0, 2)", (double)pgs->omega);
+  PetscCheck(pgs->active_set >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_active_set %" PetscInt_FMT " must be >= 0", pgs->active_set);
+  PetscCheck(pgs->sweeps_local >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_local_sweeps %" PetscInt_FMT " must be at least 1", pgs->sweeps_local);
+  PetscCheck(pgs->merit_every >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_pgs_merit_every %" PetscInt_FMT " must be at least 1", pgs->merit_every);
   PetscFunctionReturn(0);
 }
 
 /* The parts of W a rank sweeps with: its diagonal block Ad (its rows and columns), the
    off-diagonal block Ao (its rows, the other ranks' columns, compacted) and the scatter of
    those columns of r; the diagonal 3x3 (1x1) blocks of its contacts. Kept while W is. */
-static PetscErrorCode PGSSetUpW(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r)
+static PetscErrorCode MBCMultiplierSetUp_PGS(MBCMultiplier m)
 {
-  PetscBool mpi;
+  MBC_PGS            *pgs = (MBC_PGS *)m->data;
+  MBCFrictionProblem *fp  = m->fp;
+  PetscBool           mpi;
 
   PetscFunctionBegin;
-  if (pgs->Wc == fp->W) PetscFunctionReturn(0);
-  PetscCall(MBCPGSReset(pgs));
-  PetscCall(PetscObjectReference((PetscObject)fp->W));
-  pgs->Wc = fp->W;
+  PetscCheck(!fp->G, PetscObjectComm((PetscObject)m), PETSC_ERR_SUP, "The projected Gauss-Seidel cannot impose the equilibrium of bodies free in a static analysis; use -mbc_multiplier_type newton");
   PetscCall(PetscObjectBaseTypeCompare((PetscObject)fp->W, MATMPIAIJ, &mpi));
   if (mpi) {
     const PetscInt *garray;
     PetscInt        ng;
     IS              is;
+    Vec             r;
     PetscCall(MatMPIAIJGetSeqAIJ(fp->W, &pgs->Ad, &pgs->Ao, &garray));
     PetscCall(MatGetSize(pgs->Ao, NULL, &ng));
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, ng, garray, PETSC_COPY_VALUES, &is));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, ng, &pgs->rg));
     PetscCall(VecDuplicate(pgs->rg, &pgs->cg));
     PetscCall(VecDuplicate(pgs->rg, &pgs->eg));
+    PetscCall(MatCreateVecs(fp->W, &r, NULL));
     PetscCall(VecScatterCreate(r, is, pgs->rg, NULL, &pgs->gsc));
+    PetscCall(VecDestroy(&r));
     PetscCall(ISDestroy(&is));
   } else pgs->Ad = fp->W, pgs->Ao = NULL;
-  PetscCall(PetscMalloc1(9 * fp->nc + 1, &pgs->diag));
-  for (PetscInt i = 0; i < fp->nc; i++) { /* diagonal blocks, row-major dim x dim */
-    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o, idx[3] = {o, o + 1, o + 2};
-    PetscScalar    v[9];
-    PetscCall(MatGetValues(pgs->Ad, dim, idx, dim, idx, v));
-    for (PetscInt k = 0; k < dim * dim; k++) pgs->diag[9 * i + k] = PetscRealPart(v[k]);
-  }
+  PetscCall(MBCMultiplierDiagonalBlocks(fp, pgs->Ad, &pgs->diag));
   PetscFunctionReturn(0);
 }
+
 
 /* Row grow of the active-set system: the sum over row `row` (local) of W of coef_j W_row,j into
    the columns col_j >= 0 (the column map and coefficients of this rank's slots in c, e, of the
    others' in cg, eg); cols, vals: work space of W's row length. */
-static PetscErrorCode ActiveSetRow(MBCPGS *pgs, PetscInt row, PetscInt grow, const PetscScalar c[], const PetscScalar e[], const PetscScalar cg[], const PetscScalar eg[], PetscInt acols[], PetscScalar avals[], Mat A)
+static PetscErrorCode ActiveSetRow(MBC_PGS *pgs, PetscInt row, PetscInt grow, const PetscScalar c[], const PetscScalar e[], const PetscScalar cg[], const PetscScalar eg[], PetscInt acols[], PetscScalar avals[], Mat A)
 {
   Mat      parts[2] = {pgs->Ad, pgs->Ao};
   PetscInt n = 0, nu = 0;
@@ -266,7 +115,7 @@ static PetscErrorCode ActiveSetRow(MBCPGS *pgs, PetscInt row, PetscInt grow, con
    Each W slot j of a contact in contact maps to a column col_j with a coefficient e_j: (k, 1)
    for the k-th unknown of a sticking contact, (k, 1), (k, mu d1), (k, mu d2) for the slots of a
    slipping one, (-1, 0) otherwise; the other ranks' maps arrive with the scatter of r. */
-static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
+static PetscErrorCode ActiveSetStep(MBC_PGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
 {
   MPI_Comm           comm = PetscObjectComm((PetscObject)fp->W);
   PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0, nstart = 0, N, tot[2];
@@ -481,13 +330,14 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
         for (PetscInt d = 0; d < dim; d++) y[d] = PetscRealPart(xv[c++]);
       if (dim == 1) rv[o] = PetscMax(0, y[0]); /* keep it in the cone */
       else {
-        ProjectCone(y, fp->mu[i], p);
+        MBCProjectCone(y, fp->mu[i], p);
         for (PetscInt d = 0; d < 3; d++) rv[o + d] = p[d];
       }
     }
     PetscCall(VecRestoreArrayRead(x, &xv));
     PetscCall(VecRestoreArray(r, &rv));
-    PetscCall(MBCFrictionError(fp, r, u, error));
+    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCFrictionMerit(fp, r, u, error));
     PetscCall(PetscInfo(NULL, "active set%s: %" PetscInt_FMT " unknowns, merit %g -> %g\n", reuse ? " (kept factor)" : "", N, (double)before, (double)*error));
   }
   PetscCall(VecDestroy(&x));
@@ -497,8 +347,9 @@ static PetscErrorCode ActiveSetStep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, 
 }
 
 /* One Gauss-Seidel sweep over this rank's contacts, the others' r as last exchanged (in parallel
-   a block Jacobi between ranks, Gauss-Seidel inside each). */
-static PetscErrorCode PGSLocalSweep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r)
+   a block Jacobi between ranks, Gauss-Seidel inside each). Adds the squared change of r and
+   the squared new r to dr2, r2: the sweep's own estimate of convergence, at no cost. */
+static PetscErrorCode PGSLocalSweep(MBC_PGS *pgs, MBCFrictionProblem *fp, Vec r, PetscReal *dr2, PetscReal *r2)
 {
   PetscScalar       *rv;
   const PetscScalar *qv, *gv = NULL;
@@ -532,9 +383,13 @@ static PetscErrorCode PGSLocalSweep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r)
       PetscReal x[3];
       for (PetscInt d = 0; d < dim; d++) x[d] = pgs->omega * rnew[d] + (1 - pgs->omega) * PetscRealPart(rv[o + d]);
       if (dim == 1) rnew[0] = PetscMax(0, x[0]);
-      else ProjectCone(x, fp->mu[i], rnew);
+      else MBCProjectCone(x, fp->mu[i], rnew);
     }
-    for (PetscInt d = 0; d < dim; d++) rv[o + d] = rnew[d];
+    for (PetscInt d = 0; d < dim; d++) {
+      *dr2 += PetscSqr(rnew[d] - PetscRealPart(rv[o + d]));
+      *r2 += PetscSqr(rnew[d]);
+      rv[o + d] = rnew[d];
+    }
   }
   if (gv) PetscCall(VecRestoreArrayRead(pgs->rg, &gv));
   PetscCall(VecRestoreArrayRead(fp->q, &qv));
@@ -543,76 +398,80 @@ static PetscErrorCode PGSLocalSweep(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r)
 }
 
 /* Sweeps over the contacts; r holds the warm start on entry, the solution on exit; u = W r + q.
-   Stops when the merit falls below rtol. On several ranks each rank sweeps its own contacts
-   (-mbc_pgs_local_sweeps times) with the others' r of the last exchange. */
-PetscErrorCode MBCPGSSolve(MBCPGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u)
+   Stops when the merit falls below rtol. The merit costs a product with W, as much as a sweep:
+   it is computed every merit_every sweeps, and whenever a sweep changed r by less than rtol
+   relative (the sweep's own estimate), so a converging solve stops at once. On several ranks
+   each rank sweeps its own contacts (-mbc_pgs_local_sweeps times) with the others' r of the
+   last exchange. */
+static PetscErrorCode MBCMultiplierSolve_PGS(MBCMultiplier m, Vec r, Vec u)
 {
-  PetscLogDouble t0, t1;
+  MBC_PGS            *pgs = (MBC_PGS *)m->data;
+  MBCFrictionProblem *fp  = m->fp;
+  MPI_Comm            comm = PetscObjectComm((PetscObject)m);
+  PetscReal           change[2] = {0, 0};
+  PetscBool           fresh = PETSC_TRUE; /* m->merit belongs to the current r */
 
   PetscFunctionBegin;
-  PetscCall(PetscLogEventBegin(MBC_PGSSolve, 0, 0, 0, 0));
-  PetscCall(PetscTime(&t0));
-  PetscCall(PGSSetUpW(pgs, fp, r));
-  pgs->reason = MBC_PGS_ITERATING;
-  for (pgs->its = 0; pgs->reason == MBC_PGS_ITERATING; pgs->its++) {
-    PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
+  PetscCall(MBCFrictionVelocity(fp, r, u));
+  PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+  for (m->its = 0;; m->its++) {
+    const PetscBool due = (PetscBool)(m->its % pgs->merit_every == 0 || change[0] <= PetscSqr(m->rtol) * change[1]);
+    if (m->its > 0 && due) {
+      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      fresh = PETSC_TRUE;
+    }
     /* every active_set sweeps, and at once when a factor of the last solve is kept (warm start
-       of a step like the last) */
-    if (pgs->active_set && ((pgs->its > 0 && pgs->its % pgs->active_set == 0) || (pgs->its == 0 && pgs->kept)) && pgs->error >= pgs->rtol) {
-      /* a few active-set (semismooth Newton) steps while they pay; the first also counts the
-         contacts closed in q as active: with a body held only by contact (static), D has a huge
-         rigid-mode part and the Gauss-Seidel iterate leaves most of them unloaded */
-      /* semismooth Newton: each step's split comes from the last step's iterate, not only from
-         improving ones (an active set that slips a few heel contacts may first raise the merit);
-         the best iterate is kept, and the steps stop after 3 without a new best */
+       of a step like the last): a few active-set (semismooth Newton) steps while they pay; the
+       first also counts the contacts closed in q as active */
+    if (fresh && pgs->active_set && ((m->its > 0 && m->its % pgs->active_set == 0) || (m->its == 0 && pgs->kept)) && m->merit >= m->rtol) {
       Vec       rbest;
-      PetscReal ebest = pgs->error;
+      PetscReal ebest = m->merit;
       PetscCall(VecDuplicate(r, &rbest));
       PetscCall(VecCopy(r, rbest));
-      for (PetscInt k = 0, stale = 0; k < 10 && stale < 3 && ebest >= pgs->rtol; k++) {
-        PetscCall(ActiveSetStep(pgs, fp, r, u, (PetscBool)(k == 0 && pgs->its > 0), &pgs->error));
-        if (pgs->error < 0.5 * ebest) {
-          ebest = pgs->error, stale = 0;
+      for (PetscInt k = 0, stale = 0; k < 10 && stale < 3 && ebest >= m->rtol; k++) {
+        PetscCall(ActiveSetStep(pgs, fp, r, u, (PetscBool)(k == 0 && m->its > 0), &m->merit));
+        if (m->merit < 0.5 * ebest) {
+          ebest = m->merit, stale = 0;
           PetscCall(VecCopy(r, rbest));
         } else stale++;
       }
       PetscCall(VecCopy(rbest, r));
       PetscCall(VecDestroy(&rbest));
-      PetscCall(MBCFrictionError(fp, r, u, &pgs->error));
+      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
     }
-    if (pgs->monitor) PetscCall(PetscPrintf(PetscObjectComm((PetscObject)fp->W), "  PGS sweep %4" PetscInt_FMT " FCLIB error %.6e\n", pgs->its, (double)pgs->error));
-    if (PetscIsInfOrNanReal(pgs->error)) pgs->reason = MBC_PGS_DIVERGED_NANORINF;
-    else if (pgs->error < pgs->rtol) pgs->reason = MBC_PGS_CONVERGED_RTOL;
-    else if (pgs->its >= pgs->max_it) pgs->reason = MBC_PGS_DIVERGED_ITS;
-    if (pgs->reason != MBC_PGS_ITERATING) break;
+    if (fresh) {
+      PetscCall(MBCMultiplierMonitorMerit(m, m->its, m->merit, NULL));
+      if (PetscIsInfOrNanReal(m->merit)) m->reason = MBC_MULTIPLIER_DIVERGED_NANORINF;
+      else if (m->merit < m->rtol) m->reason = MBC_MULTIPLIER_CONVERGED_RTOL;
+    }
+    if (m->reason == MBC_MULTIPLIER_ITERATING && m->its >= m->max_it) {
+      if (!fresh) {
+        PetscCall(MBCFrictionVelocity(fp, r, u));
+        PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      }
+      m->reason = m->merit < m->rtol ? MBC_MULTIPLIER_CONVERGED_RTOL : MBC_MULTIPLIER_DIVERGED_ITS;
+    }
+    if (m->reason != MBC_MULTIPLIER_ITERATING) break;
     if (pgs->gsc) { /* the other ranks' r */
       PetscCall(VecScatterBegin(pgs->gsc, r, pgs->rg, INSERT_VALUES, SCATTER_FORWARD));
       PetscCall(VecScatterEnd(pgs->gsc, r, pgs->rg, INSERT_VALUES, SCATTER_FORWARD));
     }
-    for (PetscInt k = 0; k < (pgs->gsc ? pgs->sweeps_local : 1); k++) PetscCall(PGSLocalSweep(pgs, fp, r));
+    change[0] = change[1] = 0;
+    for (PetscInt k = 0; k < (pgs->gsc ? pgs->sweeps_local : 1); k++) PetscCall(PGSLocalSweep(pgs, fp, r, &change[0], &change[1]));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, change, 2, MPIU_REAL, MPIU_SUM, comm));
+    fresh = PETSC_FALSE;
   }
-  PetscCall(PetscTime(&t1));
-  pgs->time = t1 - t0;
-  PetscCall(PetscLogEventEnd(MBC_PGSSolve, 0, 0, 0, 0));
-  PetscFunctionReturn(0);
-}
-
-/* Block layout: dims[i] rows (1 or 3) for contact i, or 3 each when dims is NULL. */
-PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *fp, const PetscInt dims[])
-{
-  PetscFunctionBegin;
-  PetscCall(PetscFree(fp->off));
-  PetscCall(PetscMalloc1(fp->nc + 1, &fp->off));
-  fp->off[0] = 0;
-  for (PetscInt i = 0; i < fp->nc; i++) fp->off[i + 1] = fp->off[i] + (dims ? dims[i] : 3);
   PetscFunctionReturn(0);
 }
 
 /* Frees what belongs to one W: its parts, the ghost scatter, the kept active-set factor. */
-PetscErrorCode MBCPGSReset(MBCPGS *pgs)
+static PetscErrorCode MBCMultiplierReset_PGS(MBCMultiplier m)
 {
+  MBC_PGS *pgs = (MBC_PGS *)m->data;
+
   PetscFunctionBegin;
-  PetscCall(MatDestroy(&pgs->Wc));
   pgs->Ad = pgs->Ao = NULL;
   PetscCall(VecDestroy(&pgs->rg));
   PetscCall(VecDestroy(&pgs->cg));
@@ -626,12 +485,51 @@ PetscErrorCode MBCPGSReset(MBCPGS *pgs)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *fp)
+static PetscErrorCode MBCMultiplierDestroy_PGS(MBCMultiplier m)
 {
   PetscFunctionBegin;
-  PetscCall(PetscFree(fp->off));
-  PetscCall(MatDestroy(&fp->W));
-  PetscCall(VecDestroy(&fp->q));
-  PetscCall(PetscFree(fp->mu));
+  PetscCall(MBCMultiplierReset_PGS(m));
+  PetscCall(PetscFree(m->data));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierView_PGS(MBCMultiplier m, PetscViewer viewer)
+{
+  MBC_PGS *pgs = (MBC_PGS *)m->data;
+
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "relaxation %g, active-set step every %" PetscInt_FMT " sweeps, merit every %" PetscInt_FMT " sweeps, %" PetscInt_FMT " local sweeps between exchanges\n", (double)pgs->omega, pgs->active_set, pgs->merit_every, pgs->sweeps_local));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCMultiplierCreate_PGS(MBCMultiplier m)
+{
+  MBC_PGS *pgs;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&pgs));
+  pgs->omega        = 1.0;
+  pgs->active_set   = 20;
+  pgs->sweeps_local = 1;
+  pgs->merit_every  = 10;
+  m->data           = pgs;
+  if (m->max_it < 0) m->max_it = 1000;
+  m->ops->setfromoptions = MBCMultiplierSetFromOptions_PGS;
+  m->ops->setup          = MBCMultiplierSetUp_PGS;
+  m->ops->solve          = MBCMultiplierSolve_PGS;
+  m->ops->reset          = MBCMultiplierReset_PGS;
+  m->ops->destroy        = MBCMultiplierDestroy_PGS;
+  m->ops->view           = MBCMultiplierView_PGS;
+  PetscFunctionReturn(0);
+}
+
+/* The active-set step every n sweeps (0: never): the Newton type's warm-start sweeps use none. */
+PetscErrorCode MBCMultiplierPGSSetActiveSet(MBCMultiplier m, PetscInt n)
+{
+  PetscBool pgs;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)m, MBCMULTIPLIERPGS, &pgs));
+  if (pgs) ((MBC_PGS *)m->data)->active_set = n;
   PetscFunctionReturn(0);
 }

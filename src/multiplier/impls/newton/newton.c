@@ -1,0 +1,644 @@
+/* MBCMULTIPLIERNEWTON: a globalised semismooth Newton method on the Alart-Curnier function.
+   Per contact, with u = W r + q (+ G^T alpha) and augmentations rho_n, rho_t,
+     xi_n = r_n - rho_n u_n,  phi_n = r_n - max(0, xi_n),
+     xi_t = r_t - rho_t u_t,  phi_t = r_t - proj_{|x| <= mu max(0, xi_n)}(xi_t)
+   (a frictionless 1-block has phi_n only). phi = 0 is Coulomb's law; its generalised Jacobian is
+   dphi = A dr + B du with 3x3 blocks A, B in closed form (separated: A = I, B = 0; stick:
+   A = 0, B = diag(rho); slip: the disk projection's derivative). A Newton step solves
+   (A + B W) dr = -phi on the contacts not separated (the others get dr = -r), with a sparse LU
+   (KSP, prefix -mbc_newton_, MUMPS by default); a non-monotone Armijo line search on
+   1/2 |phi|^2 globalises it, and Gauss-Seidel sweeps (type pgs) give the warm start and the
+   fallback when the line search fails. rho = 1 / (the diagonal of the contact's block of W),
+   so phi is in units of r and each contact's augmentation matches its own flexibility.
+   A direction without flexibility (W_dd = 0: the DOFs are prescribed on both sides) carries no
+   multiplier: phi_d = r_d. With equilibrium constraints G r = e (bodies free in a static
+   analysis), alpha joins the unknowns and the step solves the saddle point system
+   [A + B W, B G^T; G, 0]. The merit that stops the iteration is FCLIB's. */
+#include <mbc/private/multiplierimpl.h>
+
+typedef struct {
+  PetscReal     rho_scale;    /* rho = rho_scale / W_dd */
+  PetscInt      pgs_warm;     /* Gauss-Seidel sweeps before the first step */
+  PetscInt      pgs_fallback; /* sweeps when the line search fails */
+  PetscReal     sigma;        /* Armijo's constant */
+  PetscInt      ls_max, nonmonotone;
+  PetscInt      watchdog;     /* iterations without halving the best merit before going back to it */
+  PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
+  MBCMultiplier pgs;
+  KSP           ksp;
+  /* per W */
+  PetscReal *diag, *rho; /* 9, 2 per contact */
+  PetscBool *frozen;     /* per local row: a direction without flexibility */
+  PetscReal *A, *B;      /* 9 per contact: the Jacobian blocks at the current iterate */
+  PetscBool *active;     /* per contact: in the Newton system (not separated) */
+  Vec        phi, dr, wdr, rt, ut, dalpha, alphat;
+  PetscReal *work;       /* 3 x (reduced size): one contact's rows of the Newton matrix */
+  PetscInt  *mark, *cols;
+  PetscInt   nbuilt;     /* the kept factor's active rows (-1: none kept) */
+  IS         isbuilt;    /* and their indices: an all-stick system is the same while they are */
+  PetscBool  keptslip;   /* the kept factor has slipping contacts: never reused */
+  PetscInt   lsfail, pgssweeps, factors;
+} MBC_Newton;
+
+/* Alart-Curnier residual of this rank's contacts at (r, u) into phi; with jac, also the Jacobian
+   blocks and the active flags. Returns psi = 1/2 |phi|^2 + 1/2 |G r - e|^2 over all ranks. */
+static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, Vec alpha, PetscBool jac, PetscReal *psi, PetscBool *slips)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  const PetscScalar  *rv, *uv;
+  PetscScalar        *pv;
+  PetscReal           s2 = 0, gn2 = 0;
+  PetscBool           slip = PETSC_FALSE;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetArrayRead(r, &rv));
+  PetscCall(VecGetArrayRead(u, &uv));
+  PetscCall(VecGetArray(nt->phi, &pv));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt  o = fp->off[i], dim = fp->off[i + 1] - o;
+    const PetscReal rn = nt->rho[2 * i], rt = nt->rho[2 * i + 1], mu = dim == 3 ? fp->mu[i] : 0;
+    PetscReal       R[3] = {0, 0, 0}, U[3] = {0, 0, 0}, P[3], A[9] = {0}, B[9] = {0}, xn;
+    for (PetscInt d = 0; d < dim; d++) R[d] = PetscRealPart(rv[o + d]), U[d] = PetscRealPart(uv[o + d]);
+    xn = R[0] - rn * U[0];
+    if (nt->frozen[o] || xn <= 0) { /* separated (or no flexibility along the normal): r = 0 */
+      for (PetscInt d = 0; d < dim; d++) P[d] = R[d], A[4 * d] = 1;
+      if (jac) nt->active[i] = PETSC_FALSE;
+    } else {
+      P[0] = rn * U[0], B[0] = rn;
+      if (dim == 3) {
+        const PetscReal g = mu * xn;
+        PetscReal       xt[2], nrm;
+        for (PetscInt d = 1; d < 3; d++) xt[d - 1] = nt->frozen[o + d] ? 0 : R[d] - rt * U[d];
+        nrm = PetscSqrtReal(xt[0] * xt[0] + xt[1] * xt[1]);
+        if (nrm <= g && g > 0) { /* stick */
+          for (PetscInt d = 1; d < 3; d++) P[d] = rt * U[d], B[4 * d] = rt;
+        } else if (g == 0 || nrm == 0) { /* no friction force */
+          for (PetscInt d = 1; d < 3; d++) P[d] = R[d], A[4 * d] = 1;
+        } else { /* slip: r_t = g nu, nu = xi_t / |xi_t| */
+          const PetscReal nu[2] = {xt[0] / nrm, xt[1] / nrm}, sc = g / nrm;
+          slip = PETSC_TRUE;
+          for (PetscInt a = 0; a < 2; a++) {
+            P[1 + a] = R[1 + a] - g * nu[a];
+            for (PetscInt b = 0; b < 2; b++) {
+              const PetscReal proj = (a == b ? 1 : 0) - nu[a] * nu[b];
+              A[3 * (1 + a) + 1 + b] = (a == b ? 1 : 0) - sc * proj;
+              B[3 * (1 + a) + 1 + b] = sc * rt * proj;
+            }
+            A[3 * (1 + a)] = -mu * nu[a];
+            B[3 * (1 + a)] = mu * rn * nu[a];
+          }
+        }
+        for (PetscInt d = 1; d < 3; d++)
+          if (nt->frozen[o + d]) { /* no multiplier along it */
+            P[d] = R[d];
+            for (PetscInt e = 0; e < 3; e++) A[3 * d + e] = B[3 * d + e] = 0;
+            A[4 * d] = 1;
+          }
+      }
+      if (jac) nt->active[i] = PETSC_TRUE;
+    }
+    for (PetscInt d = 0; d < dim; d++) {
+      pv[o + d] = P[d];
+      s2 += P[d] * P[d];
+    }
+    if (jac) /* stored dim x dim, row-major, in 9 slots */
+      for (PetscInt d = 0; d < dim; d++)
+        for (PetscInt e = 0; e < dim; e++) nt->A[9 * i + dim * d + e] = A[3 * d + e], nt->B[9 * i + dim * d + e] = B[3 * d + e];
+  }
+  PetscCall(VecRestoreArray(nt->phi, &pv));
+  PetscCall(VecRestoreArrayRead(u, &uv));
+  PetscCall(VecRestoreArrayRead(r, &rv));
+  if (fp->G) {
+    Vec       g;
+    PetscReal gn;
+    PetscCall(VecDuplicate(fp->e, &g));
+    PetscCall(MatMult(fp->G, r, g));
+    PetscCall(VecAXPY(g, -1.0, fp->e));
+    PetscCall(VecNorm(g, NORM_2, &gn));
+    PetscCall(VecDestroy(&g));
+    gn2 = gn * gn;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &s2, 1, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)m)));
+  *psi = 0.5 * (s2 + gn2);
+  if (slips) PetscCallMPI(MPI_Allreduce(&slip, slips, 1, MPIU_BOOL, MPI_LOR, PetscObjectComm((PetscObject)m)));
+  PetscFunctionReturn(0);
+}
+
+/* The Newton step at the current iterate (A, B, active from ACResidual): dr on every row,
+   dalpha with equilibrium constraints. Rows of separated contacts: dr = -phi = -r. The active
+   rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
+   [B G_A^T; G_A 0] with constraints. J's rows: each rank's active rows in rank order, then
+   the rigid modes on the last rank. */
+static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
+{
+  MBC_Newton         *nt   = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp   = m->fp;
+  MPI_Comm            comm = PetscObjectComm((PetscObject)m);
+  PetscMPIInt         rank, size;
+  PetscInt            nA = 0, NA, rstart, ng = 0, nglocal = 0, gstart = 0, *rows, nloc, Nloc;
+  IS                  isA;
+  Vec                 b, x;
+  PetscBool           reuse = PETSC_FALSE;
+  KSPConvergedReason  reason;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscMalloc1(fp->off[fp->nc] + 1, &rows));
+  {
+    PetscInt rs;
+    PetscCall(MatGetOwnershipRange(fp->W, &rs, NULL));
+    for (PetscInt i = 0; i < fp->nc; i++)
+      if (nt->active[i])
+        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) rows[nA++] = rs + d;
+  }
+  PetscCall(ISCreateGeneral(comm, nA, rows, PETSC_OWN_POINTER, &isA));
+  PetscCall(MPIU_Allreduce(&nA, &NA, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Exscan(&nA, &rstart, 1, MPIU_INT, MPI_SUM, comm));
+  if (!rank) rstart = 0;
+  if (fp->G) {
+    PetscCall(MatGetSize(fp->G, &ng, NULL));
+    PetscCall(MatGetOwnershipRange(fp->G, &gstart, NULL));
+    PetscCall(MatGetLocalSize(fp->G, &nglocal, NULL));
+  }
+  /* dr = -phi on the separated rows (and 0 on the active ones), then t = W dr */
+  PetscCall(VecCopy(nt->phi, nt->dr));
+  PetscCall(VecScale(nt->dr, -1.0));
+  {
+    PetscScalar *dv;
+    PetscCall(VecGetArray(nt->dr, &dv));
+    for (PetscInt i = 0; i < fp->nc; i++)
+      if (nt->active[i])
+        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) dv[d] = 0;
+    PetscCall(VecRestoreArray(nt->dr, &dv));
+  }
+  PetscCall(MatMult(fp->W, nt->dr, nt->wdr));
+  nloc = nA + (rank == size - 1 ? ng : 0);
+  Nloc = NA + ng;
+  if (!Nloc) { /* every contact separated */
+    PetscCall(ISDestroy(&isA));
+    PetscFunctionReturn(0);
+  }
+  /* right side: -phi_A - B_A (W dr_I)_A; with constraints e - G r - G dr_I */
+  PetscCall(VecCreateMPI(comm, nloc, Nloc, &b));
+  PetscCall(VecDuplicate(b, &x));
+  {
+    const PetscScalar *pv, *tv;
+    PetscScalar       *bv;
+    PetscCall(VecGetArrayRead(nt->phi, &pv));
+    PetscCall(VecGetArrayRead(nt->wdr, &tv));
+    PetscCall(VecGetArray(b, &bv));
+    for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
+      const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+      if (!nt->active[i]) continue;
+      for (PetscInt d = 0; d < dim; d++, k++) {
+        PetscReal v = -PetscRealPart(pv[o + d]);
+        for (PetscInt e = 0; e < dim; e++) v -= nt->B[9 * i + dim * d + e] * PetscRealPart(tv[o + e]);
+        bv[k] = v;
+      }
+    }
+    PetscCall(VecRestoreArray(b, &bv));
+    PetscCall(VecRestoreArrayRead(nt->wdr, &tv));
+    PetscCall(VecRestoreArrayRead(nt->phi, &pv));
+  }
+  if (fp->G) { /* e - G (r + dr_I), into the last rank's tail of b */
+    Vec                g, t;
+    VecScatter         sc;
+    IS                 isg;
+    PetscCall(VecDuplicate(fp->e, &g));
+    PetscCall(VecDuplicate(r, &t));
+    PetscCall(VecWAXPY(t, 1.0, r, nt->dr));
+    PetscCall(MatMult(fp->G, t, g));
+    PetscCall(VecAYPX(g, -1.0, fp->e));
+    PetscCall(ISCreateStride(comm, nglocal, NA + gstart, 1, &isg));
+    PetscCall(VecScatterCreate(g, NULL, b, isg, &sc));
+    PetscCall(VecScatterBegin(sc, g, b, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(sc, g, b, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterDestroy(&sc));
+    PetscCall(ISDestroy(&isg));
+    PetscCall(VecDestroy(&g));
+    PetscCall(VecDestroy(&t));
+  }
+  /* an all-stick system on the same rows is the kept one (J = B W_AA: B depends on rho only) */
+  if (!slips && !fp->G && nt->isbuilt && !nt->keptslip) {
+    PetscBool same;
+    PetscCall(ISEqualUnsorted(isA, nt->isbuilt, &same));
+    reuse = same;
+  }
+  if (!reuse) {
+    Mat          J, Ws, GTs = NULL, Gs = NULL;
+    PetscInt    *dnz, *onz, jstart, jend, nmark;
+    PetscReal    dmax = 0;
+    PetscScalar *vals;
+    PetscCall(MatCreateSubMatrix(fp->W, isA, isA, MAT_INITIAL_MATRIX, &Ws));
+    if (fp->G) {
+      Mat GT;
+      IS  isall, isgrows;
+      PetscCall(MatTranspose(fp->G, MAT_INITIAL_MATRIX, &GT));
+      PetscCall(ISCreateStride(comm, rank == size - 1 ? ng : 0, 0, 1, &isall));
+      PetscCall(MatCreateSubMatrix(GT, isA, isall, MAT_INITIAL_MATRIX, &GTs));
+      PetscCall(ISCreateStride(comm, nglocal, gstart, 1, &isgrows));
+      PetscCall(MatCreateSubMatrix(fp->G, isgrows, isA, MAT_INITIAL_MATRIX, &Gs));
+      PetscCall(ISDestroy(&isall));
+      PetscCall(ISDestroy(&isgrows));
+      PetscCall(MatDestroy(&GT));
+    }
+    jstart = rstart; /* J's rows and columns on this rank */
+    jend   = rstart + nloc;
+    if (!nt->work) PetscCall(PetscMalloc3(3 * (Nloc + 1), &nt->work, Nloc + 1, &nt->mark, Nloc + 1, &nt->cols));
+    else {
+      PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));
+      PetscCall(PetscMalloc3(3 * (Nloc + 1), &nt->work, Nloc + 1, &nt->mark, Nloc + 1, &nt->cols));
+    }
+    for (PetscInt k = 0; k <= Nloc; k++) nt->mark[k] = -1;
+    for (PetscInt k = 0; k < 3 * (Nloc + 1); k++) nt->work[k] = 0;
+    PetscCall(PetscMalloc3(nloc + 1, &dnz, nloc + 1, &onz, Nloc + 1, &vals));
+    /* two passes over the active contacts: the row patterns (preallocation), then the values */
+    for (PetscInt pass = 0; pass < 2; pass++) {
+      if (pass == 1) {
+        PetscCall(MatCreate(comm, &J));
+        PetscCall(MatSetSizes(J, nloc, nloc, Nloc, Nloc));
+        PetscCall(MatSetType(J, MATAIJ));
+        PetscCall(MatSeqAIJSetPreallocation(J, 0, dnz));
+        PetscCall(MatMPIAIJSetPreallocation(J, 0, dnz, 0, onz));
+        PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+      }
+      for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
+        const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+        if (!nt->active[i]) continue;
+        nmark = 0;
+        for (PetscInt e = 0; e < dim; e++) { /* the union of the contact's rows of W_AA and G_A^T */
+          for (PetscInt part = 0; part < (GTs ? 2 : 1); part++) {
+            Mat                src = part ? GTs : Ws;
+            const PetscInt     grow = rstart + k + e, shiftc = part ? NA : 0;
+            PetscInt           ncols;
+            const PetscInt    *cc;
+            const PetscScalar *vv;
+            PetscCall(MatGetRow(src, grow, &ncols, &cc, &vv));
+            for (PetscInt j = 0; j < ncols; j++) {
+              const PetscInt c = cc[j] + shiftc;
+              if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+              if (pass == 1)
+                for (PetscInt d = 0; d < dim; d++) nt->work[3 * nt->mark[c] + d] += nt->B[9 * i + dim * d + e] * PetscRealPart(vv[j]);
+            }
+            PetscCall(MatRestoreRow(src, grow, &ncols, &cc, &vv));
+          }
+          { /* the contact's own columns (A and the shift) */
+            const PetscInt c = rstart + k + e;
+            if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+          }
+        }
+        for (PetscInt d = 0; d < dim; d++) {
+          const PetscInt grow = rstart + k + d;
+          if (pass == 0) {
+            dnz[k + d] = onz[k + d] = 0;
+            for (PetscInt j = 0; j < nmark; j++) {
+              if (nt->cols[j] >= jstart && nt->cols[j] < jend) dnz[k + d]++;
+              else onz[k + d]++;
+            }
+          } else {
+            for (PetscInt e = 0; e < dim; e++) nt->work[3 * nt->mark[rstart + k + e] + d] += nt->A[9 * i + dim * d + e];
+            dmax = PetscMax(dmax, PetscAbsReal(nt->work[3 * nt->mark[grow] + d]));
+            for (PetscInt j = 0; j < nmark; j++) vals[j] = nt->work[3 * j + d];
+            PetscCall(MatSetValues(J, 1, &grow, nmark, nt->cols, vals, INSERT_VALUES));
+          }
+        }
+        for (PetscInt j = 0; j < nmark; j++) { /* clear the work rows */
+          nt->mark[nt->cols[j]] = -1;
+          for (PetscInt d = 0; d < 3; d++) nt->work[3 * j + d] = 0;
+        }
+        k += dim;
+      }
+      if (Gs) { /* equilibrium rows G_A on the last rank's tail */
+        for (PetscInt j = 0; j < nglocal; j++) {
+          const PetscInt     grow = gstart + j, jrow = NA + gstart + j;
+          PetscInt           ncols;
+          const PetscInt    *cc;
+          const PetscScalar *vv;
+          PetscCall(MatGetRow(Gs, grow, &ncols, &cc, &vv));
+          if (pass == 1) {
+            PetscCall(MatSetValues(J, 1, &jrow, ncols, cc, vv, INSERT_VALUES));
+            PetscCall(MatSetValue(J, jrow, jrow, 0.0, INSERT_VALUES));
+          }
+          PetscCall(MatRestoreRow(Gs, grow, &ncols, &cc, &vv));
+        }
+        if (pass == 0 && rank == size - 1)
+          for (PetscInt j = 0; j < ng; j++) dnz[nA + j] = nloc, onz[nA + j] = Nloc - nloc;
+      }
+    }
+    PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
+    /* a shift of the contact rows: stick rows of a rank-deficient W (rigid bodies, redundant
+       constraints) are singular; it picks the least-force solution and costs the step only
+       shift x cond of accuracy, which the next steps recover */
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
+    for (PetscInt k = 0; k < nA; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
+    PetscCall(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
+    PetscCall(PetscFree3(dnz, onz, vals));
+    PetscCall(MatDestroy(&Ws));
+    PetscCall(MatDestroy(&GTs));
+    PetscCall(MatDestroy(&Gs));
+    PetscCall(KSPReset(nt->ksp));
+    PetscCall(KSPSetOperators(nt->ksp, J, J));
+    PetscCall(MatDestroy(&J));
+    PetscCall(KSPSetUp(nt->ksp));
+    nt->factors++;
+    PetscCall(ISDestroy(&nt->isbuilt));
+    nt->isbuilt  = isA;
+    nt->keptslip = (PetscBool)(slips || fp->G);
+    isA          = NULL;
+  }
+  PetscCall(KSPSolve(nt->ksp, b, x));
+  PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+  if (reason < 0) { /* a failed factorization: steepest descent on 1/2|phi|^2 instead (dr = -phi) */
+    PetscCall(PetscInfo(m, "Newton matrix: %s; falling back to dr = -phi\n", KSPConvergedReasons[reason]));
+    PetscCall(VecCopy(nt->phi, nt->dr));
+    PetscCall(VecScale(nt->dr, -1.0));
+    if (fp->G) PetscCall(VecZeroEntries(nt->dalpha));
+    PetscCall(ISDestroy(&nt->isbuilt));
+  } else {
+    const PetscScalar *xv;
+    PetscScalar       *dv;
+    PetscCall(VecGetArrayRead(x, &xv));
+    PetscCall(VecGetArray(nt->dr, &dv));
+    for (PetscInt i = 0, k = 0; i < fp->nc; i++)
+      if (nt->active[i])
+        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) dv[d] = xv[k++];
+    PetscCall(VecRestoreArray(nt->dr, &dv));
+    PetscCall(VecRestoreArrayRead(x, &xv));
+    if (fp->G) { /* dalpha from the tail of x */
+      VecScatter sc;
+      IS         isg;
+      PetscCall(ISCreateStride(comm, nglocal, NA + gstart, 1, &isg));
+      PetscCall(VecScatterCreate(x, isg, nt->dalpha, NULL, &sc));
+      PetscCall(VecScatterBegin(sc, x, nt->dalpha, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecScatterEnd(sc, x, nt->dalpha, INSERT_VALUES, SCATTER_FORWARD));
+      PetscCall(VecScatterDestroy(&sc));
+      PetscCall(ISDestroy(&isg));
+    }
+  }
+  PetscCall(ISDestroy(&isA));
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&x));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscOptionItems *PetscOptionsObject)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+
+  PetscFunctionBegin;
+  PetscOptionsHeadBegin(PetscOptionsObject, "Semismooth Newton, Alart-Curnier (-mbc_multiplier_type newton)");
+  PetscCall(PetscOptionsReal("-newton_rho", "Augmentation rho = this / (the contact's diagonal of W)", "MBCMultiplierSetFromOptions", nt->rho_scale, &nt->rho_scale, NULL));
+  PetscCall(PetscOptionsInt("-newton_pgs_warm", "Gauss-Seidel sweeps before the first Newton step", "MBCMultiplierSetFromOptions", nt->pgs_warm, &nt->pgs_warm, NULL));
+  PetscCall(PetscOptionsInt("-newton_pgs_fallback", "Gauss-Seidel sweeps when the line search fails", "MBCMultiplierSetFromOptions", nt->pgs_fallback, &nt->pgs_fallback, NULL));
+  PetscCall(PetscOptionsInt("-newton_ls_max", "Halvings of the step in the line search", "MBCMultiplierSetFromOptions", nt->ls_max, &nt->ls_max, NULL));
+  PetscCall(PetscOptionsInt("-newton_nonmonotone", "Memory of the non-monotone line search (1: monotone Armijo)", "MBCMultiplierSetFromOptions", nt->nonmonotone, &nt->nonmonotone, NULL));
+  PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
+  PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
+  PetscOptionsHeadEnd();
+  PetscCheck(nt->rho_scale > 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_rho %g must be positive", (double)nt->rho_scale);
+  PetscCheck(nt->pgs_warm >= 0 && nt->pgs_fallback >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_pgs_warm and -mbc_newton_pgs_fallback must be >= 0");
+  PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
+  PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
+  PetscCall(KSPSetFromOptions(nt->ksp));
+  PetscFunctionReturn(0);
+}
+
+/* Per W: the diagonal blocks, the augmentations, the directions without flexibility. */
+static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  Mat                 Wd;
+  PetscBool           mpi;
+  PetscReal           dmax = 0;
+  const PetscInt      nrows = fp->off[fp->nc];
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectBaseTypeCompare((PetscObject)fp->W, MATMPIAIJ, &mpi));
+  if (mpi) PetscCall(MatMPIAIJGetSeqAIJ(fp->W, &Wd, NULL, NULL));
+  else Wd = fp->W;
+  PetscCall(MBCMultiplierDiagonalBlocks(fp, Wd, &nt->diag));
+  PetscCall(PetscMalloc5(2 * fp->nc + 1, &nt->rho, nrows + 1, &nt->frozen, 9 * fp->nc + 1, &nt->A, 9 * fp->nc + 1, &nt->B, fp->nc + 1, &nt->active));
+  for (PetscInt i = 0; i < fp->nc; i++)
+    for (PetscInt d = 0, dim = fp->off[i + 1] - fp->off[i]; d < dim; d++) dmax = PetscMax(dmax, nt->diag[9 * i + (dim + 1) * d]);
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)m)));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    PetscReal      wt = 0;
+    PetscInt       nt_ = 0;
+    for (PetscInt d = 0; d < dim; d++) nt->frozen[o + d] = (PetscBool)!(nt->diag[9 * i + (dim + 1) * d] > 1e-12 * dmax);
+    nt->rho[2 * i] = nt->frozen[o] ? 0 : nt->rho_scale / nt->diag[0 + 9 * i];
+    for (PetscInt d = 1; d < dim; d++)
+      if (!nt->frozen[o + d]) wt += nt->diag[9 * i + (dim + 1) * d], nt_++;
+    nt->rho[2 * i + 1] = nt_ ? nt->rho_scale * nt_ / wt : 0;
+  }
+  PetscCall(MatCreateVecs(fp->W, &nt->phi, NULL));
+  PetscCall(VecDuplicate(nt->phi, &nt->dr));
+  PetscCall(VecDuplicate(nt->phi, &nt->wdr));
+  PetscCall(VecDuplicate(nt->phi, &nt->rt));
+  PetscCall(VecDuplicate(nt->phi, &nt->ut));
+  if (fp->G) {
+    PetscCall(VecDuplicate(fp->alpha, &nt->dalpha));
+    PetscCall(VecDuplicate(fp->alpha, &nt->alphat));
+  }
+  PetscCall(MBCMultiplierSetProblem(nt->pgs, fp));
+  PetscFunctionReturn(0);
+}
+
+/* Gauss-Seidel sweeps from r (without equilibrium constraints only); u = W r + q after. */
+static PetscErrorCode NewtonSweeps(MBCMultiplier m, PetscInt n, Vec r, Vec u)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+
+  PetscFunctionBegin;
+  if (!n || m->fp->G) PetscFunctionReturn(0);
+  PetscCall(MBCMultiplierSetTolerances(nt->pgs, m->rtol, n));
+  PetscCall(MBCMultiplierSolve(nt->pgs, r, u));
+  nt->pgssweeps += nt->pgs->its;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  PetscReal           psi, *hist;
+  PetscReal           best;
+  PetscBool           slips;
+  PetscInt            fails = 0, stall = 0, restarts = 0;
+  Vec                 rbest, abest = NULL;
+  char                line[128] = "";
+
+  PetscFunctionBegin;
+  nt->lsfail = nt->pgssweeps = nt->factors = 0;
+  PetscCall(PetscMalloc1(nt->nonmonotone, &hist));
+  PetscCall(VecDuplicate(r, &rbest));
+  if (fp->G) PetscCall(VecDuplicate(fp->alpha, &abest));
+  PetscCall(NewtonSweeps(m, nt->pgs_warm, r, u));
+  PetscCall(MBCFrictionVelocity(fp, r, u));
+  PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+  PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, &psi, &slips));
+  for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
+  best = m->merit;
+  PetscCall(VecCopy(r, rbest));
+  if (abest) PetscCall(VecCopy(fp->alpha, abest));
+  for (m->its = 0;; m->its++) {
+    PetscReal ref = hist[0], t = 1, psit = psi;
+    PetscInt  ls;
+    PetscCall(MBCMultiplierMonitorMerit(m, m->its, m->merit, line));
+    if (PetscIsInfOrNanReal(m->merit)) m->reason = MBC_MULTIPLIER_DIVERGED_NANORINF;
+    else if (m->merit < m->rtol) m->reason = MBC_MULTIPLIER_CONVERGED_RTOL;
+    else if (m->its >= m->max_it) m->reason = MBC_MULTIPLIER_DIVERGED_ITS;
+    else if (fails >= 5) m->reason = MBC_MULTIPLIER_DIVERGED_LINE_SEARCH;
+    if (m->reason != MBC_MULTIPLIER_ITERATING) break;
+    PetscCall(NewtonStep(m, r, slips));
+    PetscCall(MatMult(fp->W, nt->dr, nt->wdr)); /* wdr = W dr (+ G^T dalpha) */
+    if (fp->G) PetscCall(MatMultTransposeAdd(fp->G, nt->dalpha, nt->wdr, nt->wdr));
+    for (PetscInt k = 1; k < nt->nonmonotone; k++) ref = PetscMax(ref, hist[k]);
+    for (ls = 0; ls < nt->ls_max; ls++, t *= 0.5) { /* Armijo on 1/2|phi|^2: its slope along a Newton step is -|phi|^2 */
+      PetscCall(VecWAXPY(nt->rt, t, nt->dr, r));
+      PetscCall(VecWAXPY(nt->ut, t, nt->wdr, u));
+      if (fp->G) PetscCall(VecWAXPY(nt->alphat, t, nt->dalpha, fp->alpha));
+      PetscCall(ACResidual(m, nt->rt, nt->ut, fp->G ? nt->alphat : NULL, PETSC_FALSE, &psit, NULL));
+      if (psit <= ref - nt->sigma * t * 2 * psi) break;
+    }
+    if (ls < nt->ls_max || fp->G) { /* accepted (with constraints the last, shortest step is taken anyway) */
+      PetscCall(VecCopy(nt->rt, r));
+      if (fp->G) PetscCall(VecCopy(nt->alphat, fp->alpha));
+      if (ls == nt->ls_max) fails++, nt->lsfail++;
+      else fails = 0;
+    } else { /* Gauss-Seidel sweeps instead */
+      nt->lsfail++;
+      PetscCall(NewtonSweeps(m, nt->pgs_fallback, r, u));
+    }
+    PetscCall(MBCFrictionVelocity(fp, r, u)); /* afresh, not accumulated */
+    PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+    if (m->merit < 0.5 * best || (m->merit < best && stall < nt->watchdog)) { /* the best iterate, kept */
+      if (m->merit < 0.5 * best) stall = 0;
+      else stall++;
+      best = m->merit;
+      PetscCall(VecCopy(r, rbest));
+      if (abest) PetscCall(VecCopy(fp->alpha, abest));
+    } else stall++;
+    if (stall >= nt->watchdog && m->merit >= m->rtol) { /* the watchdog: no halving of the best merit for a while
+                                                           (the non-monotone search wandered, or Newton cycles
+                                                           between active sets): back to the best iterate, and
+                                                           Gauss-Seidel sweeps, more at each restart, to move it */
+      PetscCall(VecCopy(rbest, r));
+      if (abest) PetscCall(VecCopy(abest, fp->alpha));
+      restarts++;
+      PetscCall(NewtonSweeps(m, restarts * nt->pgs_fallback, r, u));
+      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      stall = 0;
+    }
+    PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, &psi, &slips));
+    if (stall == 0 && restarts && m->merit == best) for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
+    for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
+    hist[0] = psi;
+    if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (fp->G ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
+  }
+  if (m->reason < 0 && best < m->merit) { /* not converged: return the best iterate */
+    PetscCall(VecCopy(rbest, r));
+    if (abest) PetscCall(VecCopy(abest, fp->alpha));
+    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+  }
+  PetscCall(VecDestroy(&rbest));
+  PetscCall(VecDestroy(&abest));
+  PetscCall(PetscFree(hist));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree(nt->diag));
+  PetscCall(PetscFree5(nt->rho, nt->frozen, nt->A, nt->B, nt->active));
+  PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));
+  PetscCall(VecDestroy(&nt->phi));
+  PetscCall(VecDestroy(&nt->dr));
+  PetscCall(VecDestroy(&nt->wdr));
+  PetscCall(VecDestroy(&nt->rt));
+  PetscCall(VecDestroy(&nt->ut));
+  PetscCall(VecDestroy(&nt->dalpha));
+  PetscCall(VecDestroy(&nt->alphat));
+  PetscCall(ISDestroy(&nt->isbuilt));
+  PetscCall(KSPReset(nt->ksp));
+  PetscCall(MBCMultiplierReset(nt->pgs));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierDestroy_Newton(MBCMultiplier m)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+
+  PetscFunctionBegin;
+  PetscCall(MBCMultiplierReset_Newton(m));
+  PetscCall(KSPDestroy(&nt->ksp));
+  PetscCall(MBCMultiplierDestroy(&nt->pgs));
+  PetscCall(PetscFree(m->data));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierView_Newton(MBCMultiplier m, PetscViewer viewer)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Alart-Curnier, rho %g / diag(W), non-monotone Armijo (memory %" PetscInt_FMT ", %" PetscInt_FMT " halvings), shift %g; Gauss-Seidel: %" PetscInt_FMT " warm-start sweeps, %" PetscInt_FMT " on a failed line search\n", (double)nt->rho_scale, nt->nonmonotone, nt->ls_max, (double)nt->shift, nt->pgs_warm, nt->pgs_fallback));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "last solve: %" PetscInt_FMT " factorizations, %" PetscInt_FMT " failed line searches, %" PetscInt_FMT " Gauss-Seidel sweeps\n", nt->factors, nt->lsfail, nt->pgssweeps));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(KSPView(nt->ksp, viewer));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
+{
+  MBC_Newton *nt;
+  const char *prefix;
+  char        p[256];
+  PC          pc;
+  PetscBool   mumps;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&nt));
+  nt->rho_scale    = 1.0;
+  nt->pgs_warm     = 0;
+  nt->pgs_fallback = 10;
+  nt->sigma        = 1e-4;
+  nt->ls_max       = 20;
+  nt->nonmonotone  = 5;
+  nt->watchdog     = 10;
+  nt->shift        = 1e-12;
+  m->data          = nt;
+  if (m->max_it < 0) m->max_it = 100;
+  PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));
+  PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_", prefix ? prefix : ""));
+  PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), &nt->ksp));
+  PetscCall(KSPSetOptionsPrefix(nt->ksp, p));
+  PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(PetscHasExternalPackage("mumps", &mumps));
+  if (mumps) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
+  PetscCall(MBCMultiplierCreate(PetscObjectComm((PetscObject)m), &nt->pgs));
+  PetscCall(MBCMultiplierSetOptionsPrefix(nt->pgs, prefix));
+  PetscCall(MBCMultiplierSetType(nt->pgs, MBCMULTIPLIERPGS));
+  PetscCall(MBCMultiplierPGSSetActiveSet(nt->pgs, 0));
+  m->ops->setfromoptions = MBCMultiplierSetFromOptions_Newton;
+  m->ops->setup          = MBCMultiplierSetUp_Newton;
+  m->ops->solve          = MBCMultiplierSolve_Newton;
+  m->ops->reset          = MBCMultiplierReset_Newton;
+  m->ops->destroy        = MBCMultiplierDestroy_Newton;
+  m->ops->view           = MBCMultiplierView_Newton;
+  PetscFunctionReturn(0);
+}
