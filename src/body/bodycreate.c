@@ -175,6 +175,7 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   for (PetscInt i = 0; i < b->nloads; i++) PetscCall(VecDestroy(&b->load[i]));
   PetscCall(PetscFree2(b->load, b->load_index));
   PetscCall(PetscFree2(b->bc_rows, b->bc_entry));
+  PetscCall(MBCBodyRigidModesDestroy(b));
   PetscCall(MatDestroy(&b->K));
   PetscCall(MatDestroy(&b->M));
   PetscCall(MatDestroy(&b->A));

@@ -34,6 +34,7 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
     PetscCall(VecDestroy(&d));
   }
   PetscCall(MatZeroRowsColumns(A, body->nbc, body->bc_rows, 1.0, NULL, NULL));
+  if (aK != 0 && aM == 0 && body->nrigid) PetscCall(MatZeroRowsColumns(A, body->nfix, body->fix_rows, 1.0, NULL, NULL)); /* K^+ */
   PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
 
   PetscCall(KSPCreate(body->comm, &ksp));
@@ -104,6 +105,7 @@ PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, Pets
     }
   }
   PetscCall(MBCBodySetConstrainedRows(body, g, rhs));
+  if (aK != 0 && aM == 0) PetscCall(MBCBodyZeroHeldRows(body, rhs, NULL));
   PetscCall(KSPSolve(ksp, rhs, x));
   PetscCall(KSPGetConvergedReason(ksp, &reason));
   PetscCheck(reason > 0, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': linear solve failed (%s)", body->name, KSPConvergedReasons[reason]);

@@ -59,7 +59,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsBool("-mbc_contact_search_only", "Search contact on the undeformed bodies, report, stop", "MBCSolverSetFromOptions", s->search_only, &s->search_only, NULL));
   PetscCall(PetscOptionsString("-mbc_fclib_write", "Write the contact multiplier problem of step -mbc_fclib_write_step to this FCLIB file", "MBCSolverSetFromOptions", s->fclib_file, s->fclib_file, sizeof(s->fclib_file), NULL));
   PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, NULL));
-  PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: epsilon of the spring epsilon diag(K) to the last iterate (< 0: 1e-6 for bodies free in some direction, 0 elsewhere)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
+  PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
@@ -297,7 +297,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
    stabilisation one iteration is exact. */
 static PetscErrorCode SolverStatic(MBCSolver s)
 {
-  PetscBool stabilized = PETSC_FALSE;
+  PetscBool stabilized = PETSC_FALSE, floating = PETSC_FALSE;
 
   PetscFunctionBegin;
   s->theta = 1; /* no inertia: the contact force of the step is lambda_n+1 */
@@ -305,25 +305,30 @@ static PetscErrorCode SolverStatic(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
-    body->stab = s->static_stabilize >= 0 ? s->static_stabilize : ((body->bc_component[0] && body->bc_component[1] && body->bc_component[2]) ? 0.0 : 1e-6);
-    if (body->stab > 0) stabilized = PETSC_TRUE;
+    PetscCall(MBCBodyRigidModes(body)); /* the free rigid modes, exact (FETI), unless a spring is asked for */
+    body->stab = (s->static_stabilize > 0 && body->nrigid) ? s->static_stabilize : 0.0;
+    if (body->stab > 0) {
+      stabilized = PETSC_TRUE;
+      PetscCall(MBCBodyRigidModesDestroy(body));
+    }
+    if (body->nrigid) floating = PETSC_TRUE;
     PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
     body->aK = 1.0;
     body->aM = 0.0;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &stabilized, 1, MPIU_BOOL, MPI_LOR, s->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &floating, 1, MPIU_BOOL, MPI_LOR, s->comm));
   s->step = 0;
   PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   for (PetscInt b = 0; b < s->nbodies; b++) { /* a body free in some direction must touch a couple */
     PetscBool touches = PETSC_FALSE, free = PETSC_FALSE;
-    if (s->bodies[b]) free = (PetscBool)!(s->bodies[b]->bc_component[0] && s->bodies[b]->bc_component[1] && s->bodies[b]->bc_component[2]);
+    if (s->bodies[b]) free = (PetscBool)(s->bodies[b]->nrigid > 0 || s->bodies[b]->stab > 0);
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &free, 1, MPIU_BOOL, MPI_LOR, s->comm));
     for (PetscInt i = 0; s->contact && i < s->contact->ncouples && !touches; i++) {
       MBCSurface *side[2] = {&s->contact->couples[i].master, &s->contact->couples[i].slave};
       for (PetscInt k = 0; k < 2; k++)
         for (PetscInt n = 0; n < side[k]->nnodes && !touches; n++) touches = (PetscBool)(side[k]->nbody[n] == b);
     }
-    PetscCheck(!free || s->static_stabilize != 0, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and -mbc_static_stabilize 0: its static stiffness is singular; stabilise it (default) or prescribe it", s->scene->filename, s->scene->bodies[b].name);
     PetscCheck(!free || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
   for (s->step = 1; s->step <= s->nsteps; s->step++) {
@@ -334,19 +339,32 @@ static PetscErrorCode SolverStatic(MBCSolver s)
         MBCBody body = s->bodies[b];
         if (!body) continue;
         PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
+        for (PetscInt j = 0; j < body->nrigid; j++) { /* the load on each free mode */
+          PetscScalar d;
+          PetscCall(VecDot(body->rhs, body->rigid[j], &d));
+          body->frigid[j] = PetscRealPart(d);
+        }
         PetscCall(MatMult(body->K, body->u, body->work));
         PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+        for (PetscInt j = 0; j < body->nrigid; j++) { /* the equilibrium's right side -R^T (F - K u) */
+          PetscScalar d;
+          PetscCall(VecDot(body->rhs, body->rigid[j], &d));
+          body->erigid[j] = -PetscRealPart(d);
+        }
         PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
         PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
       }
-      if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda */
+      if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda (+ R alpha) */
       fmax = kumax = 0;
       for (PetscInt b = 0; b < s->nbodies; b++) {
         MBCBody   body = s->bodies[b];
         PetscReal n;
         if (!body) continue;
         PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
-        PetscCall(MatMult(body->A, body->du, body->work));
+        if (body->nrigid) { /* K du off the prescribed rows: A du is not the force of a rigid motion */
+          PetscCall(MatMult(body->K, body->du, body->work));
+          PetscCall(MBCBodySetConstrainedRows(body, NULL, body->work));
+        } else PetscCall(MatMult(body->A, body->du, body->work));
         PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
         fmax = PetscMax(fmax, n);
         PetscCall(VecAXPY(body->u, 1.0, body->du));
@@ -360,8 +378,8 @@ static PetscErrorCode SolverStatic(MBCSolver s)
         fmax = mx[0], kumax = mx[1];
       }
       PetscCall(SolverContact(s));
-      if (s->monitor && (s->contact || stabilized)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
-      if ((!s->contact && !stabilized) || fmax <= s->static_rtol * kumax) break;
+      if (s->monitor && (s->contact || stabilized || floating)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
+      if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax) break;
       PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
     }
     PetscCall(SolverMonitor(s));

@@ -21,6 +21,7 @@
    bouncing block gains energy at every bounce). */
 #include <mbc/private/solverimpl.h>
 #include <mbc/private/multiplierimpl.h>
+#include <petscblaslapack.h>
 
 PetscLogEvent MBC_FlexibilityAssemble;
 
@@ -177,6 +178,10 @@ static PetscErrorCode SolverContactReset(MBCSolver s)
   PetscCall(PetscFree4(s->perm, s->order, s->coff, s->poff));
   PetscCall(PetscFree2(s->kcouple, s->kpoint));
   PetscCall(MBCFrictionProblemDestroy(&s->fp));
+  PetscCall(PetscFree(s->goff));
+  PetscCall(PetscFree(s->gQ));
+  PetscCall(PetscFree(s->grange));
+  s->ngrigid = 0;
   PetscCall(MBCMultiplierReset(s->mult));
   PetscCall(VecDestroy(&s->lambda));
   PetscCall(VecDestroy(&s->ucontact));
@@ -243,7 +248,7 @@ static PetscErrorCode SolverContactForest(MBCSolver s)
     PetscCall(VecGetOwnershipRange(s->lam[b], &lo, &hi));
     for (PetscInt j = lo; j < hi; j++) remote[nleaf++] = s->bcols[b][j];
   }
-  PetscCall(VecGetLayout(s->lambda, &layout));
+  PetscCall(VecGetLayout(s->fp.q, &layout));
   PetscCall(PetscSFCreate(s->comm, &s->csf));
   PetscCall(PetscSFSetGraphLayout(s->csf, layout, nleaf, NULL, PETSC_OWN_POINTER, remote));
   PetscCall(PetscSFSetUp(s->csf));
@@ -297,6 +302,250 @@ static PetscErrorCode SolverContactFromBodies(MBCSolver s, Vec v)
   PetscCall(PetscSFReduceBegin(s->csf, MPIU_SCALAR, s->leaf, a, MPIU_SUM));
   PetscCall(PetscSFReduceEnd(s->csf, MPIU_SCALAR, s->leaf, a, MPIU_SUM));
   PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(0);
+}
+
+/* Combined rigid motions of several free bodies that deform no contact (the whole stack free to
+   slide or turn together: G^T v = 0) leave alpha undetermined along v and make the equilibrium
+   rows dependent. With the eigenvectors of G G^T: Q, those of its range, replace G by Q^T G and
+   alpha by Q beta; the null vectors N are kept, to check that the load balances along them
+   (N^T e = 0), else no static equilibrium exists. */
+static PetscErrorCode SolverContactRigidReduce(MBCSolver s)
+{
+  PetscMPIInt  size, rank;
+  PetscInt     ng = s->ngrigid, nr = 0, M;
+  PetscScalar *A, work[1024];
+  PetscReal   *ev, emax = 0;
+  PetscBool   *ev_keep;
+  PetscBLASInt n, lwork = 1024, info;
+  Mat          GGt, Gr;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscFree(s->gQ));
+  PetscCall(PetscCalloc1(ng * ng, &A));
+  PetscCall(PetscCalloc1(ng, &ev));
+  PetscCall(MatMatTransposeMult(s->fp.G, s->fp.G, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &GGt));
+  if (rank == size - 1)
+    for (PetscInt i = 0; i < ng; i++) {
+      PetscInt           nc;
+      const PetscInt    *cols;
+      const PetscScalar *vals;
+      PetscCall(MatGetRow(GGt, i, &nc, &cols, &vals));
+      for (PetscInt j = 0; j < nc; j++) A[i * ng + cols[j]] = vals[j];
+      PetscCall(MatRestoreRow(GGt, i, &nc, &cols, &vals));
+    }
+  PetscCall(MatDestroy(&GGt));
+  PetscCallMPI(MPI_Bcast(A, (PetscMPIInt)(ng * ng), MPIU_SCALAR, size - 1, s->comm));
+  PetscCall(PetscBLASIntCast(ng, &n));
+  PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "U", &n, A, &n, ev, work, &lwork, &info)); /* the same on every rank */
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK syev failed (%d) on the rigid-mode equilibrium", (int)info);
+  for (PetscInt i = 0; i < ng; i++) emax = PetscMax(emax, ev[i]);
+  PetscCall(PetscMalloc1(ng, &ev_keep));
+  for (PetscInt i = 0; i < ng; i++) {
+    ev_keep[i] = (PetscBool)(ev[i] > 1e-10 * emax);
+    if (ev_keep[i]) nr++;
+  }
+  s->gQ = A, s->grank = nr; /* eigenvectors: the k-th is gQ[k * ng + i] */
+  PetscCall(PetscFree(ev));
+  PetscCall(PetscFree(s->grange));
+  if (nr == ng) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc1(nr, &s->grange));
+  for (PetscInt k = 0, c = 0; k < ng; k++)
+    if (ev_keep[k]) s->grange[c++] = k;
+  PetscCall(MatGetSize(s->fp.G, NULL, &M));
+  PetscCall(MatCreateAIJ(s->comm, rank == size - 1 ? nr : 0, PETSC_DECIDE, nr, M, 0, NULL, 0, NULL, &Gr));
+  {
+    PetscInt mloc;
+    PetscCall(MatGetLocalSize(s->fp.G, NULL, &mloc));
+    PetscCall(MatDestroy(&Gr));
+    PetscCall(MatCreateAIJ(s->comm, rank == size - 1 ? nr : 0, mloc, nr, M, 0, NULL, 0, NULL, &Gr));
+  }
+  PetscCall(MatSetOption(Gr, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+  if (rank == size - 1) {
+    PetscScalar *acc;
+    PetscInt    *mark, *cols, nmark;
+    PetscCall(PetscCalloc3(M + 1, &acc, M + 1, &mark, M + 1, &cols));
+    for (PetscInt k = 0, row = 0; k < ng; k++) {
+      if (!ev_keep[k]) continue;
+      nmark = 0;
+      for (PetscInt i = 0; i < ng; i++) {
+        PetscInt           nc;
+        const PetscInt    *cc;
+        const PetscScalar *vv;
+        const PetscScalar  q = A[k * ng + i];
+        if (q == 0.0) continue;
+        PetscCall(MatGetRow(s->fp.G, i, &nc, &cc, &vv));
+        for (PetscInt j = 0; j < nc; j++) {
+          if (!mark[cc[j]]) mark[cc[j]] = 1, cols[nmark++] = cc[j];
+          acc[cc[j]] += q * vv[j];
+        }
+        PetscCall(MatRestoreRow(s->fp.G, i, &nc, &cc, &vv));
+      }
+      for (PetscInt j = 0; j < nmark; j++) {
+        PetscCall(MatSetValue(Gr, row, cols[j], acc[cols[j]], INSERT_VALUES));
+        acc[cols[j]] = 0, mark[cols[j]] = 0;
+      }
+      row++;
+    }
+    PetscCall(PetscFree3(acc, mark, cols));
+  }
+  PetscCall(MatAssemblyBegin(Gr, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(Gr, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatDestroy(&s->fp.G));
+  PetscCall(PetscFree(ev_keep));
+  s->fp.G = Gr;
+  PetscFunctionReturn(0);
+}
+
+/* Static analysis with bodies their supports leave free (FETI's natural coarse space): the
+   equilibrium of body i, R_i^T (f_i + H_i lambda) = 0, is G lambda = e with G's rows
+   (H_i^T R_ij)^T, one per free mode, in the multiplier layout (W's); the free motion
+   u_i = K_i^+ (f_i + H_i lambda) + R_i alpha_i adds G^T alpha to the contact velocity. G, e,
+   alpha have all their rows on the last rank (the Newton type's layout), scaled as W is: the
+   problem's G is G / dscale, its alpha dscale alpha. */
+static PetscErrorCode SolverContactRigidModes(MBCSolver s)
+{
+  PetscMPIInt size, rank;
+  PetscInt    ng = 0, mloc, *nr;
+  Vec         row;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree(s->goff));
+  s->ngrigid = 0;
+  if (s->analysis != MBC_ANALYSIS_STATIC) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscCalloc1(s->nbodies + 1, &s->goff));
+  PetscCall(PetscCalloc1(s->nbodies + 1, &nr));
+  for (PetscInt b = 0; b < s->nbodies; b++) { /* a body's count, once (from its first rank) */
+    PetscMPIInt brank = 1;
+    if (s->bodies[b]) PetscCallMPI(MPI_Comm_rank(s->bodies[b]->comm, &brank));
+    if (!brank) nr[b] = s->bodies[b]->nrigid;
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nr, s->nbodies, MPIU_INT, MPI_SUM, s->comm));
+  for (PetscInt b = 0; b < s->nbodies; b++) s->goff[b + 1] = s->goff[b] + nr[b];
+  ng = s->ngrigid = s->goff[s->nbodies];
+  PetscCall(PetscFree(nr));
+  if (!ng) PetscFunctionReturn(0);
+  PetscCall(MatGetLocalSize(s->fp.W, &mloc, NULL));
+  PetscCall(MatCreateAIJ(s->comm, rank == size - 1 ? ng : 0, mloc, ng, PETSC_DETERMINE, 0, NULL, 0, NULL, &s->fp.G));
+  PetscCall(MatSetOption(s->fp.G, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+  PetscCall(VecDuplicate(s->fp.q, &row));
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    for (PetscInt j = 0; j < s->goff[b + 1] - s->goff[b]; j++) {
+      const PetscScalar *a;
+      PetscInt           rstart, n, g = s->goff[b] + j;
+      for (PetscInt o = 0; o < s->nbodies; o++) { /* H_b^T R_bj, the other bodies 0 */
+        if (!s->Hu[o]) continue;
+        if (o == b) PetscCall(MatMultTranspose(s->H[o], s->bodies[o]->rigid[j], s->Hu[o]));
+        else PetscCall(VecZeroEntries(s->Hu[o]));
+      }
+      PetscCall(SolverContactFromBodies(s, row));
+      PetscCall(VecGetOwnershipRange(row, &rstart, NULL));
+      PetscCall(VecGetLocalSize(row, &n));
+      PetscCall(VecGetArrayRead(row, &a));
+      for (PetscInt i = 0; i < n; i++)
+        if (a[i] != 0.0) PetscCall(MatSetValue(s->fp.G, g, rstart + i, a[i] / s->dscale, INSERT_VALUES));
+      PetscCall(VecRestoreArrayRead(row, &a));
+    }
+  PetscCall(VecDestroy(&row));
+  PetscCall(MatAssemblyBegin(s->fp.G, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(s->fp.G, MAT_FINAL_ASSEMBLY));
+  PetscCall(SolverContactRigidReduce(s));
+  PetscCall(MatCreateVecs(s->fp.G, NULL, &s->fp.e));
+  PetscCall(VecDuplicate(s->fp.e, &s->fp.alpha));
+  PetscCall(VecZeroEntries(s->fp.alpha));
+  PetscFunctionReturn(0);
+}
+
+/* After a static solve with free bodies: du_i += R_i alpha_i, alpha = Q beta / dscale (beta the
+   problem's alpha; Q = I when no combined motion was removed). */
+PetscErrorCode MBCSolverContactRigidMotion(MBCSolver s)
+{
+  const PetscInt ng = s->ngrigid;
+  PetscReal     *alpha;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(ng + 1, &alpha));
+  {
+    const PetscScalar *a;
+    PetscInt           n;
+    PetscCall(VecGetLocalSize(s->fp.alpha, &n)); /* all rows on the last rank */
+    PetscCall(VecGetArrayRead(s->fp.alpha, &a));
+    for (PetscInt c = 0; c < n; c++)
+      for (PetscInt i = 0; i < ng; i++) alpha[i] += (s->grange ? s->gQ[s->grange[c] * ng + i] : (PetscScalar)(i == c)) * PetscRealPart(a[c]) / s->dscale;
+    PetscCall(VecRestoreArrayRead(s->fp.alpha, &a));
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, alpha, ng, MPIU_REAL, MPIU_SUM, s->comm));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    if (!s->bodies[b]) continue;
+    for (PetscInt j = 0; j < s->bodies[b]->nrigid; j++) PetscCall(VecAXPY(s->bodies[b]->du, alpha[s->goff[b] + j], s->bodies[b]->rigid[j]));
+  }
+  PetscCall(PetscFree(alpha));
+  PetscFunctionReturn(0);
+}
+
+/* e = (-R_ij^T (F_i - K_i u_i)) from the bodies (each held on its ranks), Q^T e on the last rank.
+   Along a combined rigid motion v that no contact resists the load must balance, v^T e = 0 (to
+   1e-8 of the load R^T F): else no static equilibrium exists, an input error named here. */
+PetscErrorCode MBCSolverContactRigidRHS(MBCSolver s)
+{
+  const PetscInt ng = s->ngrigid;
+  PetscReal     *e, fscale = 0;
+  PetscMPIInt    size, rank;
+
+  PetscFunctionBegin;
+  if (!s->fp.G) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscCalloc1(2 * ng + 1, &e));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscMPIInt brank;
+    if (!s->bodies[b]) continue;
+    PetscCallMPI(MPI_Comm_rank(s->bodies[b]->comm, &brank));
+    if (!brank)
+      for (PetscInt j = 0; j < s->bodies[b]->nrigid; j++) e[s->goff[b] + j] = s->bodies[b]->erigid[j], e[ng + s->goff[b] + j] = s->bodies[b]->frigid[j];
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, e, 2 * ng, MPIU_REAL, MPIU_SUM, s->comm));
+  for (PetscInt i = 0; i < ng; i++) fscale = PetscMax(fscale, PetscAbsReal(e[ng + i]));
+  if (s->grange) {
+    PetscInt c = 0;
+    for (PetscInt k = 0; k < ng; k++) {
+      PetscReal ve = 0;
+      for (PetscInt i = 0; i < ng; i++) ve += PetscRealPart(s->gQ[k * ng + i]) * e[i];
+      if (c < s->grank && s->grange[c] == k) {
+        e[ng + c++] = ve;
+        continue;
+      }
+      if (PetscAbsReal(ve) > 1e-8 * fscale) { /* a mechanism under load: name its bodies */
+        char     names[512] = "";
+        size_t   len;
+        PetscInt best = 0;
+        for (PetscInt b = 0; b < s->nbodies; b++) {
+          PetscReal share = 0;
+          for (PetscInt i = s->goff[b]; i < s->goff[b + 1]; i++) share += PetscSqr(PetscRealPart(s->gQ[k * ng + i]));
+          if (share > 1e-6) {
+            PetscCall(PetscStrlen(names, &len));
+            PetscCall(PetscSNPrintf(names + len, sizeof(names) - len, "%s'%s'", len ? ", " : "", s->scene->bodies[b].name));
+          }
+          (void)best;
+        }
+        SETERRQ(s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: bod%s %s can move as one rigid body that no support and no contact resists, and the load along that motion does not balance (%g, %.3g of the largest load on a rigid mode %g); prescribe a displacement that holds it, or run a dynamic analysis", s->step, (double)s->time, strchr(names, ',') ? "ies" : "y", names, (double)ve, (double)(PetscAbsReal(ve) / fscale), (double)fscale);
+      }
+    }
+  } else
+    for (PetscInt i = 0; i < ng; i++) e[ng + i] = e[i];
+  if (rank == size - 1) {
+    PetscScalar *a;
+    PetscInt     n;
+    PetscCall(VecGetLocalSize(s->fp.e, &n));
+    PetscCall(VecGetArray(s->fp.e, &a));
+    for (PetscInt i = 0; i < n; i++) a[i] = e[ng + i];
+    PetscCall(VecRestoreArray(s->fp.e, &a));
+  }
+  PetscCall(PetscFree(e));
   PetscFunctionReturn(0);
 }
 
@@ -453,6 +702,7 @@ static PetscErrorCode SolverContactBuildD(MBCSolver s, PetscInt m, PetscInt mloc
       }
       PetscCall(MatDenseRestoreArrayWrite(Hd, &h));
       PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &X));
+      PetscCall(MBCBodyZeroHeldRows(body, NULL, Hd)); /* K^+ of a free body (static) */
       PetscCall(KSPMatSolve(body->ksp, Hd, X));
       PetscCall(MatDestroy(&Hd));
       /* H^T X with H sparse (a dozen entries per column): 2 nnz(H) w flops, not 2 N m w */
@@ -562,10 +812,11 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     PetscCall(PetscFree(first));
     PetscCall(SolverContactBuildD(s, m, mloc));
     PetscCall(MatCreateVecs(s->fp.W, &s->fp.q, NULL));
+    PetscCall(SolverContactForest(s));
+    PetscCall(SolverContactRigidModes(s));
     PetscCall(VecDuplicate(s->fp.q, &s->lambda));
     PetscCall(VecDuplicate(s->fp.q, &s->ucontact));
     PetscCall(VecDuplicate(s->fp.q, &s->lamprev));
-    PetscCall(SolverContactForest(s));
     PetscCall(VecScatterCreateToAll(s->lambda, &s->gather, &s->gathered));
     /* carry lambda_n and the warm start r (physical, then scaled) over to the new points */
     PetscCall(PetscMalloc2(m + 1, &v[0], m + 1, &v[1]));

@@ -75,13 +75,23 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     PetscReal L;
     PetscCall(VecNorm(s->fp.q, NORM_2, &L));
     if (!(L > 0)) L = 1;
+    PetscCall(MBCSolverContactRigidRHS(s));
+    if (s->fp.G) PetscCall(VecZeroEntries(s->fp.alpha)); /* the rigid motion of this increment */
     PetscCall(VecScale(s->fp.q, 1 / L));
     PetscCall(VecScale(s->lambda, 1 / L));
+    if (s->fp.G) {
+      PetscCall(VecScale(s->fp.e, 1 / L));
+      PetscCall(VecScale(s->fp.alpha, 1 / L));
+    }
     PetscCall(MBCMultiplierSetProblem(s->mult, &s->fp));
     PetscCall(MBCMultiplierSolve(s->mult, s->lambda, s->ucontact)); /* warm start: r of the last step */
     PetscCall(VecScale(s->fp.q, L));
     PetscCall(VecScale(s->lambda, L));
     PetscCall(VecScale(s->ucontact, L));
+    if (s->fp.G) {
+      PetscCall(VecScale(s->fp.e, L));
+      PetscCall(VecScale(s->fp.alpha, L));
+    }
   }
   if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
   PetscCheck(s->mult->reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): %s solve %s after %" PetscInt_FMT " iterations, FCLIB merit %g > -mbc_multiplier_rtol %g", s->step, (double)s->time, ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), s->mult->its, (double)s->mult->merit, (double)s->mult->rtol);
@@ -98,9 +108,11 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     MBCBody body = s->bodies[b];
     if (!body || !s->H[b]) continue;
     PetscCall(MatMult(s->H[b], s->lam[b], s->Hl[b]));
+    PetscCall(MBCBodyZeroHeldRows(body, s->Hl[b], NULL)); /* K^+ of a free body (static) */
     PetscCall(KSPSolve(body->ksp, s->Hl[b], s->Xl[b]));
     PetscCall(VecAXPY(body->du, 1.0, s->Xl[b]));
   }
+  if (s->fp.G) PetscCall(MBCSolverContactRigidMotion(s));
   PetscFunctionReturn(0);
 }
 

@@ -36,6 +36,12 @@ struct _n_MBCBody {
   PetscInt  *bc_rows;     /* their global rows, sorted, unique */
   PetscInt  *bc_entry;    /* for each, the dirichlet entry that prescribes it (last one wins) */
   PetscBool  bc_component[3]; /* some DOF of this component is constrained on some rank */
+  /* static analysis of a body its supports leave free (bodyrigid.c) */
+  PetscInt   nrigid;      /* free rigid-body modes (0 to 6) */
+  Vec       *rigid;       /* those modes, orthonormal, 0 on prescribed DOFs */
+  PetscInt   nfix, *fix_rows; /* DOFs held at 0 by the generalised inverse K^+ (owned, sorted) */
+  PetscReal *erigid;      /* per mode: -R^T (F - K u), the right side of the equilibrium G lambda = e */
+  PetscReal *frigid;      /* per mode: R^T F, the load it carries (the scale of e) */
 
   Vec u, v, a;            /* displacement, velocity, acceleration */
   Vec du, rhs, f, fold, g, work, work2;
@@ -57,3 +63,6 @@ PETSC_INTERN PetscErrorCode MBCBodySetConstrainedRows(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyConstrainedSolve(MBCBody, KSP, PetscReal, PetscReal, Vec, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyComputeStress(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyRigidModes(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyRigidModesDestroy(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyZeroHeldRows(MBCBody, Vec, Mat);

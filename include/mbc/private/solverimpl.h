@@ -93,6 +93,9 @@ struct _n_MBCSolver {
   PetscInt   fclib_step;
 
   /* static analysis: equilibrium iterations, stabilisation of bodies held only by contact */
+  PetscInt   ngrigid, *goff; /* free rigid modes of all bodies; body b's are goff[b].. goff[b+1] (static) */
+  PetscScalar *gQ;        /* eigenvectors of G G^T (ng x ng, the k-th at gQ[k ng]) */
+  PetscInt   grank, *grange; /* the rank of G and the eigenvectors of its range (NULL when G has full rank) */
   PetscReal  static_stabilize, static_rtol;
   PetscInt   static_max_it, static_its;
 
@@ -117,6 +120,8 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscIn
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactRigidRHS(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactRigidMotion(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactDestroy(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactToBodies(MBCSolver, Vec);
 PETSC_INTERN PetscErrorCode MBCSolverContactGapRate(MBCSolver, Vec);

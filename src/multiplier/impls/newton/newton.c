@@ -23,6 +23,7 @@ typedef struct {
   PetscReal     sigma;        /* Armijo's constant */
   PetscInt      ls_max, nonmonotone;
   PetscInt      watchdog;     /* iterations without halving the best merit before going back to it */
+  PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
   PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
   MBCMultiplier pgs;
   KSP           ksp;
@@ -41,8 +42,9 @@ typedef struct {
 } MBC_Newton;
 
 /* Alart-Curnier residual of this rank's contacts at (r, u) into phi; with jac, also the Jacobian
-   blocks and the active flags. Returns psi = 1/2 |phi|^2 + 1/2 |G r - e|^2 over all ranks. */
-static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, Vec alpha, PetscBool jac, PetscReal *psi, PetscBool *slips)
+   blocks and the active flags; stick: every contact in contact is taken as sticking (the
+   predictor from r = 0). Returns psi = 1/2 |phi|^2 + 1/2 |G r - e|^2 over all ranks. */
+static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, Vec alpha, PetscBool jac, PetscBool stick, PetscReal *psi, PetscBool *slips)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp = m->fp;
@@ -71,7 +73,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, Vec alpha, Petsc
         PetscReal       xt[2], nrm;
         for (PetscInt d = 1; d < 3; d++) xt[d - 1] = nt->frozen[o + d] ? 0 : R[d] - rt * U[d];
         nrm = PetscSqrtReal(xt[0] * xt[0] + xt[1] * xt[1]);
-        if (nrm <= g && g > 0) { /* stick */
+        if ((nrm <= g || stick) && g > 0) { /* stick */
           for (PetscInt d = 1; d < 3; d++) P[d] = rt * U[d], B[4 * d] = rt;
         } else if (g == 0 || nrm == 0) { /* no friction force */
           for (PetscInt d = 1; d < 3; d++) P[d] = R[d], A[4 * d] = 1;
@@ -396,6 +398,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsInt("-newton_pgs_fallback", "Gauss-Seidel sweeps when the line search fails", "MBCMultiplierSetFromOptions", nt->pgs_fallback, &nt->pgs_fallback, NULL));
   PetscCall(PetscOptionsInt("-newton_ls_max", "Halvings of the step in the line search", "MBCMultiplierSetFromOptions", nt->ls_max, &nt->ls_max, NULL));
   PetscCall(PetscOptionsInt("-newton_nonmonotone", "Memory of the non-monotone line search (1: monotone Armijo)", "MBCMultiplierSetFromOptions", nt->nonmonotone, &nt->nonmonotone, NULL));
+  PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
   PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
   PetscOptionsHeadEnd();
@@ -481,7 +484,29 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
   PetscCall(NewtonSweeps(m, nt->pgs_warm, r, u));
   PetscCall(MBCFrictionVelocity(fp, r, u));
   PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
-  PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, &psi, &slips));
+  {
+    PetscReal rn;
+    PetscCall(VecNorm(r, NORM_INFINITY, &rn));
+    if (rn == 0 && nt->predictor && fp->G) { /* from r = 0, the all-stick solution first: Newton's first
+                                       classification by the free increment q alone would slip
+                                       contacts along q_t, and the iteration may end in another of
+                                       the solutions a frictional static problem can have */
+      PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, PETSC_TRUE, &psi, &slips));
+      PetscCall(NewtonStep(m, r, PETSC_FALSE));
+      PetscCall(VecAXPY(r, 1.0, nt->dr));
+      if (fp->G) PetscCall(VecAXPY(fp->alpha, 1.0, nt->dalpha));
+      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      if (PetscIsInfOrNanReal(m->merit)) { /* a failed predictor: start from 0 as without it */
+        PetscCall(VecZeroEntries(r));
+        if (fp->G) PetscCall(VecZeroEntries(fp->alpha));
+        PetscCall(MBCFrictionVelocity(fp, r, u));
+        PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      }
+      PetscCall(ISDestroy(&nt->isbuilt)); /* its factor is no Newton matrix */
+    }
+  }
+  PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
   for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
   best = m->merit;
   PetscCall(VecCopy(r, rbest));
@@ -503,7 +528,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(VecWAXPY(nt->rt, t, nt->dr, r));
       PetscCall(VecWAXPY(nt->ut, t, nt->wdr, u));
       if (fp->G) PetscCall(VecWAXPY(nt->alphat, t, nt->dalpha, fp->alpha));
-      PetscCall(ACResidual(m, nt->rt, nt->ut, fp->G ? nt->alphat : NULL, PETSC_FALSE, &psit, NULL));
+      PetscCall(ACResidual(m, nt->rt, nt->ut, fp->G ? nt->alphat : NULL, PETSC_FALSE, PETSC_FALSE, &psit, NULL));
       if (psit <= ref - nt->sigma * t * 2 * psi) break;
     }
     if (ls < nt->ls_max || fp->G) { /* accepted (with constraints the last, shortest step is taken anyway) */
@@ -536,7 +561,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       stall = 0;
     }
-    PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, &psi, &slips));
+    PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
     if (stall == 0 && restarts && m->merit == best) for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
     for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
     hist[0] = psi;
@@ -617,6 +642,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->ls_max       = 20;
   nt->nonmonotone  = 5;
   nt->watchdog     = 10;
+  nt->predictor    = PETSC_TRUE;
   nt->shift        = 1e-12;
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;

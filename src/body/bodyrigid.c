@@ -1,0 +1,152 @@
+/* Rigid-body modes a body's supports leave free, for a static analysis treated as FETI does:
+   with R the free modes, K u = f has a solution only if R^T f = 0, and then u = K^+ f + R alpha.
+   K^+ is a generalised inverse: K with as many DOFs held at zero as there are free modes (chosen
+   so that R restricted to them is regular, hence K with them held is), factored once. */
+#include <mbc/private/bodyimpl.h>
+#include <petscblaslapack.h>
+
+/* body->rigid: the free modes (orthonormal), body->fix_rows: the DOFs held in K^+. The six rigid
+   modes of the mesh, combined by the eigenvectors of C^T C (C: the modes on the prescribed DOFs)
+   whose eigenvalues vanish: those combinations do not move any prescribed DOF. */
+PetscErrorCode MBCBodyRigidModes(MBCBody body)
+{
+  MatNullSpace       sp;
+  const Vec         *modes;
+  PetscInt           nm, rstart, rend, k = 0;
+  PetscScalar        CtC[36], V[36], work[200];
+  PetscReal          ev[6];
+  PetscBLASInt       n6, lwork = 200, info;
+  const PetscScalar *mv[6];
+
+  PetscFunctionBegin;
+  PetscCall(MBCBodyRigidModesDestroy(body));
+  PetscCall(DMPlexCreateRigidBody(body->dm, 0, &sp));
+  PetscCall(MatNullSpaceGetVecs(sp, NULL, &nm, &modes));
+  PetscCall(VecGetOwnershipRange(body->u, &rstart, &rend));
+  for (PetscInt a = 0; a < nm; a++) PetscCall(VecGetArrayRead(modes[a], &mv[a]));
+  for (PetscInt a = 0; a < nm * nm; a++) CtC[a] = 0;
+  for (PetscInt i = 0; i < body->nbc; i++)
+    for (PetscInt a = 0; a < nm; a++)
+      for (PetscInt b = 0; b < nm; b++) CtC[a * nm + b] += mv[a][body->bc_rows[i] - rstart] * mv[b][body->bc_rows[i] - rstart];
+  for (PetscInt a = 0; a < nm; a++) PetscCall(VecRestoreArrayRead(modes[a], &mv[a]));
+  PetscCall(MPIU_Allreduce(CtC, V, nm * nm, MPIU_SCALAR, MPIU_SUM, body->comm));
+  PetscCall(PetscBLASIntCast(nm, &n6));
+  PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "U", &n6, V, &n6, ev, work, &lwork, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK syev failed (%d) on body '%s''s rigid modes", (int)info, body->name);
+  /* the modes are unit vectors: an eigenvalue is the share of a combination's norm on prescribed
+     DOFs, 0 for a free motion, at least ~1/N for one that moves a single prescribed DOF */
+  for (PetscInt a = 0; a < nm; a++)
+    if (PetscRealPart(ev[a]) < 1e-12) k++;
+  body->nrigid = k;
+  if (k) {
+    PetscReal   *piv, pv;
+    PetscScalar *rv;
+    Vec         *W;
+    PetscCall(PetscMalloc1(k, &body->rigid));
+    PetscCall(PetscMalloc3(k, &body->fix_rows, k, &body->erigid, k, &body->frigid));
+    for (PetscInt j = 0, a = 0; a < nm; a++) {
+      if (!(PetscRealPart(ev[a]) < 1e-12)) continue;
+      PetscCall(VecDuplicate(body->u, &body->rigid[j]));
+      PetscCall(VecZeroEntries(body->rigid[j]));
+      for (PetscInt b = 0; b < nm; b++) PetscCall(VecAXPY(body->rigid[j], V[a * nm + b], modes[b]));
+      PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rigid[j])); /* exactly 0 there */
+      j++;
+    }
+    /* the held DOFs: elimination with full pivoting over the rows of R */
+    PetscCall(VecDuplicateVecs(body->u, k, &W));
+    for (PetscInt j = 0; j < k; j++) PetscCall(VecCopy(body->rigid[j], W[j]));
+    PetscCall(PetscMalloc1(k, &piv));
+    for (PetscInt p = 0; p < k; p++) {
+      struct {
+        PetscReal v;
+        PetscInt  row;
+      } loc = {-1, -1}, glob;
+      PetscInt n;
+      PetscCall(VecGetLocalSize(W[p], &n));
+      PetscCall(VecGetArray(W[p], &rv));
+      for (PetscInt i = 0; i < n; i++)
+        if (PetscAbsScalar(rv[i]) > loc.v) loc.v = PetscAbsScalar(rv[i]), loc.row = rstart + i;
+      PetscCall(VecRestoreArray(W[p], &rv));
+      {
+        PetscReal   in[2] = {loc.v, (PetscReal)loc.row}, out[2];
+        PetscMPIInt size;
+        PetscCallMPI(MPI_Comm_size(body->comm, &size));
+        out[0] = in[0], out[1] = in[1];
+        if (size > 1) { /* the largest entry and its row, the same on every rank (ties: the lowest rank's) */
+          PetscReal *all;
+          PetscCall(PetscMalloc1(2 * size, &all));
+          PetscCallMPI(MPI_Allgather(in, 2, MPIU_REAL, all, 2, MPIU_REAL, body->comm));
+          out[0] = -1, out[1] = -1;
+          for (PetscMPIInt r = 0; r < size; r++)
+            if (all[2 * r] > out[0]) out[0] = all[2 * r], out[1] = all[2 * r + 1];
+          PetscCall(PetscFree(all));
+        }
+        glob.v = out[0], glob.row = (PetscInt)out[1];
+      }
+      PetscCheck(glob.v > 0, body->comm, PETSC_ERR_PLIB, "Body '%s': rigid mode %" PetscInt_FMT " vanishes", body->name, p);
+      body->fix_rows[p] = glob.row;
+      piv[p]            = glob.v;
+      /* W_q -= (W_q[row] / W_p[row]) W_p for the later modes */
+      for (PetscInt q = p + 1; q < k; q++) {
+        PetscScalar wq = 0, wp = 0;
+        if (glob.row >= rstart && glob.row < rend) {
+          PetscCall(VecGetValues(W[q], 1, &glob.row, &wq));
+          PetscCall(VecGetValues(W[p], 1, &glob.row, &wp));
+        }
+        {
+          PetscScalar in[2] = {wq, wp}, out[2];
+          PetscCall(MPIU_Allreduce(in, out, 2, MPIU_SCALAR, MPIU_SUM, body->comm));
+          pv = PetscRealPart(out[0] / out[1]);
+        }
+        PetscCall(VecAXPY(W[q], -pv, W[p]));
+      }
+    }
+    PetscCall(PetscFree(piv));
+    PetscCall(VecDestroyVecs(k, &W));
+    /* owned held rows, sorted, for MatZeroRowsColumns and the right sides */
+    body->nfix = 0;
+    for (PetscInt p = 0; p < k; p++)
+      if (body->fix_rows[p] >= rstart && body->fix_rows[p] < rend) body->fix_rows[body->nfix++] = body->fix_rows[p];
+    PetscCall(PetscSortInt(body->nfix, body->fix_rows));
+  }
+  PetscCall(MatNullSpaceDestroy(&sp));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyRigidModesDestroy(MBCBody body)
+{
+  PetscFunctionBegin;
+  for (PetscInt j = 0; j < body->nrigid; j++) PetscCall(VecDestroy(&body->rigid[j]));
+  PetscCall(PetscFree(body->rigid));
+  PetscCall(PetscFree3(body->fix_rows, body->erigid, body->frigid));
+  body->nrigid = body->nfix = 0;
+  PetscFunctionReturn(0);
+}
+
+/* Rows held by K^+ set to zero in a right side (a Vec), or in the columns of a dense Mat. */
+PetscErrorCode MBCBodyZeroHeldRows(MBCBody body, Vec v, Mat X)
+{
+  PetscInt rstart;
+
+  PetscFunctionBegin;
+  if (!body->nfix) PetscFunctionReturn(0);
+  if (v) {
+    PetscScalar *a;
+    PetscCall(VecGetOwnershipRange(v, &rstart, NULL));
+    PetscCall(VecGetArray(v, &a));
+    for (PetscInt i = 0; i < body->nfix; i++) a[body->fix_rows[i] - rstart] = 0;
+    PetscCall(VecRestoreArray(v, &a));
+  }
+  if (X) {
+    PetscScalar *a;
+    PetscInt     lda, n;
+    PetscCall(MatGetOwnershipRange(X, &rstart, NULL));
+    PetscCall(MatGetSize(X, NULL, &n));
+    PetscCall(MatDenseGetLDA(X, &lda));
+    PetscCall(MatDenseGetArray(X, &a));
+    for (PetscInt j = 0; j < n; j++)
+      for (PetscInt i = 0; i < body->nfix; i++) a[(size_t)j * lda + body->fix_rows[i] - rstart] = 0;
+    PetscCall(MatDenseRestoreArray(X, &a));
+  }
+  PetscFunctionReturn(0);
+}
