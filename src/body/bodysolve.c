@@ -105,8 +105,11 @@ PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, Pets
     }
   }
   PetscCall(MBCBodySetConstrainedRows(body, g, rhs));
-  if (aK != 0 && aM == 0) PetscCall(MBCBodyZeroHeldRows(body, rhs, NULL));
+  if (aK != 0 && aM == 0 && body->nrigid) { /* x = P K^+ P rhs */
+    PetscCall(MBCBodyZeroHeldRows(body, rhs, NULL));
+  }
   PetscCall(KSPSolve(ksp, rhs, x));
+
   PetscCall(KSPGetConvergedReason(ksp, &reason));
   PetscCheck(reason > 0, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': linear solve failed (%s)", body->name, KSPConvergedReasons[reason]);
   PetscCall(PetscLogEventEnd(MBC_BodySolve, 0, 0, 0, 0));

@@ -181,6 +181,7 @@ static PetscErrorCode SolverContactReset(MBCSolver s)
   PetscCall(PetscFree(s->goff));
   PetscCall(PetscFree(s->gQ));
   PetscCall(PetscFree(s->grange));
+  PetscCall(PetscFree(s->gscale));
   s->ngrigid = 0;
   PetscCall(MBCMultiplierReset(s->mult));
   PetscCall(VecDestroy(&s->lambda));
@@ -454,6 +455,33 @@ static PetscErrorCode SolverContactRigidModes(MBCSolver s)
   PetscCall(MatAssemblyBegin(s->fp.G, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(s->fp.G, MAT_FINAL_ASSEMBLY));
   PetscCall(SolverContactRigidReduce(s));
+  { /* rows of G scaled to the unit entries of W: R's unit modes over N DOFs and 1 / dscale gave
+       rows ~1e7 against W ~ 1, a saddle-point system the factorization could solve only to
+       ~1e-8 (the static dam). e and alpha follow: G' = S G, e' = S e, alpha = S alpha'. */
+    Vec       sc;
+    PetscInt  n, rstart;
+    PetscCall(MatCreateVecs(s->fp.G, NULL, &sc));
+    PetscCall(VecGetLocalSize(sc, &n));
+    PetscCall(VecGetOwnershipRange(sc, &rstart, NULL));
+    PetscCall(PetscFree(s->gscale));
+    PetscCall(PetscCalloc1(s->grank + 1, &s->gscale));
+    for (PetscInt i = 0; i < n; i++) {
+      PetscInt           nc;
+      const PetscInt    *cc;
+      const PetscScalar *vv;
+      PetscReal          mx = 0;
+      PetscCall(MatGetRow(s->fp.G, rstart + i, &nc, &cc, &vv));
+      for (PetscInt j = 0; j < nc; j++) mx = PetscMax(mx, PetscAbsScalar(vv[j]));
+      PetscCall(MatRestoreRow(s->fp.G, rstart + i, &nc, &cc, &vv));
+      s->gscale[rstart + i] = mx > 0 ? 1 / mx : 1;
+      PetscCall(VecSetValue(sc, rstart + i, s->gscale[rstart + i], INSERT_VALUES));
+    }
+    PetscCall(VecAssemblyBegin(sc));
+    PetscCall(VecAssemblyEnd(sc));
+    PetscCall(MatDiagonalScale(s->fp.G, sc, NULL));
+    PetscCall(VecDestroy(&sc));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, s->gscale, s->grank, MPIU_REAL, MPIU_SUM, s->comm));
+  }
   PetscCall(MatCreateVecs(s->fp.G, NULL, &s->fp.e));
   PetscCall(VecDuplicate(s->fp.e, &s->fp.alpha));
   PetscCall(VecZeroEntries(s->fp.alpha));
@@ -475,7 +503,7 @@ PetscErrorCode MBCSolverContactRigidMotion(MBCSolver s)
     PetscCall(VecGetLocalSize(s->fp.alpha, &n)); /* all rows on the last rank */
     PetscCall(VecGetArrayRead(s->fp.alpha, &a));
     for (PetscInt c = 0; c < n; c++)
-      for (PetscInt i = 0; i < ng; i++) alpha[i] += (s->grange ? s->gQ[s->grange[c] * ng + i] : (PetscScalar)(i == c)) * PetscRealPart(a[c]) / s->dscale;
+      for (PetscInt i = 0; i < ng; i++) alpha[i] += (s->grange ? s->gQ[s->grange[c] * ng + i] : (PetscScalar)(i == c)) * s->gscale[c] * PetscRealPart(a[c]) / s->dscale;
     PetscCall(VecRestoreArrayRead(s->fp.alpha, &a));
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, alpha, ng, MPIU_REAL, MPIU_SUM, s->comm));
@@ -542,7 +570,7 @@ PetscErrorCode MBCSolverContactRigidRHS(MBCSolver s)
     PetscInt     n;
     PetscCall(VecGetLocalSize(s->fp.e, &n));
     PetscCall(VecGetArray(s->fp.e, &a));
-    for (PetscInt i = 0; i < n; i++) a[i] = e[ng + i];
+    for (PetscInt i = 0; i < n; i++) a[i] = s->gscale[i] * e[ng + i];
     PetscCall(VecRestoreArray(s->fp.e, &a));
   }
   PetscCall(PetscFree(e));
@@ -702,7 +730,7 @@ static PetscErrorCode SolverContactBuildD(MBCSolver s, PetscInt m, PetscInt mloc
       }
       PetscCall(MatDenseRestoreArrayWrite(Hd, &h));
       PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &X));
-      PetscCall(MBCBodyZeroHeldRows(body, NULL, Hd)); /* K^+ of a free body (static) */
+      PetscCall(MBCBodyZeroHeldRows(body, NULL, Hd));
       PetscCall(KSPMatSolve(body->ksp, Hd, X));
       PetscCall(MatDestroy(&Hd));
       /* H^T X with H sparse (a dozen entries per column): 2 nnz(H) w flops, not 2 N m w */

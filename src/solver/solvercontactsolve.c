@@ -108,7 +108,7 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     MBCBody body = s->bodies[b];
     if (!body || !s->H[b]) continue;
     PetscCall(MatMult(s->H[b], s->lam[b], s->Hl[b]));
-    PetscCall(MBCBodyZeroHeldRows(body, s->Hl[b], NULL)); /* K^+ of a free body (static) */
+    PetscCall(MBCBodyZeroHeldRows(body, s->Hl[b], NULL));
     PetscCall(KSPSolve(body->ksp, s->Hl[b], s->Xl[b]));
     PetscCall(VecAXPY(body->du, 1.0, s->Xl[b]));
   }

@@ -19,11 +19,11 @@ STATIC = ("-mbc_analysis", "static", "-mbc_dt", "1", "-mbc_final_time", "1")
 
 def test_static_two_blocks(tmp_path):
     """Block 2 rests on block 1 and is held only by contact (no prescribed displacement; block 1
-    only has u_z = 0 at its base). The static solver regularises both with the spring
-    1e-6 diag(K) to the last iterate and iterates to equilibrium: the top of block 2 at
-    -1.5e-4 m and the contact face at -1.0e-4 m (exact for nu = 0) within 1e-4 (the equilibrium
-    test leaves an out-of-balance force of 1e-6 of the largest nodal force), in a few
-    iterations. The base carries block 2's weight 100 N/m3 x 1e6 m3 = 1e8 N (contact CSV) and the
+    only has u_z = 0 at its base). Both are free bodies: their rigid modes (6 and 3) enter the
+    multiplier problem as equilibrium constraints, and the stack's common sliding and turning,
+    which nothing resists and no load drives, is removed: the top of block 2 at -1.5e-4 m and
+    the contact face at -1.0e-4 m (exact for nu = 0) within 1e-4 (the equilibrium test leaves an
+    out-of-balance force of 1e-6 of the largest nodal force), in a few iterations. The base carries block 2's weight 100 N/m3 x 1e6 m3 = 1e8 N (contact CSV) and the
     pressure is 1e4 Pa at every contact point within 0.5 % (block 2's 20 x 20 faces on block 1's
     10 x 10: the integrated constraints give consistent nodal forces)."""
     h5 = blocks.build(tmp_path, dt=0.01, final_time=1.0)
@@ -43,13 +43,46 @@ def test_static_two_blocks(tmp_path):
     assert np.abs(pts["traction"]).max() < 1e-4 * 1e4  # the PGS tolerance: merit 1e-8 on r ~ u ~ 1e-4 m
 
 
-def test_static_free_body_needs_stabilisation(tmp_path):
-    """-mbc_static_stabilize 0 on a body held only by contact: a clear error, not a solve with a
-    singular stiffness."""
+def test_static_free_bodies_exact(tmp_path):
+    """The free bodies' equilibrium is exact, not a spring's: block 2's contact forces balance its
+    weight 1e8 N to 1e-8 (the spring 1e-6 diag(K) of -mbc_static_stabilize gave the same answer
+    only to the equilibrium tolerance 1e-6), and the stack's free sliding needs no load to be
+    resisted. The opt-in spring still works and agrees to its tolerance."""
     h5 = blocks.build(tmp_path, dt=0.01, final_time=1.0)
-    r = solve(h5, *STATIC, "-mbc_static_stabilize", "0", check=False)
-    assert r.returncode != 0
-    assert re.search(r"body 'block[12]'", r.stderr) and "-mbc_static_stabilize 0" in r.stderr, r.stderr
+    solve(h5, *STATIC, "-mbc_static_rtol", "1e-10")
+    c = read_csv(result(h5, "_contact.csv"))
+    assert abs(c["fz"][-1] / 1e8 - 1) < 1e-8 and abs(c["fx"][-1]) < 1e-8 * 1e8 and abs(c["fy"][-1]) < 1e-8 * 1e8
+    p = read_csv(result(h5, "_points.csv"))
+    solve(h5, *STATIC, "-mbc_static_stabilize", "1e-6", "-mbc_output", str(tmp_path / "spring"))
+    q = read_csv(str(tmp_path / "spring_points.csv"))
+    assert abs(q["top_uz"][-1] / p["top_uz"][-1] - 1) < 1e-5
+
+
+def test_static_no_equilibrium_is_refused(tmp_path):
+    """Frictionless stack pushed sideways: block 2 slides on block 1 (and block 1, u_z = 0 at its
+    base only, on its support), nothing resists a lateral body force on block 2; the run stops
+    at once with a message that names the body, not after 50 iterations or with a wrong
+    answer. Without the push the same frictionless stack is solved (the free sliding carries no
+    load)."""
+    from mbcontact.prep import prepare
+    for push, name in ((0.0, "still"), (10.0, "pushed")):
+        sc = blocks.scene(0.01, 1.0)
+        sc["couples"][0]["mu"] = 0.0
+        sc["loads"][0]["vector"] = [push, 0, -100.0]
+        d = tmp_path / name
+        d.mkdir()
+        meshgen.boxes(str(d / "blocks.msh"),
+                      [dict(lo=(0, 0, 0), hi=(100, 100, 100), n=(4, 4, 4), cell="hex8", name="block1"),
+                       dict(lo=(0, 0, 100), hi=(100, 100, 200), n=(5, 5, 4), cell="hex8", name="block2")])
+        h5 = prepare(str(d), "blocks", sc)
+        r = solve(h5, *STATIC, check=False, timeout=120)
+        if push == 0:
+            assert r.returncode == 0, r.stderr
+            c = read_csv(result(h5, "_contact.csv"))
+            assert abs(c["fz"][-1] / 1e8 - 1) < 1e-8
+        else:
+            assert r.returncode != 0
+            assert "no static equilibrium" in r.stderr and "'block2'" in r.stderr, r.stderr
 
 
 def patch_scene(tmp_path, lower_cell, mu):

@@ -96,6 +96,7 @@ struct _n_MBCSolver {
   PetscInt   ngrigid, *goff; /* free rigid modes of all bodies; body b's are goff[b].. goff[b+1] (static) */
   PetscScalar *gQ;        /* eigenvectors of G G^T (ng x ng, the k-th at gQ[k ng]) */
   PetscInt   grank, *grange; /* the rank of G and the eigenvectors of its range (NULL when G has full rank) */
+  PetscReal *gscale;      /* the scale of each row of the problem's G */
   PetscReal  static_stabilize, static_rtol;
   PetscInt   static_max_it, static_its;
 

@@ -354,6 +354,32 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
   }
   PetscCall(KSPSolve(nt->ksp, b, x));
   PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+  if (reason >= 0) { /* iterative refinement against the shift and the factor's rounding: the
+                        static saddle-point systems (free bodies) are conditioned enough that a plain
+                        solve floored the merit near 1e-8 */
+    Mat       J;
+    Vec       res, dx;
+    PetscReal r0, r1;
+    PetscCall(KSPGetOperators(nt->ksp, &J, NULL));
+    PetscCall(VecDuplicate(b, &res));
+    PetscCall(VecDuplicate(b, &dx));
+    PetscCall(MatMult(J, x, res));
+    PetscCall(VecAYPX(res, -1.0, b));
+    for (PetscInt k = 0, shifted = 1; k < 2 && shifted; k++) {
+      PetscCall(VecNorm(res, NORM_2, &r0));
+      PetscCall(KSPSolve(nt->ksp, res, dx));
+      PetscCall(VecAXPY(x, 1.0, dx));
+      PetscCall(MatMult(J, x, res));
+      PetscCall(VecAYPX(res, -1.0, b));
+      PetscCall(VecNorm(res, NORM_2, &r1));
+      if (!(r1 < 0.5 * r0)) { /* no gain: undo and stop */
+        PetscCall(VecAXPY(x, -1.0, dx));
+        shifted = 0;
+      }
+    }
+    PetscCall(VecDestroy(&res));
+    PetscCall(VecDestroy(&dx));
+  }
   if (reason < 0) { /* a failed factorization: steepest descent on 1/2|phi|^2 instead (dr = -phi) */
     PetscCall(PetscInfo(m, "Newton matrix: %s; falling back to dr = -phi\n", KSPConvergedReasons[reason]));
     PetscCall(VecCopy(nt->phi, nt->dr));
@@ -566,6 +592,31 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
     hist[0] = psi;
     if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (fp->G ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
+  }
+  if (m->reason > 0) { /* the iterate into the cones (Newton's iterates are not in them), kept if it
+                          still meets the tolerance: with a rank-deficient W a projection can move u
+                          by much more than it moves r */
+    PetscScalar *rv;
+    PetscReal    before = m->merit;
+    PetscCall(VecCopy(r, rbest));
+    PetscCall(VecGetArray(r, &rv));
+    for (PetscInt i = 0; i < fp->nc; i++) {
+      const PetscInt o = fp->off[i];
+      if (fp->off[i + 1] - o == 1) rv[o] = PetscMax(0, PetscRealPart(rv[o]));
+      else {
+        PetscReal x[3] = {PetscRealPart(rv[o]), PetscRealPart(rv[o + 1]), PetscRealPart(rv[o + 2])}, p[3];
+        MBCProjectCone(x, fp->mu[i], p);
+        for (PetscInt d = 0; d < 3; d++) rv[o + d] = p[d];
+      }
+    }
+    PetscCall(VecRestoreArray(r, &rv));
+    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+    if (!(m->merit < m->rtol)) {
+      PetscCall(VecCopy(rbest, r));
+      PetscCall(MBCFrictionVelocity(fp, r, u));
+      m->merit = before;
+    }
   }
   if (m->reason < 0 && best < m->merit) { /* not converged: return the best iterate */
     PetscCall(VecCopy(rbest, r));
