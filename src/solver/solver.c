@@ -344,6 +344,16 @@ static PetscErrorCode SolverStatic(MBCSolver s)
           PetscCall(VecDot(body->rhs, body->rigid[j], &d));
           body->frigid[j] = PetscRealPart(d);
         }
+        if (body->nrigid) { /* and its resultant (x, y, z interleaved per vertex) */
+          const PetscScalar *fv;
+          PetscInt           n;
+          PetscCall(VecGetLocalSize(body->rhs, &n));
+          PetscCall(VecGetArrayRead(body->rhs, &fv));
+          body->fres[0] = body->fres[1] = body->fres[2] = 0;
+          for (PetscInt i = 0; i < n; i++) body->fres[i % 3] += PetscRealPart(fv[i]);
+          PetscCall(VecRestoreArrayRead(body->rhs, &fv));
+          PetscCall(MPIU_Allreduce(MPI_IN_PLACE, body->fres, 3, MPIU_REAL, MPIU_SUM, body->comm));
+        }
         PetscCall(MatMult(body->K, body->u, body->work));
         PetscCall(VecAXPY(body->rhs, -1.0, body->work));
         for (PetscInt j = 0; j < body->nrigid; j++) { /* the equilibrium's right side -R^T (F - K u) */

@@ -52,6 +52,49 @@ static PetscErrorCode SolverContactWriteFclib(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* A static contact solve with free bodies that failed: is the load on some free body beyond
+   what friction can hold? Per body its load's resultant F (this step's), the mean normal n of
+   the contact points that touch it and the largest mu of its couples: a tangential load
+   |F - (F.n) n| above mu |F.n| has no static equilibrium, an input error named here. */
+static PetscErrorCode SolverContactFrictionCapacity(MBCSolver s)
+{
+  MBCContact c = s->contact;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    PetscReal F[4] = {0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N;
+    PetscInt  cnt = 0;
+    if (s->bodies[b]) { /* F and whether the body is free, from its first rank */
+      PetscMPIInt brank;
+      PetscCallMPI(MPI_Comm_rank(s->bodies[b]->comm, &brank));
+      if (!brank && s->bodies[b]->nrigid) {
+        for (PetscInt d = 0; d < 3; d++) F[d] = s->bodies[b]->fres[d];
+        F[3] = 1;
+      }
+    }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, F, 4, MPIU_REAL, MPIU_SUM, s->comm));
+    if (!F[3]) continue;
+    for (PetscInt k = 0; k < s->ncontact; k++) { /* the points touching b (replicated bookkeeping) */
+      const MBCCouple *cp = &c->couples[s->kcouple[k]];
+      const PetscInt   j  = s->kpoint[k];
+      PetscBool        touches = PETSC_FALSE;
+      for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1] && !touches; l++) touches = (PetscBool)(cp->master.nbody[cp->mnode[l]] == b);
+      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1] && !touches; l++) touches = (PetscBool)(cp->slave.nbody[cp->snode[l]] == b);
+      if (!touches) continue;
+      for (PetscInt d = 0; d < 3; d++) n[d] += s->frames[9 * k + d];
+      mu = PetscMax(mu, cp->mu);
+      cnt++;
+    }
+    N = PetscSqrtReal(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!cnt || !(N > 0)) continue;
+    for (PetscInt d = 0; d < 3; d++) n[d] /= N, fn += F[d] * n[d];
+    for (PetscInt d = 0; d < 3; d++) ft[d] = F[d] - fn * n[d], T += ft[d] * ft[d];
+    T = PetscSqrtReal(T);
+    PetscCheck(!(T > mu * PetscAbsReal(fn)), s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: body '%s' carries a tangential load of %g along (%.3f, %.3f, %.3f) against a friction capacity mu N = %g x %g = %g on its contact surfaces (T / mu N = %.4f); a static state needs T <= mu N: lower the load, prescribe a displacement that holds the body, or run a dynamic analysis", s->step, (double)s->time, s->scene->bodies[b].name, (double)T, (double)(ft[0] / T), (double)(ft[1] / T), (double)(ft[2] / T), (double)mu, (double)PetscAbsReal(fn), (double)(mu * PetscAbsReal(fn)), (double)(T / (mu * PetscAbsReal(fn))));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Given every body's free increment in body->du, solves for the multipliers and adds
    A^-1 H lambda. */
 PetscErrorCode MBCSolverContactSolve(MBCSolver s)
@@ -94,6 +137,7 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     }
   }
   if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
+  if (s->mult->reason < 0 && s->fp.G) PetscCall(SolverContactFrictionCapacity(s));
   PetscCheck(s->mult->reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): %s solve %s after %" PetscInt_FMT " iterations, FCLIB merit %g > -mbc_multiplier_rtol %g", s->step, (double)s->time, ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), s->mult->its, (double)s->mult->merit, (double)s->mult->rtol);
   PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
   PetscCall(MBCSolverContactGather(s, s->lambda, s->rall));
