@@ -11,7 +11,7 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export PYTHONPATH := $(CURDIR)/python$(if $(PYTHONPATH),:$(PYTHONPATH))
 export MBC_BUILD_DIR := $(CURDIR)/$(BUILD)
 
-DEBS := build-essential cmake pkg-config petsc-dev python3-petsc4py libmetis-dev \
+DEBS := build-essential cmake pkg-config petsc-dev python3-petsc4py libmetis-dev gmsh \
         libhdf5-openmpi-dev openmpi-bin python3-meshio python3-h5py python3-numpy \
         python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 \
         libopenblas0-serial
