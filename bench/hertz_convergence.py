@@ -69,7 +69,7 @@ def cylinder_level(work, hc, analysis="static", delta=None):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="two coarse levels, no dynamic route, one sphere level")
-    ap.add_argument("--smoke", action="store_true", help="one coarse cylinder level and a coarse sphere (~10 s: does the bench still run)")
+    ap.add_argument("--smoke", action="store_true", help="one coarse cylinder level and a 13k-DOF sphere (25 s at load 10: does the bench still run)")
     ap.add_argument("--levels", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.0075, 0.005])
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "hertz_convergence.png"))
     a = ap.parse_args()

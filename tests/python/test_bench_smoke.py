@@ -1,5 +1,5 @@
 """Benches must not rot: every script in bench/ runs at its smallest size (exit 0, its table
-printed, its plot written with matplotlib's Agg backend). ~40 s in all on the project machine."""
+printed, its plot written with matplotlib's Agg backend): 80 s in all at load average 10."""
 import glob
 import os
 import re
