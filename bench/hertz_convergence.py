@@ -12,7 +12,7 @@ approach (b / R halves: the departure from Hertz's half-spaces), the paper's dyn
 one level, and the sphere on a half-space (Hertz point contact) at two levels. Prints tables
 and writes docs/hertz_convergence.png (error against run time).
 
-  bench/hertz_convergence.py [--quick] [--levels 0.04 0.02 0.01 0.0075 0.005]
+  bench/hertz_convergence.py [--quick | --smoke] [--levels 0.04 0.02 0.01 0.0075 0.005]
 """
 import argparse
 import os
@@ -69,10 +69,11 @@ def cylinder_level(work, hc, analysis="static", delta=None):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="two coarse levels, no dynamic route, one sphere level")
+    ap.add_argument("--smoke", action="store_true", help="one coarse cylinder level and a 13k-DOF sphere (25 s at load 10: does the bench still run)")
     ap.add_argument("--levels", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.0075, 0.005])
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "hertz_convergence.png"))
     a = ap.parse_args()
-    levels = [0.04, 0.02] if a.quick else a.levels
+    levels = [0.04] if a.smoke else [0.04, 0.02] if a.quick else a.levels
     work = tempfile.mkdtemp(prefix="mbc_hertz_")
 
     print("Hertz cylinders, static: errors against Hertz for the computed P (b, p_max) and against the paper's ANSYS column (surface u_y)")
@@ -89,7 +90,7 @@ def main():
     print(f"(the paper, 0.1 mm elements: b {report.PAPER['b'] / report.HERTZ_PAPER['b'] - 1:+.2%}, p_max {report.PAPER['p_max'] / report.HERTZ_PAPER['p_max'] - 1:+.2%})")
 
     sphere_rows, quarter = [], None
-    if not a.quick:
+    if not (a.quick or a.smoke):
         hc = 0.01 if 0.01 in levels else levels[-1]
         h5 = build.build(os.path.join(work, "tol"), hc)
         print(f"\nPGS tolerance (hc {hc}): {'rtol':>7} {'b err':>8} {'p_max err':>9} {'PGS [s]':>8} {'wall':>7}")
@@ -114,7 +115,7 @@ def main():
 
     print("\nsphere on a half-space (R = 10 mm, an eighth on a quarter block, -0.02 mm imposed): a and p0 against Hertz for the computed P")
     print(f"{'hc [mm]':>8} {'DOFs':>7} {'P [N]':>8} {'a err':>8} {'p0 err':>8} {'factor':>7} {'D':>7} {'wall':>7} {'RSS MiB':>8}", flush=True)
-    for hc in ([0.09] if a.quick else [0.09, 0.06]):
+    for hc in ([0.4] if a.smoke else [0.09] if a.quick else [0.09, 0.06]):
         d = os.path.join(work, f"s{hc}")
         h5 = build.build_sphere(d, hc, 0.8)
         wall, rss, ph, dofs, _ = solve(h5)

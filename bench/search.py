@@ -67,12 +67,13 @@ def main():
     print("\nmbcontact = global + local search (the local search projects onto faces: the KD-tree and the")
     print("brute force only find the nearest node). Brute force only up to --brute-max nodes (O(N M)).")
     n = np.array([r[0] for r in rows])
+    series = [(n, [r[3] for r in rows], "o-", "mbcontact global + local"),
+              (n, [r[4] for r in rows], "s-", "cKDTree (nearest node only)")]
     bf = [(r[0], r[5]) for r in rows if r[5] == r[5]]
-    plot.loglog(a.plot, None, "surface nodes",
-                [(n, [r[3] for r in rows], "o-", "mbcontact global + local"),
-                 (n, [r[4] for r in rows], "s-", "cKDTree (nearest node only)"),
-                 (*zip(*bf), "^-", "brute force O(N M)"),
-                 (n, n / 2e6, "k:", "linear, 2e6 nodes/s")])
+    if bf:  # none when every size is above --brute-max: zip(*[]) gave a 2-tuple series, and the plot crashed
+        series.append((*zip(*bf), "^-", "brute force O(N M)"))
+    plot.loglog(a.plot, None, "surface nodes", series + [(n, n / 2e6, "k:", "linear, 2e6 nodes/s")])
+
 
 if __name__ == "__main__":
     sys.exit(main())
