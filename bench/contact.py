@@ -13,7 +13,7 @@ round(0.7 n) x round(0.7 n); both 10 layers high.
    MBCBodySolve for context, wall time and peak RSS of the solver (--repeat: the fastest of
    several runs). Growth exponents are least-squares slopes of log time against log contact
    points over the larger sizes. The bodies grow with n too (DOFs ~ 50 points).
-2. For one size (--tol-size), -mbc_pgs_rtol from 1e-2 to 1e-10, with the active-set step
+2. For one size (--tol-size), -mbc_multiplier_rtol from 1e-2 to 1e-10, newton and pgs with the active-set step
    (default, every 20 sweeps) and without (-mbc_pgs_active_set 0), run to a steady state
    (--tol-final-time): sweeps and PGS time per step and the error of the steady displacement
    of block 2's top (mean of top_uz over the last 0.5 s of <scene>_result_points.csv) against
@@ -48,7 +48,7 @@ import plot  # noqa: E402  (bench/plot.py)
 BUILD = os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build"))
 SOLVER = os.path.join(BUILD, "mbcontact")
 PREP = os.path.join(ROOT, "python", "mbcontact-prep")
-EVENTS = ("MBCFlexibilityAssemble", "MBCPGSSolve", "MBCBodyFactor", "MBCBodySolve",
+EVENTS = ("MBCFlexibilityAssemble", "MBCMultiplierSolve", "MBCBodyFactor", "MBCBodySolve",
           "KSPMatSolve", "MatTrnMatMultSym", "MatTrnMatMultNum")
 TOP = -1.5e-4  # exact steady displacement of block 2's top [m]
 LAYERS = 10
@@ -100,9 +100,9 @@ def run(h5, *options):
         w = line.split()
         if w and w[0] in EVENTS:
             ev[w[0]] = (int(w[1]), float(w[3]))
-    sweeps = [int(s) for s in re.findall(r"contact: PGS CONVERGED_\w+ in (\d+) sweeps", out)]
+    sweeps = [int(s) for s in re.findall(r"contact: \w+ CONVERGED_\w+ in (\d+) iterations", out)]
     points = [int(s) for s in re.findall(r"contact: (\d+) contact points, (?:\d+ multipliers, )?flexibility matrix rebuilt", out)]
-    last = re.findall(r"contact: PGS .*separated (\d+), stick (\d+), slip (\d+)", out)
+    last = re.findall(r"contact: \w+ .*separated (\d+), stick (\d+), slip (\d+)", out)
     steps = len(re.findall(r"^step\s+\d+ t \S+\s+max\|u\|", out, re.M)) - 1  # minus step 0
     if not sweeps or not points or steps < 1:
         sys.stderr.write(f"\nno contact in the run: {' '.join(cmd)}\n")
@@ -110,7 +110,7 @@ def run(h5, *options):
     t = {k: v[1] for k, v in ev.items()}
     return {"wall": wall, "rss": usage.ru_maxrss / 1024.0, "events": t, "sweeps": sweeps, "steps": steps,
             "points": points[0], "builds": len(points), "state": tuple(map(int, last[-1])),
-            "pgs_calls": ev.get("MBCPGSSolve", (1, 0))[0]}
+            "pgs_calls": ev.get("MBCMultiplierSolve", (1, 0))[0]}
 
 
 def slope(x, y):
@@ -133,7 +133,7 @@ def against_points(a, work):
         r["wall"] = min(x["wall"] for x in runs)
         r.update(n=n, D=e.get("MBCFlexibilityAssemble", 0), solves=e.get("KSPMatSolve", 0),
                  htx=e.get("MatTrnMatMultSym", 0) + e.get("MatTrnMatMultNum", 0),
-                 pgs=e.get("MBCPGSSolve", 0) / r["pgs_calls"], body_solve=e.get("MBCBodySolve", 0) / r["steps"])
+                 pgs=e.get("MBCMultiplierSolve", 0) / r["pgs_calls"], body_solve=e.get("MBCBodySolve", 0) / r["steps"])
         rows.append(r)
         print(f"{n:3d} {slave_grid(n):5d} {r['points']:6d} {3 * r['points']:5d} {dofs(n):6d} {r['D']:8.3f} {r['solves']:8.3f} "
               f"{r['htx']:8.3f} {r['pgs']:9.4f} {np.mean(r['sweeps']):6.1f} {e.get('MBCBodyFactor', 0):7.3f} "
@@ -160,33 +160,28 @@ def against_points(a, work):
 def against_tolerance(a, work):
     n = a.tol_size
     h5 = make_scene(work, n, a.dt, a.tol_final_time)
-    print(f"\nPGS tolerance, n = {n} (slave {slave_grid(n)}), dt {a.dt} s to t = {a.tol_final_time} s "
+    print(f"\nMultiplier solve tolerance, n = {n} (slave {slave_grid(n)}), dt {a.dt} s to t = {a.tol_final_time} s "
           f"({round(a.tol_final_time / a.dt)} steps); steady top_uz = mean over the last 0.5 s, exact {TOP:g} m\n")
-    print(f"{'rtol':>7} {'active set':>10} {'sweeps/step':>11} {'max':>6} {'PGS/step':>9} {'PGS total':>9} "
+    print(f"{'rtol':>7} {'solver':>10} {'its/step':>11} {'max':>6} {'PGS/step':>9} {'PGS total':>9} "
           f"{'D builds':>8} {'top_uz':>12} {'error':>9} {'wall':>7}  last step (sep/stick/slip)", flush=True)
-    rows, with_set = [], {}
-    for act in (ACTIVE_SET, 0):
+    rows = []
+    variants = (("newton", ()), (f"pgs + AS {ACTIVE_SET}", ("-mbc_multiplier_type", "pgs", "-mbc_pgs_active_set", ACTIVE_SET)),
+                ("pgs", ("-mbc_multiplier_type", "pgs", "-mbc_pgs_active_set", 0)))
+    for label, opts in variants:
         for tol in a.tols:
-            same = not act and max(with_set[tol]["sweeps"]) < ACTIVE_SET
-            if same:  # no step reached the first active-set sweep: the run without it is the same computation
-                r = dict(with_set[tol])
-            else:
-                r = run(h5, "-mbc_pgs_rtol", tol, "-mbc_pgs_active_set", act, "-mbc_pgs_max_it", a.max_it)
-                pts = read_csv(h5[:-3] + "_result_points.csv")
-                late = pts["t"] >= pts["t"][-1] - 0.5 + 1e-9
-                top = pts["top_uz"][late].mean()
-                r.update(top=top, err=abs(top / TOP - 1), pgs=r["events"].get("MBCPGSSolve", 0))
-            r.update(tol=tol, act=act)
-            if act:
-                with_set[tol] = r
+            r = run(h5, "-mbc_multiplier_rtol", tol, "-mbc_multiplier_max_it", a.max_it if label != "newton" else 100, *opts)
+            pts = read_csv(h5[:-3] + "_result_points.csv")
+            late = pts["t"] >= pts["t"][-1] - 0.5 + 1e-9
+            top = pts["top_uz"][late].mean()
+            r.update(top=top, err=abs(top / TOP - 1), pgs=r["events"].get("MBCMultiplierSolve", 0), tol=tol, act=label)
             rows.append(r)
-            print(f"{tol:7.0e} {('every %d' % act) if act else 'off':>10} {np.mean(r['sweeps']):11.1f} {max(r['sweeps']):6d} "
+            print(f"{tol:7.0e} {label:>10} {np.mean(r['sweeps']):11.1f} {max(r['sweeps']):6d} "
                   f"{r['pgs'] / r['pgs_calls']:9.4f} {r['pgs']:9.2f} {r['builds']:8d} {r['top']:12.5e} {r['err']:9.2e} "
-                  f"{r['wall']:7.2f}  {'/'.join(map(str, r['state']))}{'  (same run as above)' if same else ''}", flush=True)
-    print("\nrtol: -mbc_pgs_rtol, on the FCLIB merit of each step's problem scaled to |q| = 1 (relative); active set:")
-    print("-mbc_pgs_active_set (the direct solve on the contact set every that many sweeps, and at sweep 0 with the kept factor);")
-    print("error: |steady top_uz / -1.5e-4 - 1| (discretisation included). A run without the active set is not repeated")
-    print(f"when no step of the run with it reached sweep {ACTIVE_SET}: the step is never tried, the computation is the same.")
+                  f"{r['wall']:7.2f}  {'/'.join(map(str, r['state']))}", flush=True)
+    print("\nrtol: -mbc_multiplier_rtol, on the FCLIB merit of each step's problem scaled to |q| = 1 (relative); solver:")
+    print("newton (the default: semismooth Newton, iterations = Newton steps), pgs with the active-set step every")
+    print(f"{ACTIVE_SET} sweeps (-mbc_pgs_active_set) or without it (iterations = sweeps);")
+    print("error: |steady top_uz / -1.5e-4 - 1| (discretisation included).")
     return rows
 
 
@@ -200,7 +195,7 @@ def main():
     ap.add_argument("--tol-size", type=int, default=15, help="master grid of the tolerance study")
     ap.add_argument("--tol-final-time", type=float, default=1.5, help="end of the tolerance runs [s]")
     ap.add_argument("--tols", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10])
-    ap.add_argument("--max-it", type=int, default=100000, help="-mbc_pgs_max_it of the tolerance runs")
+    ap.add_argument("--max-it", type=int, default=100000, help="-mbc_multiplier_max_it of the pgs tolerance runs")
     ap.add_argument("--sizes-only", action="store_true", help="part 1 only (the tolerance study takes most of the time)")
     ap.add_argument("--plot", default=None, help="PNG (default docs/contact.png; with --quick, in the temporary directory)")
     a = ap.parse_args()

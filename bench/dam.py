@@ -34,7 +34,7 @@ from mbcontact.results import log_view_times  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch"),
-          "D": "MBCFlexibilityAssemble", "PGS": "MBCPGSSolve", "solves": "MBCBodySolve", "output": "MBCOutput"}
+          "D": "MBCFlexibilityAssemble", "PGS": "MBCMultiplierSolve", "solves": "MBCBodySolve", "output": "MBCOutput"}
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
 STATIC_OK = dict(level=80.0, mu_base=1.0)  # the converging static case of tests/python/test_dam.py (height 100)
 
@@ -63,7 +63,7 @@ def solve(h5, ranks=1, timeout=300, *options):
     r["points"] = int(m[-1]) if m else -1
     m = re.findall(r"(\d+) multipliers", out)
     r["mult"] = int(m[-1]) if m else -1
-    r["err"] = [l for l in out.splitlines() if re.search(r"DIVERGED|[Ee]rror|not converge", l) and "PGS CONVERGED" not in l][:3]
+    r["err"] = [l for l in out.splitlines() if re.search(r"DIVERGED|[Ee]rror|not converge", l) and "CONVERGED" not in l][:3]
     r["rebuilds"] = out.count("flexibility matrix rebuilt")
     r["iters"] = len(re.findall(r"static iteration \d+:", out))
     return r
@@ -99,7 +99,7 @@ def main():
     ap.add_argument("--timeout", type=float, default=300)
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "dam_bench.png"))
     ap.add_argument("--json", default=None, help="also write the rows here")
-    ap.add_argument("--options", default="", help="extra solver options, e.g. '-mbc_pgs_rtol 1e-4'")
+    ap.add_argument("--options", default="", help="extra solver options, e.g. '-mbc_multiplier_rtol 1e-4'")
     a = ap.parse_args()
     params = {} if a.defaults else STATIC_OK
     work = tempfile.mkdtemp(prefix="mbc_dam_")

@@ -34,7 +34,7 @@ from mbcontact.prep import prepare  # noqa: E402
 from mbcontact.results import log_view_times  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
-EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "D": "MBCFlexibilityAssemble", "PGS": "MBCPGSSolve",
+EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "D": "MBCFlexibilityAssemble", "PGS": "MBCMultiplierSolve",
           "solves": "MBCBodySolve", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch"), "output": "MBCOutput"}
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 
@@ -97,7 +97,7 @@ def main():
         for rtol in (1e-3, 1e-4, 1e-6, 1e-8, 1e-10):
             # the equilibrium iterations cannot be tighter than the multipliers they balance
             try:
-                wall, rss, ph, dofs, _ = solve(h5, "-mbc_pgs_rtol", f"{rtol:g}", "-mbc_static_rtol", f"{max(rtol, 1e-6):g}")
+                wall, rss, ph, dofs, _ = solve(h5, "-mbc_multiplier_rtol", f"{rtol:g}", "-mbc_static_rtol", f"{max(rtol, 1e-6):g}")
             except SystemExit:  # the equilibrium iterations may not converge on loose multipliers
                 print(f"{'':30s} {rtol:7.0e}  no static equilibrium within 50 iterations", flush=True)
                 continue

@@ -683,6 +683,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   char        p[256];
   PC          pc;
   PetscBool   mumps;
+  PetscMPIInt size;
 
   PetscFunctionBegin;
   PetscCall(PetscNew(&nt));
@@ -703,8 +704,19 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   PetscCall(KSPSetOptionsPrefix(nt->ksp, p));
   PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
   PetscCall(KSPGetPC(nt->ksp, &pc));
-  PetscCall(PCSetType(pc, PCLU));
   PetscCall(PetscHasExternalPackage("mumps", &mumps));
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)m), &size));
+  if (size > 1) { /* the Newton system is the contact problem's size: each rank factors all of it
+                     (PCREDUNDANT). MUMPS on distributed input skips its maximum-transversal
+                     permutation, and the zero block of the free bodies' equilibrium rows then
+                     gave infinite steps (a static dam on 2 ranks) */
+    KSP inner;
+    PetscCall(PCSetType(pc, PCREDUNDANT));
+    PetscCall(PCRedundantGetKSP(pc, &inner));
+    PetscCall(KSPSetType(inner, KSPPREONLY));
+    PetscCall(KSPGetPC(inner, &pc));
+  }
+  PetscCall(PCSetType(pc, PCLU));
   if (mumps) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
   PetscCall(MBCMultiplierCreate(PetscObjectComm((PetscObject)m), &nt->pgs));
