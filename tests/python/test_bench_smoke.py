@@ -26,7 +26,7 @@ def fclib_dir():
 SMOKE = {
     "body_phases.py": (["--sizes", "4", "--steps", "2"], r"^\s+375\s", True),
     "contact.py": (["--sizes", "3", "--steps", "2", "--tol-size", "3", "--tols", "1e-4", "--tol-final-time", "0.05"],
-                   r"^\s+1e-04\s+every 20", True),
+                   r"^\s+1e-04\s+pgs \+ AS 20", True),
     "dam.py": (["--dofs", "1e3", "2e3", "--scaling", "1e3", "--ranks", "2"], r"^speed-up", True),
     "fclib.py": (["--smoke"], r"^\| local_problem_test\.hdf5 \| local \| 48 \|.*\| mbcontact \|", False),
     "hertz_convergence.py": (["--smoke"], r"^\s+0\.400\s+\d+", True),
