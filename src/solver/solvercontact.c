@@ -550,7 +550,6 @@ PetscErrorCode MBCSolverContactRigidRHS(MBCSolver s)
       if (PetscAbsReal(ve) > 1e-8 * fscale) { /* a mechanism under load: name its bodies */
         char     names[512] = "";
         size_t   len;
-        PetscInt best = 0;
         for (PetscInt b = 0; b < s->nbodies; b++) {
           PetscReal share = 0;
           for (PetscInt i = s->goff[b]; i < s->goff[b + 1]; i++) share += PetscSqr(PetscRealPart(s->gQ[k * ng + i]));
@@ -558,7 +557,6 @@ PetscErrorCode MBCSolverContactRigidRHS(MBCSolver s)
             PetscCall(PetscStrlen(names, &len));
             PetscCall(PetscSNPrintf(names + len, sizeof(names) - len, "%s'%s'", len ? ", " : "", s->scene->bodies[b].name));
           }
-          (void)best;
         }
         SETERRQ(s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: bod%s %s can move as one rigid body that no support and no contact resists, and the load along that motion does not balance (%g, %.3g of the largest load on a rigid mode %g); prescribe a displacement that holds it, or run a dynamic analysis", s->step, (double)s->time, strchr(names, ',') ? "ies" : "y", names, (double)ve, (double)(PetscAbsReal(ve) / fscale), (double)fscale);
       }

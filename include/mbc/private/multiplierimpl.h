@@ -54,6 +54,7 @@ PETSC_INTERN PetscReal      MBCContactNaturalMap2(const PetscReal[3], const Pets
 PETSC_EXTERN PetscErrorCode MBCContactLocalSolve(const PetscReal[9], const PetscReal[3], PetscReal, PetscReal[3]);
 PETSC_EXTERN PetscErrorCode MBCFrictionMerit(MBCFrictionProblem *, Vec, Vec, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCFrictionVelocity(MBCFrictionProblem *, Vec, Vec);
+PETSC_EXTERN PetscErrorCode MBCFrictionEquilibriumResidual2(MBCFrictionProblem *, Vec, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCFrictionProblemSetBlocks(MBCFrictionProblem *, const PetscInt[]);
 PETSC_EXTERN PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *);
 PETSC_EXTERN PetscErrorCode MBCFclibRead(const char[], MBCFrictionProblem *, PetscBool *);

@@ -42,6 +42,24 @@ PetscErrorCode MBCFrictionVelocity(MBCFrictionProblem *fp, Vec r, Vec u)
   PetscFunctionReturn(0);
 }
 
+/* |G r - e|^2: how far r is from the free bodies' equilibrium (0 without constraints). */
+PetscErrorCode MBCFrictionEquilibriumResidual2(MBCFrictionProblem *fp, Vec r, PetscReal *g2)
+{
+  Vec       g;
+  PetscReal gn;
+
+  PetscFunctionBegin;
+  *g2 = 0;
+  if (!fp->G) PetscFunctionReturn(0);
+  PetscCall(VecDuplicate(fp->e, &g));
+  PetscCall(MatMult(fp->G, r, g));
+  PetscCall(VecAXPY(g, -1.0, fp->e));
+  PetscCall(VecNorm(g, NORM_2, &gn));
+  PetscCall(VecDestroy(&g));
+  *g2 = gn * gn;
+  PetscFunctionReturn(0);
+}
+
 /* FCLIB merit of (r, u) as fclib_merit_local (fcmer.c) defines it:
    sqrt(sum over contacts of |r - proj_K(r - (u + mu |u_t| e_n))|^2) / (1 + sqrt(|q|_2)).
    A frictionless 1-block contributes (r_n - max(0, r_n - u_n))^2, what its 3-block with mu = 0
@@ -66,14 +84,9 @@ PetscErrorCode MBCFrictionMerit(MBCFrictionProblem *fp, Vec r, Vec u, PetscReal 
   PetscCall(VecRestoreArrayRead(r, &rv));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &e, 1, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)fp->W)));
   if (fp->G) {
-    Vec       g;
-    PetscReal gn;
-    PetscCall(VecDuplicate(fp->e, &g));
-    PetscCall(MatMult(fp->G, r, g));
-    PetscCall(VecAXPY(g, -1.0, fp->e));
-    PetscCall(VecNorm(g, NORM_2, &gn));
-    PetscCall(VecDestroy(&g));
-    e += gn * gn;
+    PetscReal g2;
+    PetscCall(MBCFrictionEquilibriumResidual2(fp, r, &g2));
+    e += g2;
   }
   PetscCall(VecNorm(fp->q, NORM_2, &qn));
   *merit = PetscSqrtReal(e) / (1 + PetscSqrtReal(qn));

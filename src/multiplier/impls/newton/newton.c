@@ -44,7 +44,7 @@ typedef struct {
 /* Alart-Curnier residual of this rank's contacts at (r, u) into phi; with jac, also the Jacobian
    blocks and the active flags; stick: every contact in contact is taken as sticking (the
    predictor from r = 0). Returns psi = 1/2 |phi|^2 + 1/2 |G r - e|^2 over all ranks. */
-static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, Vec alpha, PetscBool jac, PetscBool stick, PetscReal *psi, PetscBool *slips)
+static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, PetscBool stick, PetscReal *psi, PetscBool *slips)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp = m->fp;
@@ -111,16 +111,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, Vec alpha, Petsc
   PetscCall(VecRestoreArray(nt->phi, &pv));
   PetscCall(VecRestoreArrayRead(u, &uv));
   PetscCall(VecRestoreArrayRead(r, &rv));
-  if (fp->G) {
-    Vec       g;
-    PetscReal gn;
-    PetscCall(VecDuplicate(fp->e, &g));
-    PetscCall(MatMult(fp->G, r, g));
-    PetscCall(VecAXPY(g, -1.0, fp->e));
-    PetscCall(VecNorm(g, NORM_2, &gn));
-    PetscCall(VecDestroy(&g));
-    gn2 = gn * gn;
-  }
+  PetscCall(MBCFrictionEquilibriumResidual2(fp, r, &gn2));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &s2, 1, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)m)));
   *psi = 0.5 * (s2 + gn2);
   if (slips) PetscCallMPI(MPI_Allreduce(&slip, slips, 1, MPIU_BOOL, MPI_LOR, PetscObjectComm((PetscObject)m)));
@@ -517,7 +508,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
                                        classification by the free increment q alone would slip
                                        contacts along q_t, and the iteration may end in another of
                                        the solutions a frictional static problem can have */
-      PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, PETSC_TRUE, &psi, &slips));
+      PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_TRUE, &psi, &slips));
       PetscCall(NewtonStep(m, r, PETSC_FALSE));
       PetscCall(VecAXPY(r, 1.0, nt->dr));
       if (fp->G) PetscCall(VecAXPY(fp->alpha, 1.0, nt->dalpha));
@@ -532,7 +523,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(ISDestroy(&nt->isbuilt)); /* its factor is no Newton matrix */
     }
   }
-  PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
+  PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
   for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
   best = m->merit;
   PetscCall(VecCopy(r, rbest));
@@ -554,7 +545,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(VecWAXPY(nt->rt, t, nt->dr, r));
       PetscCall(VecWAXPY(nt->ut, t, nt->wdr, u));
       if (fp->G) PetscCall(VecWAXPY(nt->alphat, t, nt->dalpha, fp->alpha));
-      PetscCall(ACResidual(m, nt->rt, nt->ut, fp->G ? nt->alphat : NULL, PETSC_FALSE, PETSC_FALSE, &psit, NULL));
+      PetscCall(ACResidual(m, nt->rt, nt->ut, PETSC_FALSE, PETSC_FALSE, &psit, NULL));
       if (psit <= ref - nt->sigma * t * 2 * psi) break;
     }
     if (ls < nt->ls_max || fp->G) { /* accepted (with constraints the last, shortest step is taken anyway) */
@@ -587,7 +578,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       stall = 0;
     }
-    PetscCall(ACResidual(m, r, u, fp->alpha, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
+    PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
     if (stall == 0 && restarts && m->merit == best) for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
     for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
     hist[0] = psi;
