@@ -122,7 +122,7 @@ def against_points(a, work):
     print(f"\ntwo blocks, master grid n x n, slave round(0.7 n)^2, {LAYERS} layers; dt {a.dt} s, {a.steps} Newmark steps, "
           "one rank, MUMPS Cholesky\n")
     head = (f"{'n':>3} {'slave':>5} {'points':>6} {'m':>5} {'DOFs':>6} {'D [s]':>8} {'solves':>8} {'HtX':>8} "
-            f"{'PGS/step':>9} {'sweeps':>6} {'factor':>7} {'solve/step':>10} {'wall':>7} {'RSS MiB':>8}")
+            f"{'mult/step':>9} {'its':>6} {'factor':>7} {'solve/step':>10} {'wall':>7} {'RSS MiB':>8}")
     print(head, flush=True)
     rows = []
     for n in a.sizes:
@@ -142,12 +142,12 @@ def against_points(a, work):
             print(f"    D built {r['builds']} times (the pairs changed)")
     print("\npoints: contact points (master nodes); m = 3 points multipliers; D = MBCFlexibilityAssemble, of which")
     print("solves = KSPMatSolve (X = A^-1 H, m right-hand sides per body) and HtX = MatTransposeMatMult (H^T X, H sparse);")
-    print("PGS/step = MBCPGSSolve per call, sweeps = mean sweeps per step; factor = MBCBodyFactor (all factorizations);")
+    print("mult/step = MBCMultiplierSolve per call, its = mean multiplier iterations per step (Newton steps; sweeps with pgs); factor = MBCBodyFactor (all factorizations);")
     print("solve/step = MBCBodySolve / steps (both bodies, the initial-state solves included).")
     p = np.array([r["points"] for r in rows], float)
     big = p >= min(200, p[-2]) if len(p) > 2 else p > 0
     fits = {}
-    for key, label in (("D", "D assembly"), ("solves", "  KSPMatSolve"), ("htx", "  H^T X"), ("pgs", "PGS per step")):
+    for key, label in (("D", "D assembly"), ("solves", "  KSPMatSolve"), ("htx", "  H^T X"), ("pgs", "solve per step")):
         y = np.array([r[key] for r in rows])
         if big.sum() >= 2 and (y[big] > 0).all():
             fits[key] = slope(p[big], y[big])
@@ -162,7 +162,7 @@ def against_tolerance(a, work):
     h5 = make_scene(work, n, a.dt, a.tol_final_time)
     print(f"\nMultiplier solve tolerance, n = {n} (slave {slave_grid(n)}), dt {a.dt} s to t = {a.tol_final_time} s "
           f"({round(a.tol_final_time / a.dt)} steps); steady top_uz = mean over the last 0.5 s, exact {TOP:g} m\n")
-    print(f"{'rtol':>7} {'solver':>10} {'its/step':>11} {'max':>6} {'PGS/step':>9} {'PGS total':>9} "
+    print(f"{'rtol':>7} {'solver':>10} {'its/step':>11} {'max':>6} {'mult/step':>9} {'mult tot':>9} "
           f"{'D builds':>8} {'top_uz':>12} {'error':>9} {'wall':>7}  last step (sep/stick/slip)", flush=True)
     rows = []
     variants = (("newton", ()), (f"pgs + AS {ACTIVE_SET}", ("-mbc_multiplier_type", "pgs", "-mbc_pgs_active_set", ACTIVE_SET)),
@@ -215,7 +215,7 @@ def main():
                     [(p, [r["D"] for r in rows], "o-", "D assembly (once)"),
                      (p, [r["solves"] for r in rows], "o--", "  of which KSPMatSolve"),
                      (p, [r["htx"] for r in rows], "o:", "  of which H^T X"),
-                     (p, [r["pgs"] for r in rows], "s-", "PGS per step"),
+                     (p, [r["pgs"] for r in rows], "s-", "multiplier solve per step"),
                      (p, [r["events"].get("MBCBodyFactor", 0) for r in rows], "^-", "body factorizations"),
                      (p, [r["body_solve"] for r in rows], "v-", "body solves per step"),
                      (p, ref(2, rows[-1]["D"]), "k:", "points^2"),
