@@ -4,6 +4,8 @@
    energies to CSV. */
 #include <mbc/private/solverimpl.h>
 #include <mbc/private/h5util.h>
+#include <errno.h>
+#include <signal.h>
 
 /* Nearest owned vertex of each output point, over the bodies it may belong to. */
 static PetscErrorCode SolverLocatePoints(MBCSolver s)
@@ -76,6 +78,54 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* The CSV histories are flushed after every step, so that a killed or failed run leaves whole
+   lines; a write error (full disk, file-size limit) is found on rank 0 and raised on every rank
+   (collective), so that the run stops cleanly. */
+static PetscErrorCode SolverFlushCsv(MBCSolver s)
+{
+  FILE       *fp[3]     = {s->points_csv, s->energy_csv, s->contact_csv};
+  const char *suffix[3] = {"_points.csv", "_energy.csv", "_contact.csv"};
+  int         bad = -1, err = 0;
+
+  PetscFunctionBegin;
+  for (int i = 0; i < 3 && bad < 0; i++)
+    if (fp[i] && (fflush(fp[i]) || ferror(fp[i]))) {
+      bad = i;
+      err = errno;
+    }
+  {
+    int v[2] = {bad, err};
+    PetscCallMPI(MPI_Bcast(v, 2, MPI_INT, 0, s->comm));
+    bad = v[0], err = v[1];
+  }
+  PetscCheck(bad < 0, s->comm, PETSC_ERR_FILE_WRITE, "Cannot write %s%s at t = %g: %s (is the disk full, or the file-size limit, ulimit -f, reached?)", s->output, suffix[bad], (double)s->time, strerror(err));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverWriteXdmf(MBCSolver, PetscBool *);
+
+/* Makes the outputs written so far durable: the time of each in /time, their count in
+   num_outputs, the file flushed (a reader sees exactly these outputs if the run is killed
+   before the next commit; num_outputs, not the groups present, says which are complete), then
+   the XDMF index of these outputs replaces the old one atomically. Collective. */
+static PetscErrorCode SolverOutputCommit(MBCSolver s)
+{
+  hid_t       file = (hid_t)s->h5;
+  int         n    = (int)s->noutputs;
+  PetscMPIInt rank;
+  PetscBool   ok = PETSC_TRUE;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(MBCH5WriteRowsGrow(file, "time", H5T_NATIVE_DOUBLE, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_times + s->noutputs - 1 : NULL));
+  PetscCall(MBCH5WriteAttribute(file, "num_outputs", H5T_NATIVE_INT, 1, &n));
+  PetscCall(MBCH5FileFlush(file));
+  if (!rank) PetscCall(SolverWriteXdmf(s, &ok));
+  PetscCallMPI(MPI_Bcast(&ok, 1, MPIU_BOOL, 0, s->comm));
+  PetscCheck(ok, s->comm, PETSC_ERR_FILE_WRITE, "Cannot write the XDMF index %s.xmf at t = %g (is the disk full, or the file-size limit, ulimit -f, reached?)", s->output, (double)s->time);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
 {
   MBCScene    scene  = s->scene;
@@ -86,6 +136,8 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscTime(&s->t_start));
+  s->t_last = s->t_start;
   PetscCall(PetscMalloc2(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints));
   s->noutputs = 0;
   if (fields || s->contact) {
@@ -99,6 +151,8 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
     PetscCall(MBCH5WriteAttributeString(file_id, "title", scene->title));
     if (fields) PetscCall(MBCSolverOutputBodiesOpen(s));
   }
+  PetscCall(MBCSolverOutputContactOpen(s));
+  if (s->h5 >= 0) PetscCall(SolverOutputCommit(s)); /* geometry and an empty index: readable from the start */
   if (scene->npoints) {
     PetscCall(SolverLocatePoints(s));
     if (!rank) {
@@ -109,12 +163,12 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       fprintf(s->points_csv, "\n");
     }
   }
-  PetscCall(MBCSolverOutputContactOpen(s));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC && !rank) {
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,total\n");
   }
+  PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -152,8 +206,11 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   MBCScene  scene = s->scene;
   PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress);
   PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == s->nsteps));
+  int       sig;
 
   PetscFunctionBegin;
+  PetscCall(MBCStopSignalled(s->comm, &sig)); /* between steps: a signal makes this the last one, written whole */
+  if (sig && (fields || s->contact)) fieldstep = PETSC_TRUE;
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
   if (scene->npoints) PetscCall(SolverOutputPoints(s));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC) {
@@ -166,21 +223,26 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
     if (fields) PetscCall(MBCSolverOutputBodiesStep(s));
     if (!s->contact) s->output_npoints[s->noutputs] = 0;
     s->output_times[s->noutputs++] = s->time;
+    PetscCall(SolverOutputCommit(s));
   }
+  PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
+  PetscCheck(!sig, s->comm, PETSC_ERR_SIG, "Stopped by signal %d (%s) after step %" PetscInt_FMT " of %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " output steps (the last at t = %g) are in %s.h5, indexed by %s.xmf, and the CSV histories are complete to t = %g", sig, sig == SIGINT ? "SIGINT" : (sig == SIGTERM ? "SIGTERM" : "?"), s->step, s->nsteps, (double)s->time, s->noutputs, s->noutputs ? (double)s->output_times[s->noutputs - 1] : 0.0, s->output, s->output, (double)s->time);
   PetscFunctionReturn(0);
 }
 
 /* The XDMF index: a temporal collection of spatial collections (a grid per body, one for the
-   contact points), every dataset in the one result file. */
-static PetscErrorCode SolverWriteXdmf(MBCSolver s)
+   contact points), every dataset in the one result file. Written beside it and renamed over it,
+   so that a reader (or a kill) never meets half an index. Rank 0; *ok false on a write error. */
+static PetscErrorCode SolverWriteXdmf(MBCSolver s, PetscBool *ok)
 {
-  char  file[PETSC_MAX_PATH_LEN];
+  char  file[PETSC_MAX_PATH_LEN], part[PETSC_MAX_PATH_LEN + 8];
   FILE *fp;
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s.xmf", s->output));
-  PetscCall(MBCFileOpenWrite(file, &fp));
+  PetscCall(PetscSNPrintf(part, sizeof(part), "%s.part", file));
+  PetscCall(MBCFileOpenWrite(part, &fp));
   fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n  <Domain>\n");
   fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
   for (PetscInt k = 0; k < s->noutputs; k++) {
@@ -190,7 +252,10 @@ static PetscErrorCode SolverWriteXdmf(MBCSolver s)
     fprintf(fp, "    </Grid>\n");
   }
   fprintf(fp, "  </Grid>\n  </Domain>\n</Xdmf>\n");
-  PetscCheck(!ferror(fp) && !fclose(fp), PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write %s (is the disk full?)", file);
+  *ok = (PetscBool)!ferror(fp);
+  if (fclose(fp)) *ok = PETSC_FALSE;
+  if (*ok && rename(part, file)) *ok = PETSC_FALSE;
+  if (!*ok) remove(part);
   PetscFunctionReturn(0);
 }
 
@@ -205,16 +270,29 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
   s->points_csv = s->energy_csv = NULL;
-  if (s->h5 >= 0) {
+  if (s->h5 >= 0) { /* /time, num_outputs and the XDMF index are up to date (SolverOutputCommit) */
     hid_t file = (hid_t)s->h5;
-    int   n    = (int)s->noutputs;
-    PetscCall(MBCH5WriteRows(file, "time", H5T_NATIVE_DOUBLE, s->noutputs, 1, 0, rank ? 0 : s->noutputs, s->output_times));
-    PetscCall(MBCH5WriteAttribute(file, "num_outputs", H5T_NATIVE_INT, 1, &n));
     PetscCall(MBCH5FileClose(&file));
     s->h5 = -1;
-    if (!rank) PetscCall(SolverWriteXdmf(s));
   }
   PetscCall(MBCSolverOutputBodiesClose(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
   PetscFunctionReturn(0);
+}
+
+/* After an error: close what can be closed. The CSV files are this rank's own; the result file
+   is closed only when collective (every rank stopped: MBCStopErrorIsCollective), its index and
+   num_outputs are those of the last committed output step. Never raises an error. */
+PetscErrorCode MBCSolverOutputAbort(MBCSolver s, PetscBool collective)
+{
+  if (!s) return 0;
+  if (s->points_csv) fclose(s->points_csv);
+  if (s->energy_csv) fclose(s->energy_csv);
+  if (s->contact_csv) fclose(s->contact_csv);
+  s->points_csv = s->energy_csv = s->contact_csv = NULL;
+  if (collective && s->h5 >= 0) {
+    H5Fclose((hid_t)s->h5); /* H5F_CLOSE_STRONG: also closes the groups the error left open */
+    s->h5 = -1;
+  }
+  return 0;
 }

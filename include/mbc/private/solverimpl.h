@@ -98,6 +98,10 @@ struct _n_MBCSolver {
 
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
+
+  /* long runs (solveroutput.c, solvermonitor.c): wall-clock times of the stepping's start and
+     of the last monitored step */
+  PetscLogDouble t_start, t_last;
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
@@ -113,6 +117,7 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactDestroy(MBCSolver);
