@@ -51,7 +51,7 @@ PETSC_EXTERN PetscErrorCode MBCSolverSetUp(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverSolve(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverView(MBCSolver, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCSolverDestroy(MBCSolver *);
-PETSC_EXTERN PetscErrorCode MBCSolverOutputAbort(MBCSolver, PetscBool);
+PETSC_EXTERN PetscErrorCode MBCSolverOutputAbort(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverHelp(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverGetNumBodies(MBCSolver, PetscInt *);
 PETSC_EXTERN PetscErrorCode MBCSolverGetBody(MBCSolver, PetscInt, MBCBody *);

@@ -123,16 +123,13 @@ int main(int argc, char **argv)
   ierr = Run(&status, &solver);
   sig  = MBCStopGetSignal();
   if (ierr) {
-    /* Every rank stopped (a failed check on reduced values, a signal, a full disk): close the
-       files collectively and finish PETSc (-log_view). A user error found on some ranks only:
-       the others wait in a collective, so the job is aborted (the files hold every completed
-       output step: they are flushed after each). */
+    /* The result files hold every completed output step (committed after each). Every rank
+       stopped (a failed check on reduced values, a signal, a full disk): finish PETSc, so that
+       -log_view is printed. A user error found on some ranks only: the others wait in a
+       collective, so the job is aborted. */
     PetscCall(MBCStopErrorIsCollective(3.0, &all));
-    if (!all) {
-      MBCSolverOutputAbort(solver, PETSC_FALSE);
-      MPI_Abort(PETSC_COMM_WORLD, sig ? 128 + sig : 1);
-    }
-    MBCSolverOutputAbort(solver, PETSC_TRUE);
+    MBCSolverOutputAbort(solver);
+    if (!all) MPI_Abort(PETSC_COMM_WORLD, sig ? 128 + sig : 1);
     MBCStopFinalize();
     PetscFinalize();
     return sig ? 128 + sig : 1;

@@ -5,6 +5,9 @@
 #include <mbc/private/solverimpl.h>
 #include <mbc/private/h5util.h>
 #include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <signal.h>
 
 /* Nearest owned vertex of each output point, over the bodies it may belong to. */
@@ -104,6 +107,34 @@ static PetscErrorCode SolverFlushCsv(MBCSolver s)
 
 static PetscErrorCode SolverWriteXdmf(MBCSolver, PetscBool *);
 
+/* Space for the next output step, reserved on disk right after a flush (the flush leaves the
+   file at its allocated size): twice the last step's bytes, at least 64 KiB. A full disk or
+   the file-size limit (ulimit -f) is then met here, with nothing of the next step allocated,
+   and not inside HDF5, which would leave a superblock that claims more than the file holds
+   (unreadable: "truncated file"). HDF5 trims the file back at the next flush or at close. */
+static PetscErrorCode SolverOutputReserve(MBCSolver s)
+{
+  PetscMPIInt rank;
+  int         err = 0;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  if (!rank) {
+    struct stat st;
+    int         fd = open(s->h5file, O_WRONLY);
+    if (fd < 0 || fstat(fd, &st)) err = errno;
+    else {
+      off_t step = s->h5_size > 0 ? (off_t)(st.st_size - s->h5_size) : (off_t)st.st_size, want = PetscMax(2 * step, 65536);
+      err        = posix_fallocate(fd, st.st_size, want);
+      s->h5_size = (PetscInt64)st.st_size;
+    }
+    if (fd >= 0) close(fd);
+  }
+  PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
+  PetscCheck(!err, s->comm, PETSC_ERR_FILE_WRITE, "Cannot extend the result file %s for the output step after t = %g: %s (is the disk full, or the file-size limit, ulimit -f, reached?)", s->h5file, (double)s->time, strerror(err));
+  PetscFunctionReturn(0);
+}
+
 /* Makes the outputs written so far durable: the time of each in /time, their count in
    num_outputs, the file flushed (a reader sees exactly these outputs if the run is killed
    before the next commit; num_outputs, not the groups present, says which are complete), then
@@ -123,6 +154,7 @@ static PetscErrorCode SolverOutputCommit(MBCSolver s)
   if (!rank) PetscCall(SolverWriteXdmf(s, &ok));
   PetscCallMPI(MPI_Bcast(&ok, 1, MPIU_BOOL, 0, s->comm));
   PetscCheck(ok, s->comm, PETSC_ERR_FILE_WRITE, "Cannot write the XDMF index %s.xmf at t = %g (is the disk full, or the file-size limit, ulimit -f, reached?)", s->output, (double)s->time);
+  PetscCall(SolverOutputReserve(s));
   PetscFunctionReturn(0);
 }
 
@@ -280,19 +312,18 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* After an error: close what can be closed. The CSV files are this rank's own; the result file
-   is closed only when collective (every rank stopped: MBCStopErrorIsCollective), its index and
-   num_outputs are those of the last committed output step. Never raises an error. */
-PetscErrorCode MBCSolverOutputAbort(MBCSolver s, PetscBool collective)
+/* After an error: close the CSV files (this rank's own; their lines are complete) and abandon
+   the result file without closing it: a close would write the metadata of the failed step, and
+   after a write error (full disk, file-size limit) a superblock that claims more than the file
+   holds, making it unreadable. As left, it holds every committed output step (it was flushed
+   after each); MBCStopInitialize keeps HDF5 from closing it at exit. Never raises an error. */
+PetscErrorCode MBCSolverOutputAbort(MBCSolver s)
 {
   if (!s) return 0;
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
   if (s->contact_csv) fclose(s->contact_csv);
   s->points_csv = s->energy_csv = s->contact_csv = NULL;
-  if (collective && s->h5 >= 0) {
-    H5Fclose((hid_t)s->h5); /* H5F_CLOSE_STRONG: also closes the groups the error left open */
-    s->h5 = -1;
-  }
+  s->h5 = -1;
   return 0;
 }

@@ -102,6 +102,7 @@ struct _n_MBCSolver {
   /* long runs (solveroutput.c, solvermonitor.c): wall-clock times of the stepping's start and
      of the last monitored step */
   PetscLogDouble t_start, t_last;
+  PetscInt64     h5_size; /* bytes of the result file at its last commit */
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
