@@ -86,12 +86,12 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
    (collective), so that the run stops cleanly. */
 static PetscErrorCode SolverFlushCsv(MBCSolver s)
 {
-  FILE       *fp[3]     = {s->points_csv, s->energy_csv, s->contact_csv};
-  const char *suffix[3] = {"_points.csv", "_energy.csv", "_contact.csv"};
+  FILE       *fp[4]     = {s->points_csv, s->energy_csv, s->contact_csv, s->reactions_csv};
+  const char *suffix[4] = {"_points.csv", "_energy.csv", "_contact.csv", "_reactions.csv"};
   int         bad = -1, err = 0;
 
   PetscFunctionBegin;
-  for (int i = 0; i < 3 && bad < 0; i++)
+  for (int i = 0; i < 4 && bad < 0; i++)
     if (fp[i] && (fflush(fp[i]) || ferror(fp[i]))) {
       bad = i;
       err = errno;
@@ -200,6 +200,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,total\n");
   }
+  PetscCall(MBCSolverOutputReactionsOpen(s));
   PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
   PetscFunctionReturn(0);
@@ -251,6 +252,7 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
     if (s->energy_csv) fprintf(s->energy_csv, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3]));
   }
   PetscCall(MBCSolverOutputContactStep(s, fieldstep));
+  PetscCall(MBCSolverOutputReactionsStep(s));
   if (fieldstep) {
     if (fields) PetscCall(MBCSolverOutputBodiesStep(s));
     if (!s->contact) s->output_npoints[s->noutputs] = 0;
@@ -301,7 +303,8 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
   PetscCall(MBCSolverOutputContactClose(s));
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
-  s->points_csv = s->energy_csv = NULL;
+  if (s->reactions_csv) fclose(s->reactions_csv);
+  s->points_csv = s->energy_csv = s->reactions_csv = NULL;
   if (s->h5 >= 0) { /* /time, num_outputs and the XDMF index are up to date (SolverOutputCommit) */
     hid_t file = (hid_t)s->h5;
     PetscCall(MBCH5FileClose(&file));
@@ -323,7 +326,8 @@ PetscErrorCode MBCSolverOutputAbort(MBCSolver s)
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
   if (s->contact_csv) fclose(s->contact_csv);
-  s->points_csv = s->energy_csv = s->contact_csv = NULL;
+  if (s->reactions_csv) fclose(s->reactions_csv);
+  s->points_csv = s->energy_csv = s->contact_csv = s->reactions_csv = NULL;
   s->h5 = -1;
   return 0;
 }

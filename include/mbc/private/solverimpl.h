@@ -103,12 +103,15 @@ struct _n_MBCSolver {
      of the last monitored step */
   PetscLogDouble t_start, t_last;
   PetscInt64     h5_size; /* bytes of the result file at its last commit */
+  FILE          *reactions_csv; /* solveroutputreaction.c */
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
