@@ -171,7 +171,8 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   PetscCall(PetscTime(&s->t_start));
   s->t_last = s->t_start;
   PetscCall(PetscMalloc2(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints));
-  s->noutputs = 0;
+  s->noutputs = s->xmf_outputs = 0;
+  s->h5_size  = 0;
   if (fields || s->contact) {
     hid_t file_id;
     int   version = 1;
@@ -267,29 +268,54 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
 
 /* The XDMF index: a temporal collection of spatial collections (a grid per body, one for the
    contact points), every dataset in the one result file. Written beside it and renamed over it,
-   so that a reader (or a kill) never meets half an index. Rank 0; *ok false on a write error. */
+   so that a reader (or a kill) never meets half an index. The outputs already indexed are
+   copied from the old index, not formatted again (the index grows by ~1 KB per body and
+   output). Rank 0; *ok false on a write error. */
+static const char XdmfTail[] = "  </Grid>\n  </Domain>\n</Xdmf>\n";
+
 static PetscErrorCode SolverWriteXdmf(MBCSolver s, PetscBool *ok)
 {
-  char  file[PETSC_MAX_PATH_LEN], part[PETSC_MAX_PATH_LEN + 8];
-  FILE *fp;
+  char     file[PETSC_MAX_PATH_LEN], part[PETSC_MAX_PATH_LEN + 8];
+  FILE    *fp, *old = NULL;
+  PetscInt first = 0;
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s.xmf", s->output));
   PetscCall(PetscSNPrintf(part, sizeof(part), "%s.part", file));
-  PetscCall(MBCFileOpenWrite(part, &fp));
-  fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n  <Domain>\n");
-  fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
-  for (PetscInt k = 0; k < s->noutputs; k++) {
+  *ok = PETSC_FALSE;
+  if (!(fp = fopen(part, "w"))) PetscFunctionReturn(0);
+  if (s->xmf_outputs > 0 && (old = fopen(file, "r")) && !fseek(old, 0, SEEK_END)) {
+    long keep = ftell(old) - (long)strlen(XdmfTail); /* all but the closing tags */
+    char buf[65536];
+    rewind(old);
+    while (keep > 0) {
+      size_t n = fread(buf, 1, (size_t)PetscMin(keep, (long)sizeof(buf)), old);
+      if (!n || fwrite(buf, 1, n, fp) != n) break;
+      keep -= (long)n;
+    }
+    if (!keep) first = s->xmf_outputs;
+  }
+  if (old) fclose(old);
+  if (s->xmf_outputs > 0 && !first) { /* could not copy: write it all */
+    fclose(fp);
+    if (!(fp = fopen(part, "w"))) PetscFunctionReturn(0);
+  }
+  if (!first) {
+    fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n  <Domain>\n");
+    fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
+  }
+  for (PetscInt k = first; k < s->noutputs; k++) {
     fprintf(fp, "    <Grid Name=\"step%" PetscInt_FMT "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n      <Time Value=\"%.17g\"/>\n", k, (double)s->output_times[k]);
     PetscCall(MBCSolverOutputBodiesXdmf(s, fp, k));
     PetscCall(MBCSolverOutputContactXdmf(s, fp, k));
     fprintf(fp, "    </Grid>\n");
   }
-  fprintf(fp, "  </Grid>\n  </Domain>\n</Xdmf>\n");
+  fputs(XdmfTail, fp);
   *ok = (PetscBool)!ferror(fp);
   if (fclose(fp)) *ok = PETSC_FALSE;
   if (*ok && rename(part, file)) *ok = PETSC_FALSE;
   if (!*ok) remove(part);
+  else s->xmf_outputs = s->noutputs;
   PetscFunctionReturn(0);
 }
 
