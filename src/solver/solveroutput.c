@@ -341,11 +341,12 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* After an error: close the CSV files (this rank's own; their lines are complete) and abandon
-   the result file without closing it: a close would write the metadata of the failed step, and
-   after a write error (full disk, file-size limit) a superblock that claims more than the file
-   holds, making it unreadable. As left, it holds every committed output step (it was flushed
-   after each); MBCStopInitialize keeps HDF5 from closing it at exit. Never raises an error. */
+/* After an error: close the CSV files (this rank's own; their lines are complete) and leave
+   the result file to HDF5, which closes it at MPI_Finalize (not at all if the job is aborted):
+   it holds every committed output step either way: the failed step's allocations lie within
+   the space reserved after the last commit (SolverOutputReserve; if the step needs no more than
+   twice the last one), so that close never claims more than the file holds. Not collective;
+   never raises an error. */
 PetscErrorCode MBCSolverOutputAbort(MBCSolver s)
 {
   if (!s) return 0;

@@ -3,7 +3,6 @@
    results written; and after an error, whether every rank has it (then the files can be closed
    collectively and -log_view printed) or only some (then the job must be aborted). */
 #include <mbcontact.h>
-#include <hdf5.h>
 #include <signal.h>
 #include <time.h>
 
@@ -17,9 +16,7 @@ static void MBCStopHandler(int sig)
 
 /* SIGINT and SIGTERM stop the run after the current step; SIGXFSZ (file-size limit) is ignored
    so that the write fails with EFBIG and is reported, instead of killing the process. Replaces
-   PETSc's handler for these signals only. HDF5 is told not to close open files at exit: a
-   result file abandoned after an error must stay as its last flush left it
-   (MBCSolverOutputAbort). Call before any HDF5 use. Collective on comm (dups it). */
+   PETSc's handler for these signals only. Collective on comm (dups it). */
 PetscErrorCode MBCStopInitialize(MPI_Comm comm)
 {
   struct sigaction sa;
@@ -32,7 +29,6 @@ PetscErrorCode MBCStopInitialize(MPI_Comm comm)
   sigemptyset(&sa.sa_mask);
   PetscCheck(!sigaction(SIGINT, &sa, NULL) && !sigaction(SIGTERM, &sa, NULL), PETSC_COMM_SELF, PETSC_ERR_SYS, "Cannot install the SIGINT/SIGTERM handler");
   signal(SIGXFSZ, SIG_IGN);
-  H5dont_atexit();
   PetscFunctionReturn(0);
 }
 

@@ -18,14 +18,14 @@ from mbcontact import meshgen
 DT, STEPS = 1e-5, 1000  # a run far longer than the tests wait for
 
 
-def bar(tmp_path):
+def bar(tmp_path, time="sudden"):
     """A slender bar under sudden gravity (as test_body's), every step written."""
     meshgen.box(tmp_path / "bar.msh", (0, 0, 0), (0.05, 0.05, 1.0), n=(2, 2, 40), cell="hex8", volume_name="bar")
     return prep(tmp_path, {
         "meshes": {"m": "bar.msh"},
         "bodies": {"bar": {"mesh": "m", "regions": ["bar"], "material": {"E": 1e6, "nu": 0.0, "density": 1.0}}},
         "dirichlet": [{"surface": "zmin", "components": "all"}],
-        "loads": [{"kind": "gravity", "vector": [0, 0, -10.0], "time": "sudden"}],
+        "loads": [{"kind": "gravity", "vector": [0, 0, -10.0], "time": time}],
         "analysis": {"type": "dynamic", "dt": DT, "final_time": STEPS * DT},
         "output": {"every": 1, "fields": ["displacement", "stress"], "energy": True, "points": {"tip": [0.025, 0.025, 1.0]}},
     })
@@ -145,6 +145,25 @@ def test_sigterm_writes_the_step_and_stops(tmp_path):
     rows = assert_csv_whole(f"{out}_points.csv", last + 1)
     assert len(rows) == last + 1 and abs(rows[-1, 0] - last * DT) < 1e-12
     assert_xdmf(out, len(got))
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_error_stop_keeps_completed_steps(tmp_path, nproc):
+    """An error at step 22 (the load's time table jumps to 1e308 after t = 0.000205: the
+    displacement increment is not finite): one message naming the body and the time, exit
+    status 1, -log_view printed (also at 2 ranks: every rank has the error), the outputs of
+    steps 0..21 equal to an uninterrupted run's, indexed, CSV lines whole."""
+    table = [[0, 0], [20 * DT, 1], [20.5 * DT, 1e308], [1, 1e308]]
+    h5, out = bar(tmp_path, {"table": table}), tmp_path / "run"
+    r = solve(h5, "-mbc_output", str(out), "-log_view", nproc=nproc, check=False)
+    assert r.returncode == 1, r.stderr
+    assert "Body 'bar': the displacement increment is not finite at time 0.00022" in r.stderr, r.stderr
+    assert "PETSc Performance Summary" in r.stdout and "MBCBodySolve" in r.stdout
+    got = outputs(f"{out}.h5")
+    assert len(got) == 22
+    assert_xdmf(out, 22)
+    assert len(assert_csv_whole(f"{out}_points.csv", 22)) == 22
+    assert_same_as_uninterrupted(tmp_path, h5, got, nproc)
 
 
 def test_full_disk_stops_cleanly(tmp_path):
