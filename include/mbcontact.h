@@ -32,6 +32,13 @@ PETSC_EXTERN PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_Bo
 PETSC_EXTERN PetscErrorCode MBCInitializePackage(void);
 PETSC_EXTERN PetscErrorCode MBCFileOpenWrite(const char[], FILE **);
 
+/* Stopping short (src/sys/stop.c): signals checked between steps, errors on all ranks or some. */
+PETSC_EXTERN PetscErrorCode MBCStopInitialize(MPI_Comm);
+PETSC_EXTERN PetscErrorCode MBCStopFinalize(void);
+PETSC_EXTERN int            MBCStopGetSignal(void);
+PETSC_EXTERN PetscErrorCode MBCStopSignalled(MPI_Comm, int *);
+PETSC_EXTERN PetscErrorCode MBCStopErrorIsCollective(PetscReal, PetscBool *);
+
 PETSC_EXTERN PetscErrorCode MBCSceneLoad(MPI_Comm, const char[], MBCScene *);
 PETSC_EXTERN PetscErrorCode MBCSceneCreateEmpty(MBCScene *);
 PETSC_EXTERN PetscErrorCode MBCSceneView(MBCScene, PetscViewer);
@@ -44,6 +51,8 @@ PETSC_EXTERN PetscErrorCode MBCSolverSetUp(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverSolve(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverView(MBCSolver, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCSolverDestroy(MBCSolver *);
+PETSC_EXTERN PetscErrorCode MBCSolverOutputAbort(MBCSolver);
+PETSC_EXTERN PetscErrorCode MBCSolverHelp(MBCSolver);
 PETSC_EXTERN PetscErrorCode MBCSolverGetNumBodies(MBCSolver, PetscInt *);
 PETSC_EXTERN PetscErrorCode MBCSolverGetBody(MBCSolver, PetscInt, MBCBody *);
 

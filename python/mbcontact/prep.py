@@ -99,6 +99,9 @@ def _write(output, scene, bodies, labels, face_counts):
         try:
             fd, partial = tempfile.mkstemp(prefix=".mbcontact-prep-", suffix=".h5", dir=folder)
             os.close(fd)
+            mask = os.umask(0)  # mkstemp makes it 0600: give it the mode of any new file
+            os.umask(mask)
+            os.chmod(partial, 0o666 & ~mask)
             _write_meshes(npz, partial)
             write_metadata(partial, scene, bodies, face_counts, labels)
             os.replace(partial, output)

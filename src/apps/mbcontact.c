@@ -62,12 +62,28 @@ static PetscErrorCode RunFclib(const char *file, PetscBool *converged)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode Run(PetscInt *status)
+/* The program's own options, listed by -help like the solver's (read again where used). */
+static PetscErrorCode ProgramOptions(char scene[], size_t len, PetscBool *set)
+{
+  char      fclib[PETSC_MAX_PATH_LEN] = "", out[PETSC_MAX_PATH_LEN] = "";
+  PetscBool flag = PETSC_FALSE;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "mbcontact program options", NULL);
+  PetscCall(PetscOptionsString("-scene", "Scene file made by mbcontact-prep", NULL, scene, scene, len, set));
+  PetscCall(PetscOptionsString("-fclib", "Solve this FCLIB friction-contact problem with the PGS instead of a scene (exit status 2 if it does not converge)", NULL, fclib, fclib, sizeof(fclib), NULL));
+  PetscCall(PetscOptionsString("-fclib_write", "With -fclib: write the problem back as a local problem with its solution", NULL, out, out, sizeof(out), NULL));
+  PetscCall(PetscOptionsBool("-fclib_warm_start", "With -fclib: start from the file's /solution/r", NULL, flag, &flag, NULL));
+  PetscCall(PetscOptionsBool("-mbc_error_traceback", "On an error, PETSc's full report instead of the one-line message", NULL, flag, &flag, NULL));
+  PetscOptionsEnd();
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode Run(PetscInt *status, MBCSolver *solver)
 {
   char      file[PETSC_MAX_PATH_LEN] = "";
   PetscBool set, help;
   MBCScene  scene;
-  MBCSolver solver;
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsGetString(NULL, NULL, "-fclib", file, sizeof(file), &set));
@@ -77,46 +93,56 @@ static PetscErrorCode Run(PetscInt *status)
     if (!converged) *status = 2; /* not an error of the input: say so through the exit status */
     PetscFunctionReturn(0);
   }
-  PetscCall(PetscOptionsGetString(NULL, NULL, "-scene", file, sizeof(file), &set));
+  PetscCall(ProgramOptions(file, sizeof(file), &set));
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   if (help && !set) { /* list the solver's options with the defaults of an empty scene */
     PetscCall(MBCSceneCreateEmpty(&scene));
-    PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
-    PetscCall(MBCSolverSetScene(solver, scene));
-    PetscCall(MBCSolverSetFromOptions(solver));
-    PetscCall(MBCSolverDestroy(&solver));
+    PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, solver));
+    PetscCall(MBCSolverSetScene(*solver, scene));
+    PetscCall(MBCSolverSetFromOptions(*solver));
+    PetscCall(MBCSolverHelp(*solver));
+    PetscCall(MBCSolverDestroy(solver));
     PetscFunctionReturn(0);
   }
   PetscCheck(set && file[0], PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "No scene file: give -scene SCENE.h5 (make one with mbcontact-prep)");
   PetscCall(MBCSceneLoad(PETSC_COMM_WORLD, file, &scene));
-  PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
-  PetscCall(MBCSolverSetScene(solver, scene));
-  PetscCall(MBCSolverSetFromOptions(solver));
-  PetscCall(MBCSolverSolve(solver));
-  PetscCall(MBCSolverDestroy(&solver));
+  PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, solver));
+  PetscCall(MBCSolverSetScene(*solver, scene));
+  PetscCall(MBCSolverSetFromOptions(*solver));
+  if (help) PetscCall(MBCSolverHelp(*solver));
+  PetscCall(MBCSolverSolve(*solver));
+  PetscCall(MBCSolverDestroy(solver));
   PetscFunctionReturn(0);
 }
 
 int main(int argc, char **argv)
 {
   PetscErrorCode ierr;
-  PetscMPIInt    size;
-
-  PetscBool      traceback = PETSC_FALSE;
+  PetscBool      traceback = PETSC_FALSE, all;
   PetscInt       status    = 0;
+  MBCSolver      solver    = NULL;
+  int            sig;
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
   PetscCall(PetscOptionsGetBool(NULL, NULL, "-mbc_error_traceback", &traceback, NULL));
   if (!traceback) PetscCall(PetscPushErrorHandler(MBCErrorHandler, NULL));
-  ierr = Run(&status);
+  PetscCall(MBCStopInitialize(PETSC_COMM_WORLD));
+  ierr = Run(&status, &solver);
+  sig  = MBCStopGetSignal();
   if (ierr) {
-    /* A user error may be found on some ranks only; the others must not wait in a collective. */
-    PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
-    if (size > 1) MPI_Abort(PETSC_COMM_WORLD, 1);
+    /* The result files hold every completed output step (committed after each). Every rank
+       stopped (a failed check on reduced values, a signal, a full disk): finish PETSc, so that
+       -log_view is printed. A user error found on some ranks only: the others wait in a
+       collective, so the job is aborted. */
+    PetscCall(MBCStopErrorIsCollective(3.0, &all));
+    MBCSolverOutputAbort(solver);
+    if (!all) MPI_Abort(PETSC_COMM_WORLD, sig ? 128 + sig : 1);
+    MBCStopFinalize();
     PetscFinalize();
-    return 1;
+    return sig ? 128 + sig : 1;
   }
   if (!traceback) PetscCall(PetscPopErrorHandler());
+  PetscCall(MBCStopFinalize());
   PetscCall(PetscFinalize());
   return (int)status;
 }

@@ -269,6 +269,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 static PetscErrorCode SolverMonitor(MBCSolver s)
 {
   PetscReal umax = 0, e[4];
+  char      timing[128];
 
   PetscFunctionBegin;
   if (!s->monitor) PetscFunctionReturn(0);
@@ -279,10 +280,12 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
     umax = PetscMax(umax, n);
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, s->comm));
+  PetscCall(MBCSolverMonitorTiming(s, timing, sizeof(timing)));
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscCall(MBCSolverEnergy(s, e));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e total %.6e\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3])));
-  } else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e\n", s->step, (double)s->time, (double)umax));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e total %.6e %s\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3]), timing));
+  } else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e %s\n", s->step, (double)s->time, (double)umax, timing));
+  fflush(PETSC_STDOUT); /* a line per step as it happens, also through a pipe (tee, a job log) */
   PetscFunctionReturn(0);
 }
 

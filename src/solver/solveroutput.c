@@ -4,6 +4,11 @@
    energies to CSV. */
 #include <mbc/private/solverimpl.h>
 #include <mbc/private/h5util.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <signal.h>
 
 /* Nearest owned vertex of each output point, over the bodies it may belong to. */
 static PetscErrorCode SolverLocatePoints(MBCSolver s)
@@ -76,6 +81,83 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* The CSV histories are flushed after every step, so that a killed or failed run leaves whole
+   lines; a write error (full disk, file-size limit) is found on rank 0 and raised on every rank
+   (collective), so that the run stops cleanly. */
+static PetscErrorCode SolverFlushCsv(MBCSolver s)
+{
+  FILE       *fp[4]     = {s->points_csv, s->energy_csv, s->contact_csv, s->reactions_csv};
+  const char *suffix[4] = {"_points.csv", "_energy.csv", "_contact.csv", "_reactions.csv"};
+  int         bad = -1, err = 0;
+
+  PetscFunctionBegin;
+  for (int i = 0; i < 4 && bad < 0; i++)
+    if (fp[i] && (fflush(fp[i]) || ferror(fp[i]))) {
+      bad = i;
+      err = errno;
+    }
+  {
+    int v[2] = {bad, err};
+    PetscCallMPI(MPI_Bcast(v, 2, MPI_INT, 0, s->comm));
+    bad = v[0], err = v[1];
+  }
+  PetscCheck(bad < 0, s->comm, PETSC_ERR_FILE_WRITE, "Cannot write %s%s at t = %g: %s (is the disk full, or the file-size limit, ulimit -f, reached?)", s->output, suffix[bad], (double)s->time, strerror(err));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverWriteXdmf(MBCSolver, PetscBool *);
+
+/* Space for the next output step, reserved on disk right after a flush (the flush leaves the
+   file at its allocated size): twice the last step's bytes, at least 64 KiB. A full disk or
+   the file-size limit (ulimit -f) is then met here, with nothing of the next step allocated,
+   and not inside HDF5, which would leave a superblock that claims more than the file holds
+   (unreadable: "truncated file"). HDF5 trims the file back at the next flush or at close. */
+static PetscErrorCode SolverOutputReserve(MBCSolver s)
+{
+  PetscMPIInt rank;
+  int         err = 0;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  if (!rank) {
+    struct stat st;
+    int         fd = open(s->h5file, O_WRONLY);
+    if (fd < 0 || fstat(fd, &st)) err = errno;
+    else {
+      off_t step = s->h5_size > 0 ? (off_t)(st.st_size - s->h5_size) : (off_t)st.st_size, want = PetscMax(2 * step, 65536);
+      err        = posix_fallocate(fd, st.st_size, want);
+      s->h5_size = (PetscInt64)st.st_size;
+    }
+    if (fd >= 0) close(fd);
+  }
+  PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
+  PetscCheck(!err, s->comm, PETSC_ERR_FILE_WRITE, "Cannot extend the result file %s for the output step after t = %g: %s (is the disk full, or the file-size limit, ulimit -f, reached?)", s->h5file, (double)s->time, strerror(err));
+  PetscFunctionReturn(0);
+}
+
+/* Makes the outputs written so far durable: the time of each in /time, their count in
+   num_outputs, the file flushed (a reader sees exactly these outputs if the run is killed
+   before the next commit; num_outputs, not the groups present, says which are complete), then
+   the XDMF index of these outputs replaces the old one atomically. Collective. */
+static PetscErrorCode SolverOutputCommit(MBCSolver s)
+{
+  hid_t       file = (hid_t)s->h5;
+  int         n    = (int)s->noutputs;
+  PetscMPIInt rank;
+  PetscBool   ok = PETSC_TRUE;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(MBCH5WriteRowsGrow(file, "time", H5T_NATIVE_DOUBLE, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_times + s->noutputs - 1 : NULL));
+  PetscCall(MBCH5WriteAttribute(file, "num_outputs", H5T_NATIVE_INT, 1, &n));
+  PetscCall(MBCH5FileFlush(file));
+  if (!rank) PetscCall(SolverWriteXdmf(s, &ok));
+  PetscCallMPI(MPI_Bcast(&ok, 1, MPIU_BOOL, 0, s->comm));
+  PetscCheck(ok, s->comm, PETSC_ERR_FILE_WRITE, "Cannot write the XDMF index %s.xmf at t = %g (is the disk full, or the file-size limit, ulimit -f, reached?)", s->output, (double)s->time);
+  PetscCall(SolverOutputReserve(s));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
 {
   MBCScene    scene  = s->scene;
@@ -86,8 +168,11 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscTime(&s->t_start));
+  s->t_last = s->t_start;
   PetscCall(PetscMalloc2(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints));
-  s->noutputs = 0;
+  s->noutputs = s->xmf_outputs = 0;
+  s->h5_size  = 0;
   if (fields || s->contact) {
     hid_t file_id;
     int   version = 1;
@@ -99,6 +184,8 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
     PetscCall(MBCH5WriteAttributeString(file_id, "title", scene->title));
     if (fields) PetscCall(MBCSolverOutputBodiesOpen(s));
   }
+  PetscCall(MBCSolverOutputContactOpen(s));
+  if (s->h5 >= 0) PetscCall(SolverOutputCommit(s)); /* geometry and an empty index: readable from the start */
   if (scene->npoints) {
     PetscCall(SolverLocatePoints(s));
     if (!rank) {
@@ -109,12 +196,13 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       fprintf(s->points_csv, "\n");
     }
   }
-  PetscCall(MBCSolverOutputContactOpen(s));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC && !rank) {
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,total\n");
   }
+  PetscCall(MBCSolverOutputReactionsOpen(s));
+  PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -152,8 +240,11 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   MBCScene  scene = s->scene;
   PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress);
   PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == s->nsteps));
+  int       sig;
 
   PetscFunctionBegin;
+  PetscCall(MBCStopSignalled(s->comm, &sig)); /* between steps: a signal makes this the last one, written whole */
+  if (sig && (fields || s->contact)) fieldstep = PETSC_TRUE;
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
   if (scene->npoints) PetscCall(SolverOutputPoints(s));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC) {
@@ -162,35 +253,69 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
     if (s->energy_csv) fprintf(s->energy_csv, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3]));
   }
   PetscCall(MBCSolverOutputContactStep(s, fieldstep));
+  PetscCall(MBCSolverOutputReactionsStep(s));
   if (fieldstep) {
     if (fields) PetscCall(MBCSolverOutputBodiesStep(s));
     if (!s->contact) s->output_npoints[s->noutputs] = 0;
     s->output_times[s->noutputs++] = s->time;
+    PetscCall(SolverOutputCommit(s));
   }
+  PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
+  PetscCheck(!sig, s->comm, PETSC_ERR_SIG, "Stopped by signal %d (%s) after step %" PetscInt_FMT " of %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " output steps (the last at t = %g) are in %s.h5, indexed by %s.xmf, and the CSV histories are complete to t = %g", sig, sig == SIGINT ? "SIGINT" : (sig == SIGTERM ? "SIGTERM" : "?"), s->step, s->nsteps, (double)s->time, s->noutputs, s->noutputs ? (double)s->output_times[s->noutputs - 1] : 0.0, s->output, s->output, (double)s->time);
   PetscFunctionReturn(0);
 }
 
 /* The XDMF index: a temporal collection of spatial collections (a grid per body, one for the
-   contact points), every dataset in the one result file. */
-static PetscErrorCode SolverWriteXdmf(MBCSolver s)
+   contact points), every dataset in the one result file. Written beside it and renamed over it,
+   so that a reader (or a kill) never meets half an index. The outputs already indexed are
+   copied from the old index, not formatted again (the index grows by ~1 KB per body and
+   output). Rank 0; *ok false on a write error. */
+static const char XdmfTail[] = "  </Grid>\n  </Domain>\n</Xdmf>\n";
+
+static PetscErrorCode SolverWriteXdmf(MBCSolver s, PetscBool *ok)
 {
-  char  file[PETSC_MAX_PATH_LEN];
-  FILE *fp;
+  char     file[PETSC_MAX_PATH_LEN], part[PETSC_MAX_PATH_LEN + 8];
+  FILE    *fp, *old = NULL;
+  PetscInt first = 0;
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s.xmf", s->output));
-  PetscCall(MBCFileOpenWrite(file, &fp));
-  fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n  <Domain>\n");
-  fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
-  for (PetscInt k = 0; k < s->noutputs; k++) {
+  PetscCall(PetscSNPrintf(part, sizeof(part), "%s.part", file));
+  *ok = PETSC_FALSE;
+  if (!(fp = fopen(part, "w"))) PetscFunctionReturn(0);
+  if (s->xmf_outputs > 0 && (old = fopen(file, "r")) && !fseek(old, 0, SEEK_END)) {
+    long keep = ftell(old) - (long)strlen(XdmfTail); /* all but the closing tags */
+    char buf[65536];
+    rewind(old);
+    while (keep > 0) {
+      size_t n = fread(buf, 1, (size_t)PetscMin(keep, (long)sizeof(buf)), old);
+      if (!n || fwrite(buf, 1, n, fp) != n) break;
+      keep -= (long)n;
+    }
+    if (!keep) first = s->xmf_outputs;
+  }
+  if (old) fclose(old);
+  if (s->xmf_outputs > 0 && !first) { /* could not copy: write it all */
+    fclose(fp);
+    if (!(fp = fopen(part, "w"))) PetscFunctionReturn(0);
+  }
+  if (!first) {
+    fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n  <Domain>\n");
+    fprintf(fp, "  <Grid Name=\"mbcontact\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
+  }
+  for (PetscInt k = first; k < s->noutputs; k++) {
     fprintf(fp, "    <Grid Name=\"step%" PetscInt_FMT "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n      <Time Value=\"%.17g\"/>\n", k, (double)s->output_times[k]);
     PetscCall(MBCSolverOutputBodiesXdmf(s, fp, k));
     PetscCall(MBCSolverOutputContactXdmf(s, fp, k));
     fprintf(fp, "    </Grid>\n");
   }
-  fprintf(fp, "  </Grid>\n  </Domain>\n</Xdmf>\n");
-  PetscCheck(!ferror(fp) && !fclose(fp), PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write %s (is the disk full?)", file);
+  fputs(XdmfTail, fp);
+  *ok = (PetscBool)!ferror(fp);
+  if (fclose(fp)) *ok = PETSC_FALSE;
+  if (*ok && rename(part, file)) *ok = PETSC_FALSE;
+  if (!*ok) remove(part);
+  else s->xmf_outputs = s->noutputs;
   PetscFunctionReturn(0);
 }
 
@@ -204,17 +329,32 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
   PetscCall(MBCSolverOutputContactClose(s));
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
-  s->points_csv = s->energy_csv = NULL;
-  if (s->h5 >= 0) {
+  if (s->reactions_csv) fclose(s->reactions_csv);
+  s->points_csv = s->energy_csv = s->reactions_csv = NULL;
+  if (s->h5 >= 0) { /* /time, num_outputs and the XDMF index are up to date (SolverOutputCommit) */
     hid_t file = (hid_t)s->h5;
-    int   n    = (int)s->noutputs;
-    PetscCall(MBCH5WriteRows(file, "time", H5T_NATIVE_DOUBLE, s->noutputs, 1, 0, rank ? 0 : s->noutputs, s->output_times));
-    PetscCall(MBCH5WriteAttribute(file, "num_outputs", H5T_NATIVE_INT, 1, &n));
     PetscCall(MBCH5FileClose(&file));
     s->h5 = -1;
-    if (!rank) PetscCall(SolverWriteXdmf(s));
   }
   PetscCall(MBCSolverOutputBodiesClose(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
   PetscFunctionReturn(0);
+}
+
+/* After an error: close the CSV files (this rank's own; their lines are complete) and leave
+   the result file to HDF5, which closes it at MPI_Finalize (not at all if the job is aborted):
+   it holds every committed output step either way: the failed step's allocations lie within
+   the space reserved after the last commit (SolverOutputReserve; if the step needs no more than
+   twice the last one), so that close never claims more than the file holds. Not collective;
+   never raises an error. */
+PetscErrorCode MBCSolverOutputAbort(MBCSolver s)
+{
+  if (!s) return 0;
+  if (s->points_csv) fclose(s->points_csv);
+  if (s->energy_csv) fclose(s->energy_csv);
+  if (s->contact_csv) fclose(s->contact_csv);
+  if (s->reactions_csv) fclose(s->reactions_csv);
+  s->points_csv = s->energy_csv = s->contact_csv = s->reactions_csv = NULL;
+  s->h5 = -1;
+  return 0;
 }

@@ -38,9 +38,24 @@ PetscErrorCode MBCH5FileCreate(MPI_Comm comm, const char path[], hid_t *file)
   fapl = H5Pcreate(H5P_FILE_ACCESS);
   PetscCheck(fapl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "Cannot set up parallel HDF5 (MPI-IO) for %s", path);
   PetscCheck(H5Pset_all_coll_metadata_ops(fapl, 1) >= 0 && H5Pset_coll_metadata_write(fapl, 1) >= 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "Cannot set up parallel HDF5 (collective metadata) for %s", path);
+  H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG); /* a close after an error also closes what it left open */
   *file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   H5Pclose(fapl);
   PetscCheck(*file >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot create the result file %s (does its folder exist, is it writable?)", path);
+  PetscFunctionReturn(0);
+}
+
+/* Everything written so far to disk, superblock and metadata included, so that the file reads
+   back as it is now even if the process is killed before the next flush. Collective. */
+PetscErrorCode MBCH5FileFlush(hid_t file)
+{
+  char name[PETSC_MAX_PATH_LEN] = "?";
+
+  PetscFunctionBegin;
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) {
+    H5Fget_name(file, name, sizeof(name));
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot flush the result file %s (is the disk full, or the file-size limit, ulimit -f, reached?)", name);
+  }
   PetscFunctionReturn(0);
 }
 
@@ -116,12 +131,59 @@ PetscErrorCode MBCH5WriteRows(hid_t loc, const char name[], hid_t type, PetscInt
   if (dset < 0 || err < 0) {
     char where[2 * PETSC_MAX_PATH_LEN];
     H5Where(loc, name, where, sizeof(where));
-    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot %s the HDF5 dataset %s (is the disk full?)", dset < 0 ? "create" : "write", where);
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot %s the HDF5 dataset %s (is the disk full, or the file-size limit, ulimit -f, reached?)", dset < 0 ? "create" : "write", where);
   }
   PetscFunctionReturn(0);
 }
 
-/* Attribute name of loc: n values (a scalar when n is 1), the same on every rank. */
+/* 1D dataset name under loc that grows: made extensible (chunked) by the first call, resized to
+   nrows, rows [rstart, rstart + nlocal) of it written by this rank from buf. Collective. */
+PetscErrorCode MBCH5WriteRowsGrow(hid_t loc, const char name[], hid_t type, PetscInt nrows, PetscInt rstart, PetscInt nlocal, const void *buf)
+{
+  hsize_t dims = (hsize_t)nrows, maxdims = H5S_UNLIMITED, chunk = 256, start = (hsize_t)rstart, count = (hsize_t)nlocal, mdims = (hsize_t)PetscMax(nlocal, 1);
+  hid_t   fsp, msp, dset, dxpl;
+  herr_t  err   = 0;
+  double  dummy = 0;
+
+  PetscFunctionBegin;
+  PetscCheck(rstart >= 0 && nlocal >= 0 && rstart + nlocal <= nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Rows [%" PetscInt_FMT ", %" PetscInt_FMT ") of dataset %s outside [0, %" PetscInt_FMT ")", rstart, rstart + nlocal, name, nrows);
+  if (H5Lexists(loc, name, H5P_DEFAULT) > 0) {
+    dset = H5Dopen2(loc, name, H5P_DEFAULT);
+    if (dset >= 0) err = H5Dset_extent(dset, &dims);
+  } else {
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 1, &chunk);
+    fsp  = H5Screate_simple(1, &dims, &maxdims);
+    dset = H5Dcreate2(loc, name, type, fsp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    H5Sclose(fsp);
+    H5Pclose(dcpl);
+  }
+  if (dset >= 0 && err >= 0 && nrows > 0) {
+    fsp = H5Dget_space(dset);
+    msp = H5Screate_simple(1, &mdims, NULL);
+    if (nlocal) err = H5Sselect_hyperslab(fsp, H5S_SELECT_SET, &start, NULL, &count, NULL);
+    else {
+      H5Sselect_none(fsp);
+      H5Sselect_none(msp);
+    }
+    dxpl = H5Pcreate(H5P_DATASET_XFER);
+    H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE);
+    if (err >= 0) err = H5Dwrite(dset, type, msp, fsp, dxpl, nlocal ? buf : (const void *)&dummy);
+    H5Pclose(dxpl);
+    H5Sclose(msp);
+    H5Sclose(fsp);
+  }
+  if (dset >= 0) H5Dclose(dset);
+  if (dset < 0 || err < 0) {
+    char where[2 * PETSC_MAX_PATH_LEN];
+    H5Where(loc, name, where, sizeof(where));
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write the HDF5 dataset %s (is the disk full, or the file-size limit, ulimit -f, reached?)", where);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Attribute name of loc: n values (a scalar when n is 1), the same on every rank; an existing
+   one is overwritten (its type and size must be the same). */
 PetscErrorCode MBCH5WriteAttribute(hid_t loc, const char name[], hid_t type, PetscInt n, const void *value)
 {
   hsize_t dims = (hsize_t)n;
@@ -129,7 +191,7 @@ PetscErrorCode MBCH5WriteAttribute(hid_t loc, const char name[], hid_t type, Pet
   herr_t  err  = -1;
 
   PetscFunctionBegin;
-  at = H5Acreate2(loc, name, type, sp, H5P_DEFAULT, H5P_DEFAULT);
+  at = H5Aexists(loc, name) > 0 ? H5Aopen(loc, name, H5P_DEFAULT) : H5Acreate2(loc, name, type, sp, H5P_DEFAULT, H5P_DEFAULT); /* an existing one is overwritten */
   if (at >= 0) {
     err = H5Awrite(at, type, value);
     H5Aclose(at);

@@ -10,9 +10,11 @@ PETSC_INTERN PetscErrorCode MBCH5WriteArray(hid_t, const char[], hid_t, PetscInt
 /* Collective on the file's communicator: every rank calls each one with the same arguments
    (except the rows it writes). */
 PETSC_INTERN PetscErrorCode MBCH5FileCreate(MPI_Comm, const char[], hid_t *);
+PETSC_INTERN PetscErrorCode MBCH5FileFlush(hid_t);
 PETSC_INTERN PetscErrorCode MBCH5FileClose(hid_t *);
 PETSC_INTERN PetscErrorCode MBCH5GroupCreate(hid_t, const char[], PetscBool, hid_t *);
 PETSC_INTERN PetscErrorCode MBCH5GroupClose(hid_t *);
 PETSC_INTERN PetscErrorCode MBCH5WriteRows(hid_t, const char[], hid_t, PetscInt, PetscInt, PetscInt, PetscInt, const void *);
+PETSC_INTERN PetscErrorCode MBCH5WriteRowsGrow(hid_t, const char[], hid_t, PetscInt, PetscInt, PetscInt, const void *);
 PETSC_INTERN PetscErrorCode MBCH5WriteAttribute(hid_t, const char[], hid_t, PetscInt, const void *);
 PETSC_INTERN PetscErrorCode MBCH5WriteAttributeString(hid_t, const char[], const char[]);

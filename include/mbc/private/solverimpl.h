@@ -102,6 +102,13 @@ struct _n_MBCSolver {
 
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
+
+  /* long runs (solveroutput.c, solvermonitor.c): wall-clock times of the stepping's start and
+     of the last monitored step */
+  PetscLogDouble t_start, t_last;
+  PetscInt64     h5_size; /* bytes of the result file at its last commit */
+  PetscInt       xmf_outputs; /* outputs in the XDMF index on disk */
+  FILE          *reactions_csv; /* solveroutputreaction.c */
 };
 
 PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble;
@@ -110,6 +117,8 @@ PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
@@ -119,6 +128,7 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidRHS(MBCSolver);

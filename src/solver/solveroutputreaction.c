@@ -1,0 +1,106 @@
+/* Reactions: per prescribed (Dirichlet) surface, the resultant force the supports exert on the
+   bodies, a CSV line per step and surface (<output>_reactions.csv). On a prescribed row the
+   unconstrained equation of motion gives it: R = K u + M a + C v - F - H lambda (statics:
+   R = K u - F - H lambda), summed over the surface's prescribed rows, component by component.
+   Engineers check the base shear and the equilibrium with it (sum of R = -(sum of loads) at
+   rest). */
+#include <mbc/private/solverimpl.h>
+
+/* Surface index (first Dirichlet entry naming it) of each Dirichlet entry. */
+static PetscErrorCode ReactionSurfaces(MBCScene scene, PetscInt *first, PetscInt *nsurf)
+{
+  PetscFunctionBegin;
+  *nsurf = 0;
+  for (PetscInt d = 0; d < scene->ndirichlet; d++) {
+    first[d] = d;
+    for (PetscInt e = 0; e < d; e++) {
+      PetscBool same;
+      PetscCall(PetscStrcmp(scene->dirichlet[d].surface, scene->dirichlet[e].surface, &same));
+      if (same) {
+        first[d] = first[e];
+        break;
+      }
+    }
+    if (first[d] == d) (*nsurf)++;
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver s)
+{
+  PetscMPIInt rank;
+  char        file[PETSC_MAX_PATH_LEN];
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  if (!s->scene->ndirichlet || rank) PetscFunctionReturn(0);
+  PetscCall(PetscSNPrintf(file, sizeof(file), "%s_reactions.csv", s->output));
+  PetscCall(MBCFileOpenWrite(file, &s->reactions_csv));
+  fprintf(s->reactions_csv, "t,surface,fx,fy,fz\n");
+  PetscFunctionReturn(0);
+}
+
+/* The internal, inertial and damping forces minus the loads and the contact forces, on every
+   row of the body (only the prescribed rows are used). */
+static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, Vec r)
+{
+  MBCBody body = s->bodies[b];
+
+  PetscFunctionBegin;
+  PetscCall(MatMult(body->K, body->u, r));
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
+    PetscCall(MatMultAdd(body->M, body->a, r, r));
+    if (body->cM != 0 || body->cK != 0) {
+      PetscCall(MatMult(body->M, body->v, body->work));
+      PetscCall(VecAXPY(r, body->cM, body->work));
+      PetscCall(MatMult(body->K, body->v, body->work));
+      PetscCall(VecAXPY(r, body->cK, body->work));
+    }
+  }
+  PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->work));
+  PetscCall(VecAXPY(r, -1.0, body->work));
+  if (s->H && s->H[b] && s->lam && s->lam[b]) { /* H lambda_n+1 of the step (MBCSolverContactToBodies) */
+    PetscCall(MatMult(s->H[b], s->lam[b], body->work));
+    PetscCall(VecAXPY(r, -1.0, body->work));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Collective: every rank sums its prescribed rows, rank 0 writes. */
+PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
+{
+  MBCScene   scene = s->scene;
+  PetscInt  *first, nsurf;
+  PetscReal *sum;
+
+  PetscFunctionBegin;
+  if (!scene->ndirichlet) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc1(scene->ndirichlet, &first));
+  PetscCall(PetscCalloc1(3 * scene->ndirichlet, &sum));
+  PetscCall(ReactionSurfaces(scene, first, &nsurf));
+  if (s->contact && s->csf && s->lamprev) PetscCall(MBCSolverContactToBodies(s, s->lamprev));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody            body = s->bodies[b];
+    Vec                r;
+    const PetscScalar *rv;
+    PetscInt           rstart;
+    if (!body) continue;
+    PetscCall(VecDuplicate(body->u, &r));
+    PetscCall(BodyResidual(s, b, r));
+    PetscCall(VecGetOwnershipRange(r, &rstart, NULL));
+    PetscCall(VecGetArrayRead(r, &rv));
+    for (PetscInt i = 0; i < body->nbc; i++) {
+      const PetscInt d = body->bc_entry[i];
+      sum[3 * first[d] + scene->dirichlet[d].component] += PetscRealPart(rv[body->bc_rows[i] - rstart]);
+    }
+    PetscCall(VecRestoreArrayRead(r, &rv));
+    PetscCall(VecDestroy(&r));
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sum, 3 * (PetscMPIInt)scene->ndirichlet, MPIU_REAL, MPIU_SUM, s->comm));
+  if (s->reactions_csv)
+    for (PetscInt d = 0; d < scene->ndirichlet; d++)
+      if (first[d] == d) fprintf(s->reactions_csv, "%.17g,%s,%.17g,%.17g,%.17g\n", (double)s->time, scene->dirichlet[d].surface, (double)sum[3 * d], (double)sum[3 * d + 1], (double)sum[3 * d + 2]);
+  PetscCall(PetscFree(first));
+  PetscCall(PetscFree(sum));
+  PetscFunctionReturn(0);
+}
