@@ -73,9 +73,10 @@ static PetscErrorCode Run(PetscInt *status)
   PetscCall(PetscOptionsGetString(NULL, NULL, "-scene", file, sizeof(file), &set));
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   if (help && !set) { /* list the solver's options with the defaults of an empty scene */
-    PetscCall(MBCSceneCreateEmpty(&scene));
+    PetscCall(MBCSceneCreateEmpty(PETSC_COMM_WORLD, &scene));
     PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
     PetscCall(MBCSolverSetScene(solver, scene));
+    PetscCall(MBCSceneDestroy(&scene)); /* the solver holds a reference */
     PetscCall(MBCSolverSetFromOptions(solver));
     PetscCall(MBCSolverDestroy(&solver));
     PetscFunctionReturn(0);
@@ -84,6 +85,7 @@ static PetscErrorCode Run(PetscInt *status)
   PetscCall(MBCSceneLoad(PETSC_COMM_WORLD, file, &scene));
   PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
   PetscCall(MBCSolverSetScene(solver, scene));
+  PetscCall(MBCSceneDestroy(&scene)); /* the solver holds a reference */
   PetscCall(MBCSolverSetFromOptions(solver));
   PetscCall(MBCSolverSolve(solver));
   PetscCall(MBCSolverDestroy(&solver));
