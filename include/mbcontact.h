@@ -36,6 +36,8 @@ PETSC_EXTERN PetscErrorCode MBCSceneLoad(MPI_Comm, const char[], MBCScene *);
 PETSC_EXTERN PetscErrorCode MBCSceneCreateEmpty(MPI_Comm, MBCScene *);
 PETSC_EXTERN PetscErrorCode MBCSceneView(MBCScene, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCSceneGetFilename(MBCScene, const char **);
+PETSC_EXTERN PetscErrorCode MBCSceneGetNumBodies(MBCScene, PetscInt *);
+PETSC_EXTERN PetscErrorCode MBCSceneGetBodyName(MBCScene, PetscInt, const char **);
 PETSC_EXTERN PetscErrorCode MBCSceneDestroy(MBCScene *);
 
 PETSC_EXTERN PetscErrorCode MBCSolverCreate(MPI_Comm, MBCSolver *);

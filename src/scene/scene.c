@@ -578,3 +578,20 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);
 }
+
+PetscErrorCode MBCSceneGetNumBodies(MBCScene s, PetscInt *n)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  *n = s->nbodies;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneGetBodyName(MBCScene s, PetscInt b, const char **name)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  PetscCheck(b >= 0 && b < s->nbodies, PetscObjectComm((PetscObject)s), PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ")", s->filename, b, s->nbodies);
+  *name = s->bodies[b].name;
+  PetscFunctionReturn(0);
+}
