@@ -82,25 +82,34 @@ cdef class Scene:
 
     @classmethod
     def fromDict(cls, outdir, name, scene, meshes=None, comm=None):
-        """Builds a scene from Python: scene is the YAML's content as a dict; meshes maps the
-        dict's mesh names to meshio.Mesh objects (written beside it, with cell sets and
-        gmsh:physical data as mbcontact-prep reads them) or leaves them as file names. Writes
-        outdir/name.yaml and name.h5 (rank 0, through mbcontact.prep) and loads it."""
+        """A scene built from Python: scene is the YAML's content as a dict (docs/scene.md);
+        meshes maps mesh names to in-memory meshio.Mesh objects (named regions as Gmsh
+        physical groups or cell sets), which replace scene["meshes"] entries of that name.
+        Rank 0 writes outdir/name_<mesh>.msh, name.yaml and, with mbcontact-prep in a
+        subprocess (its h5py must not share a process with PETSc's HDF5), name.h5; every rank
+        then loads it. A bad scene raises RuntimeError with mbcontact-prep's message."""
         import os
+        import subprocess
+        from mbcontact.meshgen import write_mesh
         from mbcontact.prep import prepare
-        c = _comm(comm)
-        h5 = os.path.join(str(outdir), f"{name}.h5")
+        cdef Comm c = _comm(comm)
+        h5, err = None, None
         if c.getRank() == 0:
-            os.makedirs(str(outdir), exist_ok=True)
-            scene = dict(scene)
-            if meshes:
-                scene["meshes"] = dict(scene.get("meshes", {}))
-                for key, mesh in meshes.items():
+            try:
+                os.makedirs(str(outdir), exist_ok=True)
+                scene = dict(scene)
+                scene["meshes"] = dict(scene.get("meshes") or {})
+                for key, mesh in (meshes or {}).items():
                     path = f"{name}_{key}.msh"
-                    mesh.write(os.path.join(str(outdir), path), file_format="gmsh22", binary=False)
+                    write_mesh(mesh, os.path.join(str(outdir), path))
                     scene["meshes"][key] = path
-            h5 = prepare(str(outdir), name, scene)
-        h5 = c.tompi4py().bcast(h5, root=0) if c.getSize() > 1 else h5
+                h5 = prepare(str(outdir), name, scene)
+            except (subprocess.CalledProcessError, ValueError, OSError) as e:
+                err = f"mbcontact.Scene.fromDict({name!r}): {e} (mbcontact-prep's message is above)"
+        if c.getSize() > 1:
+            h5, err = c.tompi4py().bcast((h5, err), root=0)
+        if err:
+            raise RuntimeError(err)
         return cls().load(h5, c)
 
     def view(self, Viewer viewer=None):

@@ -81,3 +81,48 @@ except (KeyError, ValueError) as e:
     assert f"load: Scene file {tmp_path / 'missing.h5'} does not exist or cannot be read" in r.stdout, r.stdout + r.stderr
     assert "setup: Call MBCSolverSetScene() first" in r.stdout, r.stdout + r.stderr
     assert "body: ValueError" in r.stdout, r.stdout + r.stderr
+
+
+def test_scene_from_dict(tmp_path):
+    """A scene built in Python (an in-memory meshio mesh with cell sets, the YAML's content as
+    a dict), solved in-process: column under self-weight, hex8 layered in z, nu = 0, so the top's
+    u_z = -rho g L^2 / (2E) and the centroid sigma_zz = -rho g (L - z_c) are exact (rounding,
+    1e-10 and 1e-8 relative as in test_body.py); static: no velocity."""
+    script = tmp_path / "fromdict.py"
+    script.write_text(f"""
+import meshio, numpy as np
+from petsc4py import PETSc
+import mbcontact
+from mbcontact import meshgen
+E, RHO, G, L = 30e9, 2500.0, 9.81, 10.0
+meshgen.box({str(tmp_path / 'col.msh')!r}, (0, 0, 0), (1, 1, L), n=(1, 1, 10), cell="hex8", volume_name="col")
+m = meshio.read({str(tmp_path / 'col.msh')!r})
+tags = dict((n, t) for n, (t, d) in m.field_data.items())
+sets = {{n: [np.flatnonzero(p == t) for p in m.cell_data["gmsh:physical"]] for n, t in tags.items()}}
+mesh = meshio.Mesh(m.points, [(b.type, b.data) for b in m.cells], cell_sets=sets)  # no physical tags
+scene = {{"meshes": {{}}, "bodies": {{"col": {{"mesh": "m", "regions": ["col"], "material": {{"E": E, "nu": 0.0, "density": RHO}}}}}},
+         "dirichlet": [{{"surface": "zmin", "components": "all"}}], "loads": [{{"kind": "gravity", "vector": [0, 0, -G]}}],
+         "analysis": {{"type": "static"}}, "output": {{"fields": ["displacement"]}}}}
+sc = mbcontact.Scene.fromDict({str(tmp_path / 'built')!r}, "column", scene, meshes={{"m": mesh}})
+s = mbcontact.Solver().create()
+s.setScene(sc)
+s.setFromOptions()
+s.solve()
+b = s.getBody(0)
+u = b.getDisplacement()
+exact = -RHO * G * L**2 / (2 * E)
+assert abs(u.min()[1] - exact) < 1e-10 * abs(exact), (u.min(), exact)
+st = b.getStress()
+assert abs(st.strideMin(2)[1] + RHO * G * (L - 0.5)) < 1e-8 * RHO * G * L, st.strideMin(2)
+assert abs(st.strideMax(2)[1] + RHO * G * 0.5) < 1e-8 * RHO * G * L, st.strideMax(2)
+assert b.getVelocity() is None and b.getKSP() is not None and b.getDM().getDimension() == 3
+try:
+    mbcontact.Scene.fromDict({str(tmp_path / 'bad')!r}, "bad", dict(scene, bodies={{"col": {{"mesh": "m", "regions": ["nowhere"], "material": {{"E": E}}}}}}), meshes={{"m": mesh}})
+except RuntimeError as e:
+    print("bad scene:", e)
+print("ok", sc.filename)
+""")
+    r = run_python([str(script)])
+    assert "ok " + str(tmp_path / "built" / "column.h5") in r.stdout, r.stdout + r.stderr
+    assert "bad scene: mbcontact.Scene.fromDict('bad')" in r.stdout, r.stdout + r.stderr
+    assert "nowhere" in r.stderr, r.stderr  # mbcontact-prep names the missing region
