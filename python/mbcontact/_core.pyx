@@ -68,7 +68,8 @@ cdef class Scene:
         self.scene = NULL
 
     def __dealloc__(self):
-        MBCSceneDestroy(&self.scene)
+        if not PetscFinalizeCalled:  # objects left at exit outlive PETSc: nothing to free then
+            MBCSceneDestroy(&self.scene)
 
     def load(self, filename, comm=None):
         """Reads the scene on comm (default PETSC_COMM_WORLD); returns self."""
@@ -226,7 +227,8 @@ cdef class Solver:
         self._monitor = None
 
     def __dealloc__(self):
-        MBCSolverDestroy(&self.solver)
+        if not PetscFinalizeCalled:
+            MBCSolverDestroy(&self.solver)
 
     def create(self, comm=None):
         cdef Comm c = _comm(comm)

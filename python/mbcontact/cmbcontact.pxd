@@ -54,5 +54,6 @@ cdef extern from "mbcontact.h" nogil:
 
 cdef extern from "petsc.h" nogil:
     PetscErrorCode PetscObjectReference(PetscObject)
+    bint PetscFinalizeCalled
     PetscErrorCode PetscObjectGetComm(PetscObject, MPI_Comm *)
     PetscErrorCode PetscErrorMessage(int, const char *[], char **)

@@ -39,14 +39,15 @@ def column(tmp_path_factory):
                     "analysis": {"type": "static"}})
 
 
-def check_driver(exe, scene):
-    r = subprocess.run([str(exe), "-scene", str(scene), "-mbc_output", str(scene)[:-3] + "_drv"],
+def check_driver(exe, scene, *options):
+    r = subprocess.run([str(exe), "-scene", str(scene), "-mbc_output", str(scene)[:-3] + "_drv", *options],
                        capture_output=True, text=True, env=env(), timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
     assert f"mbcontact {cmake_version()}" in r.stdout
     umin = float(re.search(r"body col min u (\S+)", r.stdout).group(1))
     exact = -RHO * G * L**2 / (2 * E)
     assert abs(umin - exact) < 1e-10 * abs(exact), (umin, exact)
+    return r.stdout
 
 
 def test_installed_tree(prefix):
@@ -79,7 +80,9 @@ def test_pkg_config_driver(prefix, column, tmp_path):
     cc = subprocess.run(["cc", os.path.join(ROOT, "tests", "install", "driver.c"), "-o", str(exe), *flags.stdout.split()],
                         capture_output=True, text=True)
     assert cc.returncode == 0, cc.stderr
-    check_driver(exe, column)
+    out = check_driver(exe, column, "-mbc_solver_view", "-mbc_scene_view")
+    assert "MBCSolver Object: 1 MPI process" in out and "body col: ranks 0-0, 132 DOFs, 12 prescribed" in out, out  # 2 x 2 x 11 vertices, 4 fixed
+    assert out.count("Scene ") == 2, out  # -mbc_scene_view at load, and inside the solver's view
 
 
 def test_cmake_package_driver(prefix, column, tmp_path):
