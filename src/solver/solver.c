@@ -301,12 +301,27 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
    two-block example), whose rigid motion the contact constraints then fix. The test is on
    forces, not on du: a force imbalance f left by the PGS tolerance moves a stabilised body
    rigidly by f / (eps K_ii), a large du that is no error of equilibrium. Without contact or
-   stabilisation one iteration is exact. */
+   stabilisation one iteration is exact. Here: the factorization, D of the initial pairs and the
+   check that every body is held. */
 static PetscErrorCode SolverStaticBegin(MBCSolver s)
 {
   PetscBool stabilized = PETSC_FALSE;
 
   PetscFunctionBegin;
+  /* before anything is factored or D is built from a singular K (which fails first, with a
+     message that does not name the body) */
+  for (PetscInt b = 0; b < s->nbodies; b++) { /* a body free in some direction must touch a couple */
+    PetscBool touches = PETSC_FALSE, free = PETSC_FALSE;
+    if (s->bodies[b]) free = (PetscBool)!(s->bodies[b]->bc_component[0] && s->bodies[b]->bc_component[1] && s->bodies[b]->bc_component[2]);
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &free, 1, MPIU_BOOL, MPI_LOR, s->comm));
+    for (PetscInt i = 0; s->contact && i < s->contact->ncouples && !touches; i++) {
+      MBCSurface *side[2] = {&s->contact->couples[i].master, &s->contact->couples[i].slave};
+      for (PetscInt k = 0; k < 2; k++)
+        for (PetscInt n = 0; n < side[k]->nnodes && !touches; n++) touches = (PetscBool)(side[k]->nbody[n] == b);
+    }
+    PetscCheck(!free || s->static_stabilize != 0, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and -mbc_static_stabilize 0: its static stiffness is singular; stabilise it (default) or prescribe it", s->scene->filename, s->scene->bodies[b].name);
+    PetscCheck(!free || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+  }
   s->theta = 1; /* no inertia: the contact force of the step is lambda_n+1 */
   s->carry = 0;
   for (PetscInt b = 0; b < s->nbodies; b++) {
@@ -322,18 +337,6 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   s->static_stabilized = stabilized;
   s->step = 0;
   PetscCall(SolverContact(s)); /* D of the initial contact pairs */
-  for (PetscInt b = 0; b < s->nbodies; b++) { /* a body free in some direction must touch a couple */
-    PetscBool touches = PETSC_FALSE, free = PETSC_FALSE;
-    if (s->bodies[b]) free = (PetscBool)!(s->bodies[b]->bc_component[0] && s->bodies[b]->bc_component[1] && s->bodies[b]->bc_component[2]);
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &free, 1, MPIU_BOOL, MPI_LOR, s->comm));
-    for (PetscInt i = 0; s->contact && i < s->contact->ncouples && !touches; i++) {
-      MBCSurface *side[2] = {&s->contact->couples[i].master, &s->contact->couples[i].slave};
-      for (PetscInt k = 0; k < 2; k++)
-        for (PetscInt n = 0; n < side[k]->nnodes && !touches; n++) touches = (PetscBool)(side[k]->nbody[n] == b);
-    }
-    PetscCheck(!free || s->static_stabilize != 0, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and -mbc_static_stabilize 0: its static stiffness is singular; stabilise it (default) or prescribe it", s->scene->filename, s->scene->bodies[b].name);
-    PetscCheck(!free || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
-  }
   PetscFunctionReturn(0);
 }
 
@@ -443,13 +446,8 @@ static PetscErrorCode BodyAddDamping(MBCBody body, PetscReal scale, Vec y, Vec x
 }
 
 /* Newmark in incremental form: K~ dU = F(t+dt) - K u + M (a2 v + a3 a) + C (a4 v + a5 a),
-   K~ = K + a0 M + a1 C factored once (the paper's form; contact adds B lambda to the right). */
-#define NEWMARK_COEFFICIENTS(s) \
-  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma; \
-  const PetscReal a0 = 1 / (beta * dt * dt), a1 = gamma / (beta * dt), a2 = 1 / (beta * dt), a3 = 1 / (2 * beta) - 1; \
-  const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt
-
-/* Initial state and step 0 (its monitor line and output). */
+   K~ = K + a0 M + a1 C factored once (the paper's form; contact adds B lambda to the right).
+   Here: the initial state, K~ factored, step 0 (its monitor line and output). */
 static PetscErrorCode SolverDynamicBegin(MBCSolver s)
 {
   const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
@@ -477,10 +475,11 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
 /* Time step s->step. */
 static PetscErrorCode SolverDynamicStep(MBCSolver s)
 {
-  NEWMARK_COEFFICIENTS(s);
+  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
+  const PetscReal a0 = 1 / (beta * dt * dt), a2 = 1 / (beta * dt), a3 = 1 / (2 * beta) - 1;
+  const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt;
 
   PetscFunctionBegin;
-  (void)a1;
   {
     s->time = s->step * dt;
     for (PetscInt b = 0; b < s->nbodies; b++) {
