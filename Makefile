@@ -8,12 +8,12 @@ JOBS       ?= $(shell nproc)
 export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
-export PYTHONPATH := $(CURDIR)/python$(if $(PYTHONPATH),:$(PYTHONPATH))
+export PYTHONPATH := $(CURDIR)/python:$(CURDIR)/$(BUILD)/python$(if $(PYTHONPATH),:$(PYTHONPATH))
 export MBC_BUILD_DIR := $(CURDIR)/$(BUILD)
 
 DEBS := build-essential cmake pkg-config petsc-dev python3-petsc4py libmetis-dev gmsh \
         libhdf5-openmpi-dev openmpi-bin python3-meshio python3-h5py python3-numpy \
-        python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 \
+        python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 python3-dev \
         libopenblas0-serial
 
 .PHONY: all deps build run test test-c test-python clean

@@ -169,6 +169,29 @@ def boxes(path, specs, prefix_surfaces=True):
     _write_gmsh(path, np.concatenate(points), regions)
 
 
+def write_mesh(mesh, path, binary=False):
+    """Write an in-memory meshio.Mesh as a Gmsh 2.2 file mbcontact-prep reads, every named
+    region kept: its Gmsh physical groups (gmsh:physical + field_data) or its cell sets, which
+    Gmsh 2.2 has no place for (meshio drops them), each region as its own physical group."""
+    from .bodies import _regions
+
+    regions = _regions(mesh)
+    if not regions:
+        raise ValueError(f"{path}: the mesh has no named regions (Gmsh physical names or meshio cell sets)")
+    points = np.asarray(mesh.points, dtype=float)
+    if points.shape[1] < 3:
+        points = np.hstack([points, np.zeros((len(points), 3 - points.shape[1]))])
+    cells, physical, field_data = [], [], {}
+    for tag, (name, region) in enumerate(regions.items(), start=1):
+        for cell_type, data in region.blocks.items():  # a region of several cell types: one tag
+            cells.append((cell_type, np.asarray(data)))
+            physical.append(np.full(len(data), tag, dtype=np.int32))
+        field_data[name] = np.array([tag, region.dim])
+    out = meshio.Mesh(points, cells, field_data=field_data,
+                      cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical})
+    meshio.write(str(path), out, file_format="gmsh22", binary=binary)
+
+
 def _write_gmsh(path, points, regions, binary=False):
     """Write regions as gmsh physical groups (one tag per region, unique over dims); binary
     Gmsh 2.2 writes and reads several times faster for meshes of millions of DOFs."""

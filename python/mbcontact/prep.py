@@ -230,5 +230,9 @@ def prepare(outdir, name, scene):
     with open(yml, "w") as f:
         yaml.safe_dump(scene, f, sort_keys=False)
     prep = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "mbcontact-prep")
-    subprocess.run([prep, yml, "-o", h5, "-q"], check=True)
+    if os.path.isfile(prep):  # the source tree
+        cmd = [prep]
+    else:  # an installed package (pip install .): this interpreter, this package
+        cmd = [sys.executable, "-c", "import sys; from mbcontact.prep import main; sys.exit(main())"]
+    subprocess.run([*cmd, yml, "-o", h5, "-q"], check=True)
     return h5

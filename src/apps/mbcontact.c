@@ -96,9 +96,10 @@ static PetscErrorCode Run(PetscInt *status, MBCSolver *solver)
   PetscCall(ProgramOptions(file, sizeof(file), &set));
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   if (help && !set) { /* list the solver's options with the defaults of an empty scene */
-    PetscCall(MBCSceneCreateEmpty(&scene));
+    PetscCall(MBCSceneCreateEmpty(PETSC_COMM_WORLD, &scene));
     PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, solver));
     PetscCall(MBCSolverSetScene(*solver, scene));
+    PetscCall(MBCSceneDestroy(&scene)); /* the solver holds a reference */
     PetscCall(MBCSolverSetFromOptions(*solver));
     PetscCall(MBCSolverHelp(*solver));
     PetscCall(MBCSolverDestroy(solver));
@@ -108,6 +109,7 @@ static PetscErrorCode Run(PetscInt *status, MBCSolver *solver)
   PetscCall(MBCSceneLoad(PETSC_COMM_WORLD, file, &scene));
   PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, solver));
   PetscCall(MBCSolverSetScene(*solver, scene));
+  PetscCall(MBCSceneDestroy(&scene)); /* the solver holds a reference */
   PetscCall(MBCSolverSetFromOptions(*solver));
   if (help) PetscCall(MBCSolverHelp(*solver));
   PetscCall(MBCSolverSolve(*solver));

@@ -126,12 +126,14 @@ PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, MBCB
   char        prefix[MBC_NAME_LEN + 8];
 
   PetscFunctionBegin;
-  PetscCall(PetscNew(&body));
+  PetscCall(PetscHeaderCreate(body, MBC_BODY_CLASSID, "MBCBody", "mbcontact body", "MBCBody", comm, MBCBodyDestroy, MBCBodyView));
   body->comm  = comm;
   body->scene = scene;
+  PetscCall(PetscObjectReference((PetscObject)scene));
   body->index = index;
   body->desc  = scene->bodies[index];
   PetscCall(PetscStrncpy(body->name, body->desc.name, sizeof(body->name)));
+  PetscCall(PetscObjectSetName((PetscObject)body, body->name));
   body->lambda = body->desc.E * body->desc.nu / ((1 + body->desc.nu) * (1 - 2 * body->desc.nu));
   body->mu     = body->desc.E / (2 * (1 + body->desc.nu));
 
@@ -168,10 +170,16 @@ PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, MBCB
 
 PetscErrorCode MBCBodyDestroy(MBCBody *body)
 {
-  MBCBody b = *body;
+  MBCBody  b = *body;
+  MPI_Comm comm;
 
   PetscFunctionBegin;
   if (!b) PetscFunctionReturn(0);
+  PetscValidHeaderSpecific(b, MBC_BODY_CLASSID, 1);
+  if (--((PetscObject)b)->refct > 0) {
+    *body = NULL;
+    PetscFunctionReturn(0);
+  }
   for (PetscInt i = 0; i < b->nloads; i++) PetscCall(VecDestroy(&b->load[i]));
   PetscCall(PetscFree2(b->load, b->load_index));
   PetscCall(PetscFree2(b->bc_rows, b->bc_entry));
@@ -197,8 +205,32 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(DMDestroy(&b->dmStress));
   PetscCall(DMDestroy(&b->dm));
   PetscCall(PetscFree2(b->vnum, b->cnum));
-  if (b->comm != MPI_COMM_NULL) PetscCallMPI(MPI_Comm_free(&b->comm));
-  PetscCall(PetscFree(*body));
+  PetscCall(MBCSceneDestroy(&b->scene));
+  comm = b->comm; /* split by the solver for this body: freed after the header lets go of it */
+  PetscCall(PetscHeaderDestroy(body));
+  if (comm != MPI_COMM_NULL) PetscCallMPI(MPI_Comm_free(&comm));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyView(MBCBody b, PetscViewer viewer)
+{
+  PetscBool   ascii;
+  PetscMPIInt size;
+  PetscInt    n;
+
+  PetscFunctionBegin;
+  if (!b) PetscFunctionReturn(0); /* NULL on ranks outside the body */
+  PetscValidHeaderSpecific(b, MBC_BODY_CLASSID, 1);
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(PetscObjectComm((PetscObject)b), &viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(b->comm, &size));
+  PetscCall(PetscObjectPrintClassNamePrefixType((PetscObject)b, viewer));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  n = 0;
+  if (b->u) PetscCall(VecGetSize(b->u, &n));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "%" PetscInt_FMT " %s cells, %" PetscInt_FMT " vertices, %" PetscInt_FMT " DOFs on %d ranks; E %g nu %g density %g\n", b->desc.num_cells, b->desc.cell_type, b->desc.num_vertices, n, size, (double)b->desc.E, (double)b->desc.nu, (double)b->desc.density));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);
 }
 
@@ -227,5 +259,34 @@ PetscErrorCode MBCBodyGetKSP(MBCBody body, KSP *ksp)
 {
   PetscFunctionBegin;
   *ksp = body ? body->ksp : NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetVelocity(MBCBody body, Vec *v)
+{
+  PetscFunctionBegin;
+  *v = body ? body->v : NULL;
+  PetscFunctionReturn(0);
+}
+
+/* The cellwise stress (xx yy zz xy yz xz) of the current displacement, in a new Vec on the
+   body's stress DM (MBCBodyGetStressDM): the solver keeps none between outputs. */
+PetscErrorCode MBCBodyCreateStress(MBCBody body, Vec *stress)
+{
+  PetscFunctionBegin;
+  *stress = NULL;
+  if (!body) PetscFunctionReturn(0);
+  PetscValidHeaderSpecific(body, MBC_BODY_CLASSID, 1);
+  PetscCheck(body->u, body->comm, PETSC_ERR_ARG_WRONGSTATE, "Body '%s' is not set up: call MBCSolverSetUp() first", body->name);
+  PetscCall(DMCreateGlobalVector(body->dmStress, stress));
+  PetscCall(PetscObjectSetName((PetscObject)*stress, "stress"));
+  PetscCall(MBCBodyComputeStress(body, body->u, *stress));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetStressDM(MBCBody body, DM *dm)
+{
+  PetscFunctionBegin;
+  *dm = body ? body->dmStress : NULL;
   PetscFunctionReturn(0);
 }

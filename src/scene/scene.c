@@ -430,6 +430,14 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   PetscFunctionReturn(0);
 }
 
+static PetscErrorCode SceneCreate(MPI_Comm comm, MBCScene *scene)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCInitializePackage());
+  PetscCall(PetscHeaderCreate(*scene, MBC_SCENE_CLASSID, "MBCScene", "mbcontact scene", "MBCScene", comm, MBCSceneDestroy, MBCSceneView));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scene)
 {
   MBCScene  s;
@@ -441,7 +449,7 @@ PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scen
   PetscCall(PetscLogEventBegin(MBC_SceneLoad, 0, 0, 0, 0));
   PetscCall(PetscTestFile(filename, 'r', &exists));
   PetscCheck(exists, comm, PETSC_ERR_FILE_OPEN, "Scene file %s does not exist or cannot be read", filename);
-  PetscCall(PetscNew(&s));
+  PetscCall(SceneCreate(comm, &s));
   PetscCall(PetscStrncpy(s->filename, filename, sizeof(s->filename)));
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* our messages replace HDF5's error stack dump */
   PetscCheck(H5Fis_hdf5(filename) > 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s is not an HDF5 file; make scene files with mbcontact-prep", filename);
@@ -451,14 +459,16 @@ PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scen
   H5Fclose(file);
   PetscCall(PetscLogEventEnd(MBC_SceneLoad, 0, 0, 0, 0));
   *scene = s;
+  PetscCall(PetscObjectViewFromOptions((PetscObject)s, NULL, "-mbc_scene_view"));
   PetscFunctionReturn(0);
 }
 
 /* A scene with no bodies and the default analysis settings (for -help). */
-PetscErrorCode MBCSceneCreateEmpty(MBCScene *scene)
+PetscErrorCode MBCSceneCreateEmpty(MPI_Comm comm, MBCScene *scene)
 {
   PetscFunctionBegin;
-  PetscCall(PetscNew(scene));
+  PetscValidPointer(scene, 2);
+  PetscCall(SceneCreate(comm, scene));
   (*scene)->dt            = 1.0;
   (*scene)->final_time    = 1.0;
   (*scene)->newmark_beta  = 0.25;
@@ -474,6 +484,11 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  if (--((PetscObject)s)->refct > 0) {
+    *scene = NULL;
+    PetscFunctionReturn(0);
+  }
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].master));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].slave));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree2(s->couples[i].master_faces, s->couples[i].slave_faces));
@@ -486,7 +501,16 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   PetscCall(PetscFree(s->dirichlet));
   PetscCall(PetscFree(s->loads));
   PetscCall(PetscFree(s->points));
-  PetscCall(PetscFree(*scene));
+  PetscCall(PetscHeaderDestroy(scene));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneGetFilename(MBCScene s, const char **filename)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  PetscValidPointer(filename, 2);
+  *filename = s->filename;
   PetscFunctionReturn(0);
 }
 
@@ -531,7 +555,13 @@ PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *load, const char body[], PetscB
 
 PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
 {
+  PetscBool ascii;
+
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(PetscObjectComm((PetscObject)s), &viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(0);
   PetscCall(PetscViewerASCIIPrintf(viewer, "Scene %s%s%s: %s analysis, dt %g, final time %g, Newmark beta %g gamma %g, %s mass\n", s->filename, s->title[0] ? " - " : "", s->title, MBCAnalysisTypes[s->analysis], (double)s->dt, (double)s->final_time, (double)s->newmark_beta, (double)s->newmark_gamma, MBCMassTypes[s->mass]));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   for (PetscInt i = 0; i < s->nbodies; i++) {
@@ -546,5 +576,22 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
     else PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
   }
   PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneGetNumBodies(MBCScene s, PetscInt *n)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  *n = s->nbodies;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSceneGetBodyName(MBCScene s, PetscInt b, const char **name)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SCENE_CLASSID, 1);
+  PetscCheck(b >= 0 && b < s->nbodies, PetscObjectComm((PetscObject)s), PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ")", s->filename, b, s->nbodies);
+  *name = s->bodies[b].name;
   PetscFunctionReturn(0);
 }

@@ -7,8 +7,9 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   MBCSolver s;
 
   PetscFunctionBegin;
+  PetscValidPointer(solver, 2);
   PetscCall(MBCInitializePackage());
-  PetscCall(PetscNew(&s));
+  PetscCall(PetscHeaderCreate(s, MBC_SOLVER_CLASSID, "MBCSolver", "mbcontact solver", "MBCSolver", comm, MBCSolverDestroy, MBCSolverView));
   s->comm             = comm;
   s->h5               = -1;
   s->fclib_step       = -1;
@@ -25,6 +26,11 @@ PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
   size_t len;
 
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscValidHeaderSpecific(scene, MBC_SCENE_CLASSID, 2);
+  PetscCheck(!s->setupcalled, s->comm, PETSC_ERR_ARG_WRONGSTATE, "MBCSolverSetScene(%s): the solver is already set up with scene %s; create a new solver", scene->filename, s->scene->filename);
+  PetscCall(PetscObjectReference((PetscObject)scene)); /* the caller keeps its own */
+  PetscCall(MBCSceneDestroy(&s->scene));
   s->scene        = scene;
   s->analysis     = scene->analysis;
   s->mass         = scene->mass;
@@ -45,7 +51,9 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscEnum analysis = (PetscEnum)s->analysis, mass = (PetscEnum)s->mass;
 
   PetscFunctionBegin;
-  PetscOptionsBegin(s->comm, NULL, "mbcontact solver options", "MBCSolver");
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscCheck(s->scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Call MBCSolverSetScene() before MBCSolverSetFromOptions()");
+  PetscObjectOptionsBegin((PetscObject)s);
   PetscCall(PetscOptionsEnum("-mbc_analysis", "Analysis type (overrides the scene's)", "MBCSolverSetFromOptions", MBCAnalysisTypes, analysis, &analysis, NULL));
   PetscCall(PetscOptionsEnum("-mbc_mass", "Mass matrix", "MBCSolverSetFromOptions", MBCMassTypes, mass, &mass, NULL));
   PetscCall(PetscOptionsReal("-mbc_dt", "Time (or load) step", "MBCSolverSetFromOptions", s->dt, &s->dt, NULL));
@@ -135,6 +143,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   PetscMPIInt rank;
 
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
   if (s->setupcalled) PetscFunctionReturn(0);
   PetscCheck(scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Call MBCSolverSetScene() first");
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
@@ -163,6 +172,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   }
   s->setupcalled = PETSC_TRUE;
   if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
+  PetscCall(PetscObjectViewFromOptions((PetscObject)s, NULL, "-mbc_solver_view"));
   PetscFunctionReturn(0);
 }
 
@@ -272,6 +282,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   char      timing[128];
 
   PetscFunctionBegin;
+  if (s->usermonitor) PetscCall((*s->usermonitor)(s, s->step, s->time, s->monitorctx));
   if (!s->monitor) PetscFunctionReturn(0);
   for (PetscInt b = 0; b < s->nbodies; b++) {
     PetscReal n;
@@ -297,8 +308,9 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
    two-block example), whose rigid motion the contact constraints then fix. The test is on
    forces, not on du: a force imbalance f left by the PGS tolerance moves a stabilised body
    rigidly by f / (eps K_ii), a large du that is no error of equilibrium. Without contact or
-   stabilisation one iteration is exact. */
-static PetscErrorCode SolverStatic(MBCSolver s)
+   stabilisation one iteration is exact. Here: the factorization, D of the initial pairs and the
+   check that every body is held. */
+static PetscErrorCode SolverStaticBegin(MBCSolver s)
 {
   PetscBool stabilized = PETSC_FALSE, floating = PETSC_FALSE;
 
@@ -315,14 +327,11 @@ static PetscErrorCode SolverStatic(MBCSolver s)
       PetscCall(MBCBodyRigidModesDestroy(body));
     }
     if (body->nrigid) floating = PETSC_TRUE;
-    PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
-    body->aK = 1.0;
-    body->aM = 0.0;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &stabilized, 1, MPIU_BOOL, MPI_LOR, s->comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &floating, 1, MPIU_BOOL, MPI_LOR, s->comm));
-  s->step = 0;
-  PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  /* before anything is factored or D is built from a singular K (which fails first, with a
+     message that does not name the body) */
   for (PetscInt b = 0; b < s->nbodies; b++) { /* a body free in some direction must touch a couple */
     PetscBool touches = PETSC_FALSE, free = PETSC_FALSE;
     if (s->bodies[b]) free = (PetscBool)(s->bodies[b]->nrigid > 0 || s->bodies[b]->stab > 0);
@@ -334,7 +343,27 @@ static PetscErrorCode SolverStatic(MBCSolver s)
     }
     PetscCheck(!free || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
-  for (s->step = 1; s->step <= s->nsteps; s->step++) {
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
+    body->aK = 1.0;
+    body->aM = 0.0;
+  }
+  s->static_stabilized = stabilized;
+  s->static_floating   = floating;
+  s->step = 0;
+  PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  PetscFunctionReturn(0);
+}
+
+/* Load step s->step. */
+static PetscErrorCode SolverStaticStep(MBCSolver s)
+{
+  const PetscBool stabilized = s->static_stabilized, floating = s->static_floating;
+
+  PetscFunctionBegin;
+  {
     PetscReal fmax = 0, kumax = 0;
     s->time = PetscMin(s->step * s->dt, s->final_time);
     for (s->static_its = 1;; s->static_its++) {
@@ -457,12 +486,12 @@ static PetscErrorCode BodyAddDamping(MBCBody body, PetscReal scale, Vec y, Vec x
 }
 
 /* Newmark in incremental form: K~ dU = F(t+dt) - K u + M (a2 v + a3 a) + C (a4 v + a5 a),
-   K~ = K + a0 M + a1 C factored once (the paper's form; contact adds B lambda to the right). */
-static PetscErrorCode SolverDynamic(MBCSolver s)
+   K~ = K + a0 M + a1 C factored once (the paper's form; contact adds B lambda to the right).
+   Here: the initial state, K~ factored, step 0 (its monitor line and output). */
+static PetscErrorCode SolverDynamicBegin(MBCSolver s)
 {
   const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
-  const PetscReal a0 = 1 / (beta * dt * dt), a1 = gamma / (beta * dt), a2 = 1 / (beta * dt), a3 = 1 / (2 * beta) - 1;
-  const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt;
+  const PetscReal a0 = 1 / (beta * dt * dt), a1 = gamma / (beta * dt);
 
   PetscFunctionBegin;
   s->theta = gamma; /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
@@ -480,7 +509,18 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
   PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   PetscCall(SolverMonitor(s));
   PetscCall(MBCSolverOutputStep(s));
-  for (s->step = 1; s->step <= s->nsteps; s->step++) {
+  PetscFunctionReturn(0);
+}
+
+/* Time step s->step. */
+static PetscErrorCode SolverDynamicStep(MBCSolver s)
+{
+  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
+  const PetscReal a0 = 1 / (beta * dt * dt), a2 = 1 / (beta * dt), a3 = 1 / (2 * beta) - 1;
+  const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt;
+
+  PetscFunctionBegin;
+  {
     s->time = s->step * dt;
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody body = s->bodies[b];
@@ -537,25 +577,135 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode MBCSolverStep(MBCSolver s)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscCheck(s->stage < 2, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene file %s: every step is done (%" PetscInt_FMT " steps to t = %g); raise -mbc_final_time for more", s->scene ? s->scene->filename : "(none)", s->nsteps, (double)s->final_time);
+  if (s->stage == 0) {
+    PetscCall(MBCSolverSetUp(s));
+    if (s->contact) {
+      PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_TRUE, NULL));
+      if (s->contact->view) PetscCall(MBCContactView(s->contact, PETSC_VIEWER_STDOUT_(s->comm)));
+    }
+    if (s->search_only) {
+      s->stage = 2;
+      PetscFunctionReturn(0);
+    }
+    PetscCall(MBCSolverOutputOpen(s));
+    if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
+    else PetscCall(SolverDynamicBegin(s));
+    s->stage = 1;
+  }
+  s->step++;
+  if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticStep(s));
+  else PetscCall(SolverDynamicStep(s));
+  if (s->step == s->nsteps) {
+    PetscCall(MBCSolverOutputClose(s));
+    s->stage = 2;
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSolverSolve(MBCSolver s)
 {
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
   PetscCall(MBCSolverSetUp(s));
-  if (s->contact) {
-    PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_TRUE, NULL));
-    if (s->contact->view) PetscCall(MBCContactView(s->contact, PETSC_VIEWER_STDOUT_(s->comm)));
-  }
-  if (s->search_only) PetscFunctionReturn(0);
-  PetscCall(MBCSolverOutputOpen(s));
-  if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStatic(s));
-  else PetscCall(SolverDynamic(s));
-  PetscCall(MBCSolverOutputClose(s));
+  while (s->stage < 2) PetscCall(MBCSolverStep(s));
+  PetscFunctionReturn(0);
+}
+
+/* Steps done, steps of the run, time reached. */
+PetscErrorCode MBCSolverGetStep(MBCSolver s, PetscInt *step, PetscInt *nsteps, PetscReal *time)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  if (step) *step = s->stage ? s->step : 0;
+  if (nsteps) *nsteps = s->nsteps;
+  if (time) *time = s->stage ? s->time : 0;
+  PetscFunctionReturn(0);
+}
+
+/* monitor(solver, step, time, ctx) after each step (and after the initial state, step 0, of a
+   dynamic analysis), on every rank of the solver; one monitor, a new one replaces it. */
+PetscErrorCode MBCSolverMonitorSet(MBCSolver s, PetscErrorCode (*monitor)(MBCSolver, PetscInt, PetscReal, void *), void *ctx, PetscErrorCode (*destroy)(void **))
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  if (s->monitordestroy) PetscCall((*s->monitordestroy)(&s->monitorctx));
+  s->usermonitor    = monitor;
+  s->monitorctx     = ctx;
+  s->monitordestroy = destroy;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverGetMultipliers(MBCSolver s, Vec *lambda)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscValidPointer(lambda, 2);
+  *lambda = s->lamprev; /* NULL before the first contact build or without couples */
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverGetContactPoints(MBCSolver s, PetscInt *n, const PetscReal *x[], const PetscReal *normal[], const PetscReal *pressure[], const PetscReal *traction[], const PetscReal *slip[], const PetscInt *state[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  *n = s->cpts.n;
+  if (x) *x = s->cpts.x;
+  if (normal) *normal = s->cpts.nrm;
+  if (pressure) *pressure = s->cpts.pressure;
+  if (traction) *traction = s->cpts.traction;
+  if (slip) *slip = s->cpts.slip;
+  if (state) *state = s->cpts.state;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverSetOptionsPrefix(MBCSolver s, const char prefix[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscCall(PetscObjectSetOptionsPrefix((PetscObject)s, prefix));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverAppendOptionsPrefix(MBCSolver s, const char prefix[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscCall(PetscObjectAppendOptionsPrefix((PetscObject)s, prefix));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverGetOptionsPrefix(MBCSolver s, const char *prefix[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscCall(PetscObjectGetOptionsPrefix((PetscObject)s, prefix));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverGetScene(MBCSolver s, MBCScene *scene)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  *scene = s->scene;
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
 {
+  PetscBool ascii;
+
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(s->comm, &viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(0);
+  PetscCheck(s->scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "MBCSolverView: no scene; call MBCSolverSetScene() first");
+  PetscCall(PetscObjectPrintClassNamePrefixType((PetscObject)s, viewer));
   PetscCall(MBCSceneView(s->scene, viewer));
   PetscCall(PetscViewerASCIIPrintf(viewer, "%s analysis: dt %g, %" PetscInt_FMT " steps to t = %g\n", MBCAnalysisTypes[s->analysis], (double)s->dt, s->nsteps, (double)s->final_time));
   {
@@ -589,6 +739,7 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
 PetscErrorCode MBCSolverGetNumBodies(MBCSolver s, PetscInt *n)
 {
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
   *n = s->nbodies;
   PetscFunctionReturn(0);
 }
@@ -596,6 +747,8 @@ PetscErrorCode MBCSolverGetNumBodies(MBCSolver s, PetscInt *n)
 PetscErrorCode MBCSolverGetBody(MBCSolver s, PetscInt b, MBCBody *body)
 {
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  PetscCheck(s->setupcalled, s->comm, PETSC_ERR_ARG_WRONGSTATE, "MBCSolverGetBody: the bodies exist after MBCSolverSetUp()");
   PetscCheck(b >= 0 && b < s->nbodies, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Body %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ")", b, s->nbodies);
   *body = s->bodies[b];
   PetscFunctionReturn(0);
@@ -607,6 +760,14 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  if (--((PetscObject)s)->refct > 0) {
+    *solver = NULL;
+    PetscFunctionReturn(0);
+  }
+  if (s->stage == 1) PetscCall(MBCSolverOutputClose(s)); /* stepped part of the way: the files hold what was done */
+  if (s->monitordestroy) PetscCall((*s->monitordestroy)(&s->monitorctx));
+  PetscCall(MBCSolverContactPointsFree(s));
   PetscCall(MBCSolverContactDestroy(s));
   PetscCall(MBCContactDestroy(&s->contact));
   PetscCall(MBCMultiplierDestroy(&s->mult));
@@ -617,6 +778,6 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   PetscCall(PetscFree2(s->output_times, s->output_npoints));
   PetscCall(PetscFree(s->points));
   PetscCall(MBCSceneDestroy(&s->scene));
-  PetscCall(PetscFree(*solver));
+  PetscCall(PetscHeaderDestroy(solver));
   PetscFunctionReturn(0);
 }

@@ -1,20 +1,24 @@
-/* -help: the options of the parts a scene may not have (contact search, projected Gauss-Seidel),
+/* -help: the options of the parts a scene may not have (contact search, the multiplier solve of either type),
    listed with their defaults, so that -help shows every option the program reads with any scene
    or none. */
 #include <mbc/private/solverimpl.h>
 
 PetscErrorCode MBCSolverHelp(MBCSolver s)
 {
-  MBCContact c;
-  MBCPGS     pgs;
+  MBCContact    c;
+  MBCMultiplier m;
 
   PetscFunctionBegin;
   if (s->scene->ncouples) PetscFunctionReturn(0); /* MBCSolverSetUp reads them */
   PetscCall(MBCContactCreate(s->comm, s->scene, &c));
   PetscCall(MBCContactSetFromOptions(c));
   PetscCall(MBCContactDestroy(&c));
-  PetscCall(PetscMemzero(&pgs, sizeof(pgs)));
-  PetscCall(MBCPGSSetFromOptions(&pgs));
-  PetscCall(MBCPGSReset(&pgs));
+  for (PetscInt t = 0; t < 2; t++) { /* both types' options */
+    PetscCall(MBCMultiplierCreate(s->comm, &m));
+    PetscCall(MBCMultiplierSetOptionsPrefix(m, "mbc_"));
+    PetscCall(MBCMultiplierSetType(m, t ? MBCMULTIPLIERPGS : MBCMULTIPLIERNEWTON));
+    PetscCall(MBCMultiplierSetFromOptions(m));
+    PetscCall(MBCMultiplierDestroy(&m));
+  }
   PetscFunctionReturn(0);
 }

@@ -109,9 +109,22 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     PetscCall(MBCH5GroupClose(&g));
     s->output_npoints[s->noutputs] = np;
   }
-  PetscCall(PetscFree6(lam, x, nrm, force, traction, state));
-  PetscCall(PetscFree5(pressure, gap, area, couple, istate));
-  PetscCall(PetscFree2(x0, slip));
+  PetscCall(MBCSolverContactPointsFree(s)); /* keep this step's points for MBCSolverGetContactPoints */
+  s->cpts.n = np;
+  s->cpts.lam = lam, s->cpts.x = x, s->cpts.nrm = nrm, s->cpts.force = force, s->cpts.traction = traction, s->cpts.state = state;
+  s->cpts.pressure = pressure, s->cpts.gap = gap, s->cpts.area = area, s->cpts.couple = couple, s->cpts.istate = istate;
+  s->cpts.x0 = x0, s->cpts.slip = slip;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCSolverContactPointsFree(MBCSolver s)
+{
+  PetscFunctionBegin;
+  if (!s->cpts.x) PetscFunctionReturn(0);
+  PetscCall(PetscFree6(s->cpts.lam, s->cpts.x, s->cpts.nrm, s->cpts.force, s->cpts.traction, s->cpts.state));
+  PetscCall(PetscFree5(s->cpts.pressure, s->cpts.gap, s->cpts.area, s->cpts.couple, s->cpts.istate));
+  PetscCall(PetscFree2(s->cpts.x0, s->cpts.slip));
+  s->cpts.n = 0;
   PetscFunctionReturn(0);
 }
 

@@ -1,7 +1,8 @@
-/* Package registration: log events so -log_view shows where the time goes. */
+/* Package registration: the objects' class ids, and log events so -log_view shows where the time goes. */
 #include <mbc/private/contactimpl.h>
 #include <mbc/private/solverimpl.h>
 
+PetscClassId  MBC_SCENE_CLASSID, MBC_SOLVER_CLASSID, MBC_BODY_CLASSID;
 PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;
 
 static PetscBool MBCPackageInitialized = PETSC_FALSE;
@@ -13,6 +14,9 @@ PetscErrorCode MBCInitializePackage(void)
   PetscFunctionBegin;
   if (MBCPackageInitialized) PetscFunctionReturn(0);
   MBCPackageInitialized = PETSC_TRUE;
+  PetscCall(PetscClassIdRegister("MBCScene", &MBC_SCENE_CLASSID));
+  PetscCall(PetscClassIdRegister("MBCSolver", &MBC_SOLVER_CLASSID));
+  PetscCall(PetscClassIdRegister("MBCBody", &MBC_BODY_CLASSID));
   PetscCall(PetscClassIdRegister("mbcontact", &classid));
   PetscCall(PetscLogEventRegister("MBCSceneLoad", classid, &MBC_SceneLoad));
   PetscCall(PetscLogEventRegister("MBCBodyLoad", classid, &MBC_BodyLoad));

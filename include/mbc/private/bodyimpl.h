@@ -3,11 +3,17 @@
 
 #include <mbc/private/sceneimpl.h>
 
+typedef struct _MBCBodyOps *MBCBodyOps;
+struct _MBCBodyOps {
+  PetscErrorCode (*view)(MBCBody, PetscViewer);
+};
+
 struct _n_MBCBody {
+  PETSCHEADER(struct _MBCBodyOps);
   char        name[MBC_NAME_LEN];
   PetscInt    index;      /* position in the scene */
   MPI_Comm    comm;       /* the body's sub-communicator of the job's */
-  MBCScene    scene;      /* borrowed */
+  MBCScene    scene;      /* a reference */
   MBCBodyDesc desc;
   PetscBool   simplex;
 

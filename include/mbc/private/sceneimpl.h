@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mbcontact.h>
+#include <petsc/private/petscimpl.h>
 #include <petscds.h>
 #include <petscviewerhdf5.h>
 
@@ -69,7 +70,13 @@ typedef struct {
   PetscReal x[3];
 } MBCPointDesc;
 
+typedef struct _MBCSceneOps *MBCSceneOps;
+struct _MBCSceneOps {
+  PetscErrorCode (*view)(MBCScene, PetscViewer);
+};
+
 struct _n_MBCScene {
+  PETSCHEADER(struct _MBCSceneOps);
   char            filename[PETSC_MAX_PATH_LEN], title[MBC_NAME_LEN];
   MBCAnalysisType analysis;
   MBCMassType     mass;

@@ -33,10 +33,20 @@ typedef enum {
   MBC_CONTACT_SLIP      = 2 /* also a frictionless point in contact */
 } MBCContactState;
 
+typedef struct _MBCSolverOps *MBCSolverOps;
+struct _MBCSolverOps {
+  PetscErrorCode (*view)(MBCSolver, PetscViewer);
+};
+
 struct _n_MBCSolver {
-  MPI_Comm  comm;
-  MBCScene  scene;        /* owned */
+  PETSCHEADER(struct _MBCSolverOps);
+  MPI_Comm  comm;         /* the user's communicator (the header holds PETSc's duplicate) */
+  MBCScene  scene;        /* a reference (MBCSolverSetScene) */
   PetscBool setupcalled;
+  PetscInt  stage;        /* of the run: 0 before MBCSolverStep's first call, 1 stepping, 2 every step done */
+  PetscErrorCode (*usermonitor)(MBCSolver, PetscInt, PetscReal, void *); /* MBCSolverMonitorSet */
+  void          *monitorctx;
+  PetscErrorCode (*monitordestroy)(void **);
 
   MBCAnalysisType analysis;
   MBCMassType     mass;
@@ -98,7 +108,16 @@ struct _n_MBCSolver {
   PetscInt   grank, *grange; /* the rank of G and the eigenvectors of its range (NULL when G has full rank) */
   PetscReal *gscale;      /* the scale of each row of the problem's G */
   PetscReal  static_stabilize, static_rtol;
+  PetscBool  static_stabilized, static_floating; /* some body has the spring, or free rigid modes: iterate to equilibrium */
   PetscInt   static_max_it, static_its;
+
+  /* the contact points of the last step, couple order, every rank (MBCSolverGetContactPoints) */
+  struct {
+    PetscInt   n;
+    PetscReal *lam, *x, *nrm, *force, *traction, *pressure, *gap, *area, *x0, *slip;
+    PetscInt  *state;
+    int       *couple, *istate;
+  } cpts;
 
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
@@ -122,6 +141,7 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactPointsFree(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);

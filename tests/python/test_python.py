@@ -1,0 +1,128 @@
+"""The petsc4py binding (mbcontact._core, docs/python.md): the two-block example driven from
+Python at 1 and 2 ranks gives the executable's result file, and the exact static state."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import BUILD, ROOT, env, load_script, result, solve
+from mbcontact.results import read_body, read_csv
+
+blocks = load_script("meshes/blocks/build.py", "blocks_build_py")
+STATIC = ("-mbc_analysis", "static", "-mbc_dt", "1", "-mbc_final_time", "2")
+
+
+def pyenv():
+    e = env()
+    e["PYTHONPATH"] = os.pathsep.join([os.path.join(ROOT, "python"), os.path.join(BUILD, "python")])
+    return e
+
+
+def run_python(args, nproc=1, check=True):
+    cmd = [sys.executable, *args]
+    if nproc > 1:
+        cmd = ["mpirun", "-n", str(nproc), *cmd]
+    r = subprocess.run(cmd, capture_output=True, text=True, env=pyenv(), timeout=600)
+    if check:
+        assert r.returncode == 0, r.stdout + r.stderr
+    return r
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_blocks_from_python(tmp_path, nproc):
+    """Static two blocks (body force 100 N/m3 on block 2, 100 m high, E = 10 GPa, nu = 0): the
+    top of block 2 at -1.5e-4 m exactly, the contact force the weight 1e8 N (to the PGS and
+    static tolerances, 1e-4 as in test_contact_static.py); the result file is the executable's
+    with the same options on the same ranks, to rounding (same code, same decomposition)."""
+    h5 = blocks.build(tmp_path, dt=0.01, final_time=1.0)
+    solve(h5, *STATIC, "-mbc_output", str(tmp_path / "exe"), nproc=nproc)
+    r = run_python([os.path.join(ROOT, "tests", "python", "drive_blocks.py"), str(h5), str(tmp_path / "py")], nproc=nproc)
+    out = dict(line.split(" ", 1) for line in r.stdout.strip().splitlines())
+    assert out["steps"] == "1:1,2:2", out  # the monitor after each load step
+    assert out["nbodies"] == "2" and out["comm_size"] == str(nproc)
+    assert abs(float(out["block2_umin"]) / -1.5e-4 - 1) < 1e-4, out
+    assert out["block1_same"] == "True" and out["block2_same"] == "True"  # the Vecs share the solver's memory
+    assert abs(float(out["normal_force"]) / 1e8 - 1) < 1e-6, out
+    assert out["points"] == "441" and out["stick"] == "441"  # block 2's 21 x 21 base vertices, sticking
+    assert abs(float(out["pressure_mean"]) / 1e4 - 1) < 5e-3, out
+    assert "every step is done" in out["error_after_end"], out
+    for name in ("block1", "block2"):
+        a, b = read_body(str(tmp_path / "exe.h5"), name), read_body(str(tmp_path / "py.h5"), name)
+        scale = np.abs(a["displacement"]).max()
+        assert np.abs(a["displacement"] - b["displacement"]).max() <= 1e-12 * scale, name
+    pa, pb = read_csv(str(tmp_path / "exe_points.csv")), read_csv(str(tmp_path / "py_points.csv"))
+    for k in pa:
+        assert np.allclose(pa[k], pb[k], rtol=1e-12, atol=1e-12 * 1.5e-4), k
+
+
+def test_errors_from_python(tmp_path):
+    """C errors come back as PETSc.Error with the C message; a monitor's exception as itself."""
+    script = tmp_path / "errors.py"
+    script.write_text(f"""
+from petsc4py import PETSc
+import mbcontact
+try:
+    mbcontact.Scene().load({str(tmp_path / 'missing.h5')!r})
+except PETSc.Error as e:
+    print("load:", e)
+s = mbcontact.Solver().create()
+try:
+    s.setUp()
+except PETSc.Error as e:
+    print("setup:", e)
+try:
+    s.getBody("block9")
+except (KeyError, ValueError) as e:
+    print("body:", type(e).__name__)
+""")
+    r = run_python([str(script)])
+    assert f"load: Scene file {tmp_path / 'missing.h5'} does not exist or cannot be read" in r.stdout, r.stdout + r.stderr
+    assert "setup: Call MBCSolverSetScene() first" in r.stdout, r.stdout + r.stderr
+    assert "body: ValueError" in r.stdout, r.stdout + r.stderr
+
+
+def test_scene_from_dict(tmp_path):
+    """A scene built in Python (an in-memory meshio mesh with cell sets, the YAML's content as
+    a dict), solved in-process: column under self-weight, hex8 layered in z, nu = 0, so the top's
+    u_z = -rho g L^2 / (2E) and the centroid sigma_zz = -rho g (L - z_c) are exact (rounding,
+    1e-10 and 1e-8 relative as in test_body.py); static: no velocity."""
+    script = tmp_path / "fromdict.py"
+    script.write_text(f"""
+import meshio, numpy as np
+from petsc4py import PETSc
+import mbcontact
+from mbcontact import meshgen
+E, RHO, G, L = 30e9, 2500.0, 9.81, 10.0
+meshgen.box({str(tmp_path / 'col.msh')!r}, (0, 0, 0), (1, 1, L), n=(1, 1, 10), cell="hex8", volume_name="col")
+m = meshio.read({str(tmp_path / 'col.msh')!r})
+tags = dict((n, t) for n, (t, d) in m.field_data.items())
+sets = {{n: [np.flatnonzero(p == t) for p in m.cell_data["gmsh:physical"]] for n, t in tags.items()}}
+mesh = meshio.Mesh(m.points, [(b.type, b.data) for b in m.cells], cell_sets=sets)  # no physical tags
+scene = {{"meshes": {{}}, "bodies": {{"col": {{"mesh": "m", "regions": ["col"], "material": {{"E": E, "nu": 0.0, "density": RHO}}}}}},
+         "dirichlet": [{{"surface": "zmin", "components": "all"}}], "loads": [{{"kind": "gravity", "vector": [0, 0, -G]}}],
+         "analysis": {{"type": "static"}}, "output": {{"fields": ["displacement"]}}}}
+sc = mbcontact.Scene.fromDict({str(tmp_path / 'built')!r}, "column", scene, meshes={{"m": mesh}})
+s = mbcontact.Solver().create()
+s.setScene(sc)
+s.setFromOptions()
+s.solve()
+b = s.getBody(0)
+u = b.getDisplacement()
+exact = -RHO * G * L**2 / (2 * E)
+assert abs(u.min()[1] - exact) < 1e-10 * abs(exact), (u.min(), exact)
+st = b.getStress()
+assert abs(st.strideMin(2)[1] + RHO * G * (L - 0.5)) < 1e-8 * RHO * G * L, st.strideMin(2)
+assert abs(st.strideMax(2)[1] + RHO * G * 0.5) < 1e-8 * RHO * G * L, st.strideMax(2)
+assert b.getVelocity() is None and b.getKSP() is not None and b.getDM().getDimension() == 3
+try:
+    mbcontact.Scene.fromDict({str(tmp_path / 'bad')!r}, "bad", dict(scene, bodies={{"col": {{"mesh": "m", "regions": ["nowhere"], "material": {{"E": E}}}}}}), meshes={{"m": mesh}})
+except RuntimeError as e:
+    print("bad scene:", e)
+print("ok", sc.filename)
+""")
+    r = run_python([str(script)])
+    assert "ok " + str(tmp_path / "built" / "column.h5") in r.stdout, r.stdout + r.stderr
+    assert "bad scene: mbcontact.Scene.fromDict('bad')" in r.stdout, r.stdout + r.stderr
+    assert "nowhere" in r.stderr, r.stderr  # mbcontact-prep names the missing region
