@@ -13,12 +13,9 @@ PetscErrorCode MBCSolverHelp(MBCSolver s)
   PetscCall(MBCContactCreate(s->comm, s->scene, &c));
   PetscCall(MBCContactSetFromOptions(c));
   PetscCall(MBCContactDestroy(&c));
-  for (PetscInt t = 0; t < 2; t++) { /* both types' options */
-    PetscCall(MBCMultiplierCreate(s->comm, &m));
-    PetscCall(MBCMultiplierSetOptionsPrefix(m, "mbc_"));
-    PetscCall(MBCMultiplierSetType(m, t ? MBCMULTIPLIERPGS : MBCMULTIPLIERNEWTON));
-    PetscCall(MBCMultiplierSetFromOptions(m));
-    PetscCall(MBCMultiplierDestroy(&m));
-  }
+  PetscCall(MBCMultiplierCreate(s->comm, &m)); /* the Newton type lists the pgs type's options too */
+  PetscCall(MBCMultiplierSetOptionsPrefix(m, "mbc_"));
+  PetscCall(MBCMultiplierSetFromOptions(m));
+  PetscCall(MBCMultiplierDestroy(&m));
   PetscFunctionReturn(0);
 }

@@ -206,12 +206,13 @@ def test_monitor_timing(tmp_path):
 
 @pytest.mark.parametrize("with_scene", [False, True])
 def test_help_lists_every_option(tmp_path, with_scene):
-    """-help lists the program's own options and the contact and PGS ones, with a contact-free
+    """-help lists the program's own options and the contact and multiplier-solve ones (both types), with a contact-free
     scene or none."""
     args = ["-help", "-mbc_output", str(tmp_path / "h")] + (["-mbc_final_time", str(DT)] if with_scene else [])
     r = solve(bar(tmp_path) if with_scene else "", *args)
     for opt in ("-scene", "-fclib ", "-fclib_write", "-fclib_warm_start", "-mbc_error_traceback", "-mbc_output_every",
-                "-mbc_monitor", "-mbc_contact_cell_factor", "-mbc_contact_view", "-mbc_pgs_rtol", "-mbc_pgs_max_it"):
+                "-mbc_monitor", "-mbc_contact_cell_factor", "-mbc_contact_view", "-mbc_multiplier_type", "-mbc_multiplier_rtol",
+                "-mbc_multiplier_max_it", "-mbc_newton_rho", "-mbc_pgs_omega"):
         assert opt in r.stdout, opt
 
 

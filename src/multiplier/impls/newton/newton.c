@@ -424,6 +424,10 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
   PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
   PetscCall(KSPSetFromOptions(nt->ksp));
+  /* the Gauss-Seidel sweeps take the pgs type's options too (-mbc_pgs_omega, ...), never its
+     active-set step */
+  PetscCall((*nt->pgs->ops->setfromoptions)(nt->pgs, PetscOptionsObject));
+  PetscCall(MBCMultiplierPGSSetActiveSet(nt->pgs, 0));
   PetscFunctionReturn(0);
 }
 
