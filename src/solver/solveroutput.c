@@ -90,7 +90,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   s->noutputs = 0;
   if (fields || s->contact) {
     hid_t file_id;
-    int   version = 1;
+    int   version = 2; /* 2: stress in XDMF's Tensor6 order (1: xx yy zz xy yz xz) */
     PetscCall(PetscSNPrintf(s->h5file, sizeof(s->h5file), "%s.h5", s->output));
     PetscCall(MBCH5FileCreate(s->comm, s->h5file, &file_id));
     s->h5 = file_id;
