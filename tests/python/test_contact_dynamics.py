@@ -9,7 +9,7 @@ import pytest
 
 from conftest import prep, result, solve
 from mbcontact import meshgen
-from mbcontact.results import read_csv
+from mbcontact.results import read_contact, read_csv
 
 G = 9.81
 RHO, E = 2000.0, 1.0e9  # kg/m3, Pa: a stiff block, elastic displacements ~ rho g h^2 / E ~ 1e-6 m
@@ -247,3 +247,59 @@ def test_incline_slide_parallel(tmp_path, nproc):
         up = np.stack([parallel[f"{name}_u{c}"] for c in "xyz"], 1)
         rel = np.linalg.norm(up - us, axis=1).max() / np.linalg.norm(us, axis=1).max()
         assert rel < 1e-8, (name, rel)
+
+
+# ---------------------------------------------------------------------------------------------
+# 4. The reported force of sticking points on a deforming base
+# ---------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("analysis", ["dynamic", "static"])
+def test_stick_force_reported_in_the_frames_of_the_multipliers(tmp_path, analysis):
+    """Block 1 x 1 x 0.5 m (hex8 4x4x2, 1000 kg) on a base [-0.5,1.5]^2 x [-1,0] (hex8 2x2x2) fixed
+    at its bottom only, so its top (the slave face) deforms and the contact normals tilt by ~1e-6:
+    enough to swap the tangent axes the search picks (t1 = e x n, e the axis least aligned with n).
+    Gravity and a traction of 2400 N along x on the block's top, mu = 0.6 (mu m g = 5886 N): every
+    point sticks. The contact output (the per-point force of the result file, summed, and the CSV
+    resultant) must carry the applied loads: -2400 N along x, 0 along y, m g along z. It used to
+    rotate each point's multipliers by the tangents of the search after the step instead of those
+    D was built with: -1520 / -880 N. Dynamic: Newmark trapezoidal, the traction ramped over 0.05 s,
+    Rayleigh beta 8e-4 s on both bodies, 0.2 s; the block's inertia leaves the resultant off by
+    m |a|, and the two-step mean (the trapezoidal rule's period-2 constraint mode, see
+    test_block_sticks_on_incline) is within 0.5 % of the loads at 0.15-0.2 s. Static: to 1e-6 (the
+    equilibrium tolerance). y: below 1e-6 of the load in both."""
+    meshgen.boxes(str(tmp_path / "stick.msh"),
+                  [dict(lo=(-0.5, -0.5, -1.0), hi=(1.5, 1.5, 0.0), n=(2, 2, 2), name="base"),
+                   dict(lo=(0, 0, 0), hi=(1, 1, BLOCK_H), n=(4, 4, 2), name="block")])
+    material = {"E": E, "nu": 0.25, "density": RHO, "rayleigh_beta": 8.0e-4}
+    load = 2400.0
+    scene = {
+        "meshes": {"m": "stick.msh"},
+        "bodies": {"base": {"mesh": "m", "regions": "base", "material": material},
+                   "block": {"mesh": "m", "regions": "block", "material": material}},
+        "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.6}],
+        "dirichlet": [{"surface": "base_zmin"}],
+        "loads": [{"kind": "gravity", "vector": [0, 0, -G], "time": "sudden", "bodies": ["block"]},
+                  {"kind": "traction", "surface": "block_zmax", "vector": [load, 0, 0],
+                   "time": {"table": [[0, 0], [0.05, 1], [1, 1]]}}],
+        "analysis": {"type": "dynamic", "dt": DT, "final_time": 0.2, "newmark": dict(TRAPEZOIDAL)}
+        if analysis == "dynamic" else {"type": "static"},
+        "output": {"every": 50, "fields": ["displacement"]},
+    }
+    h5 = prep(tmp_path, scene, name="stick")
+    r = solve(h5, "-mbc_monitor")
+    last, state = contact_state(r.stdout)
+    assert state["stick"] == 25 and state["slip"] == 0, last
+    weight = RHO * BLOCK_H * G
+    c = read_csv(result(h5, "_contact.csv"))
+    pts = read_contact(result(h5, ".h5"))
+    total = pts["force"].sum(axis=0)
+    print(f"\nstick {analysis}: point forces summed {total}, CSV ({c['fx'][-1]:.3f}, {c['fy'][-1]:.3g}, {c['fz'][-1]:.3f}) N")
+    assert np.allclose(total, [c["fx"][-1], c["fy"][-1], c["fz"][-1]], rtol=1e-12, atol=1e-9 * weight)
+    assert np.abs(c["fy"]).max() < 1e-6 * load
+    if analysis == "static":
+        assert abs(total[0] / -load - 1) < 1e-6 and abs(total[2] / weight - 1) < 1e-6
+    else:
+        late = c["t"] >= 0.15 - 1e-9
+        mean2 = lambda f: 0.5 * (f[1:] + f[:-1])  # noqa: E731
+        assert np.abs(mean2(c["fx"][late]) / -load - 1).max() < 5e-3
+        assert np.abs(mean2(c["fz"][late]) / weight - 1).max() < 5e-3
