@@ -69,16 +69,20 @@ def test_cylinders_at_a_quarter_of_the_approach(tmp_path):
 
 
 def test_sphere_on_half_space(tmp_path):
-    """An eighth of a sphere R = 10 mm on a quarter block, -0.02 mm imposed, 0.09 mm elements at
-    the pole (a / 5): the contact radius a (least-squares fit of p^2 linear in r^2 over the
-    points above p0 / 3) and the peak pressure p0 within 3 % of Hertz point contact for the
-    computed P (measured +0.03 % and -0.7 %)."""
-    h5 = build.build_sphere(str(tmp_path), 0.09, 0.8)
+    """An eighth of a sphere R = 10 mm on a quarter block, -0.02 mm imposed, the ball graded from
+    0.09 mm (its pole elements 0.064 mm, a / 7: the cube-to-sphere map), the block from 0.06 mm:
+    the contact radius a (least-squares fit of p^2 linear in r^2 over the points above p0 / 3)
+    and the peak pressure p0 (the pole's force over its reference share) within 0.5 % of Hertz
+    point contact for the computed P (measured -0.01 % and +0.33 %). With the block at 0.09 mm
+    too, the ball (the master side, where the multipliers live) is the finer side at the pole and
+    p0 is -1.5 % (a +0.20 %); the ball at 0.06 on the block at 0.09 gives -7.8 %: a multiplier
+    space finer than the other side's displacements flattens the peak (docs/validation.md)."""
+    h5 = build.build_sphere(str(tmp_path), 0.09, 0.8, block_hc=0.06)
     solve(h5)
     res = report.sphere_results(str(h5)[:-3] + "_result")
     a, p0 = report.hertz_point(res["P"], build.SPHERE_R)
     print(f"\nsphere: P {res['P']:.1f} N, a {res['a']:.4f} ({res['a'] / a - 1:+.2%}), p0 {res['p0']:.1f} ({res['p0'] / p0 - 1:+.2%})")
-    assert abs(res["a"] / a - 1) < 0.03 and abs(res["p0"] / p0 - 1) < 0.03
+    assert abs(res["a"] / a - 1) < 0.005 and abs(res["p0"] / p0 - 1) < 0.005
 
 
 def test_cylinders_dynamic_route_matches_static(tmp_path, levels):
