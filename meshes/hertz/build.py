@@ -184,10 +184,12 @@ def _fix_orientation(points, cells):
     return cells, bad.any()
 
 
-def sphere_parts(radius, hc, fine, growth=1.2, hmax=None, block=None, cap_radius=None):
+def sphere_parts(radius, hc, fine, growth=1.2, hmax=None, block=None, cap_radius=None, block_hc=None):
     """An eighth of a sphere (centre (0, 0, radius), pole at the origin, x, y >= 0,
     z <= radius) on a quarter block [0, W]^2 x [-W, 0], W = block (default: the radius), both
-    graded towards the contact point. The ball octant is the cube-to-sphere map of the graded
+    graded towards the contact point, the block from block_hc (default hc). The cube-to-sphere
+    map makes the ball's elements at the pole hc / sqrt(2): with block_hc = hc the master (the
+    ball, where the multipliers live) is finer than the slave there. The ball octant is the cube-to-sphere map of the graded
     unit cube (fine towards x = 0, y = 0 and the pole face). The master surface is the cap of
     the pole face within cap_radius (default: the fine zone) of the axis: farther faces cannot
     touch, and every master node costs a column of X = A^-1 H."""
@@ -211,7 +213,7 @@ def sphere_parts(radius, hc, fine, growth=1.2, hmax=None, block=None, cap_radius
     cap = pole[np.linalg.norm(pts[pole][:, :, :2].mean(axis=1), axis=1) < cap_radius]  # the faces that can touch
     ball = meshgen.Part("ball", "hex8", pts, cells, {"ball_pole": flip(cap), "ball_flat": flip(sides["zmin"]),
                                                        "ball_symx": flip(sides["xmin"]), "ball_symy": flip(sides["ymin"])})
-    gx = _graded_axis(W, hc, fine, growth, hmax)
+    gx = _graded_axis(W, block_hc or hc, fine, growth, hmax)
     ref, cells, sides = _lattice(len(gx) - 1, len(gx) - 1, len(gx) - 1)
     m = len(gx) - 1
     bp = np.c_[np.interp(ref[:, 0], np.arange(m + 1), gx), np.interp(ref[:, 1], np.arange(m + 1), gx),
@@ -241,9 +243,9 @@ def sphere_scene():
     }
 
 
-def build_sphere(outdir, hc=0.05, fine=0.8):
+def build_sphere(outdir, hc=0.05, fine=0.8, block_hc=None):
     os.makedirs(outdir, exist_ok=True)
-    meshgen.write_parts(os.path.join(outdir, "sphere.msh"), list(sphere_parts(SPHERE_R, hc, fine)))
+    meshgen.write_parts(os.path.join(outdir, "sphere.msh"), list(sphere_parts(SPHERE_R, hc, fine, block_hc=block_hc)))
     return prepare(outdir, "sphere", sphere_scene())
 
 

@@ -111,5 +111,17 @@ def print_report(res, title="Hertz: two parallel cylinders"):
               f"{res['lower'][i]:11.6f} {lo:11.6f} {res['lower'][i] / lo - 1:8.2%}")
 
 
+def summary(res, tol=0.005):
+    """One line on what this run measured: the errors against Hertz for its own load, and whether
+    they are within tol."""
+    err = errors(res)
+    within = all(abs(err[k]) < tol for k in ("b", "p_max"))
+    return (f"Measured: b {err['b']:+.2%}, p_max {err['p_max']:+.2%} of Hertz for the computed P = {res['P']:.1f} N/mm "
+            f"(b / R = {res['b'] / R:.4f}); {'both' if within else 'not both'} within {tol:.1%}. Surface u_y within "
+            f"{max(err['upper'], err['lower']):.2%} of ANSYS. Pressure = contact force / reference (undeformed) area.")
+
+
 if __name__ == "__main__":
-    print_report(cylinder_results(sys.argv[1]))
+    res = cylinder_results(sys.argv[1])
+    print_report(res)
+    print("\n" + summary(res))

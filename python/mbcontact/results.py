@@ -41,13 +41,26 @@ def body_names(path):
         return sorted(f["bodies"], key=lambda n: int(f["bodies"][n].attrs["index"]))
 
 
+# stress components in the file and from read_body: XDMF's Tensor6 order (what ParaView shows)
+STRESS_COMPONENTS = ("xx", "xy", "xz", "yy", "yz", "zz")
+_TENSOR6_OF_VOIGT = [0, 3, 5, 1, 4, 2]  # format_version 1 files hold xx yy zz xy yz xz
+
+
+def stress_component(stress, name):
+    """Column `name` (e.g. "zz" or "yx") of a stress array from read_body."""
+    key = name if name in STRESS_COMPONENTS else name[::-1]
+    return stress[:, STRESS_COMPONENTS.index(key)]
+
+
 def read_body(path, body, step=-1):
     """Vertices (nv, 3), cells (nc, 4|8; XDMF/VTK vertex order), displacement (nv, 3) and stress
-    (nc, 6: xx yy zz xy yz xz) of one body at an output step (index into the output steps,
-    negative from the end), with its time and the number of output steps."""
+    (nc, 6: xx xy xz yy yz zz, XDMF's Tensor6 order; STRESS_COMPONENTS) of one body at an output
+    step (index into the output steps, negative from the end), with its time and the number of
+    output steps."""
     import h5py
 
     with h5py.File(path, "r") as f:
+        version = int(f.attrs.get("format_version", 1))
         if f"bodies/{body}" not in f:
             raise KeyError(f"{path}: no body '{body}' (bodies: {', '.join(f['bodies']) if 'bodies' in f else 'none'})")
         g = f["bodies"][body]
@@ -60,6 +73,8 @@ def read_body(path, body, step=-1):
             for name in ("displacement", "stress"):
                 if name in s:
                     out[name] = s[name][...]
+            if "stress" in out and version < 2:
+                out["stress"] = out["stress"][:, _TENSOR6_OF_VOIGT]
     return out
 
 

@@ -112,6 +112,31 @@ static void FacePoint(MBCSurface *m, PetscInt f, PetscReal u, PetscReal v, Petsc
   MBCNormalize(nrm);
 }
 
+/* Area element at reference point (u, v) of master face f on the coordinates X (m->x0: the
+   reference area the output divides the contact forces by). */
+static PetscReal FaceAreaElement(const MBCSurface *m, PetscInt f, const PetscReal X[], PetscReal u, PetscReal v)
+{
+  const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
+  PetscReal       dx[2][3] = {{0, 0, 0}, {0, 0, 0}}, c[3];
+
+  if (m->fnv[f] == 4) {
+    const PetscReal dNu[4] = {-(1 - v), 1 - v, v, -v}, dNv[4] = {-(1 - u), -u, u, 1 - u};
+    for (PetscInt i = 0; i < 4; i++)
+      for (PetscInt d = 0; d < 3; d++) {
+        dx[0][d] += dNu[i] * X[3 * fv[i] + d];
+        dx[1][d] += dNv[i] * X[3 * fv[i] + d];
+      }
+    MBCCross(dx[0], dx[1], c);
+    return PetscSqrtReal(MBCDot(c, c));
+  }
+  for (PetscInt d = 0; d < 3; d++) {
+    dx[0][d] = X[3 * fv[1] + d] - X[3 * fv[0] + d];
+    dx[1][d] = X[3 * fv[2] + d] - X[3 * fv[0] + d];
+  }
+  MBCCross(dx[0], dx[1], c);
+  return PetscSqrtReal(MBCDot(c, c)) * (1 - u);
+}
+
 /* Dual basis of master face f: psi_i = sum_j C_ij N_j with C = D M^-1, M_ij = int N_i N_j,
    D = diag(int N_i), so that int psi_i N_j = delta_ij int N_j: the master side of a constraint is
    its node alone, and sum_i psi_i = 1. C row-major, MBC_MAX_FACE_NODES wide. */
@@ -171,13 +196,14 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
 {
   MBCSurface *m = &c->master, *s = &c->slave;
   PetscInt   *pointOf, *pairOf, nface = 0, *faces = NULL, maxfaces = 0;
-  PetscReal  *area, *covered, *nsum, *xq, *wq, *gsum, C[MBC_MAX_FACE_NODES * MBC_MAX_FACE_NODES];
+  PetscReal  *area, *covered, *nsum, *area0, *xq, *wq, *gsum, C[MBC_MAX_FACE_NODES * MBC_MAX_FACE_NODES];
   EntryList   ml = {NULL, 0, 0}, sl = {NULL, 0, 0};
 
   PetscFunctionBegin;
   PetscCall(MBCCoupleIntegrateReset(c));
   PetscCall(PetscMalloc2(m->nnodes, &pointOf, m->nnodes, &pairOf));
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
+  PetscCall(PetscCalloc1(c->npoints + 1, &area0));
   PetscCall(PetscMalloc2(nq, &xq, nq, &wq));
   PetscCall(PetscDTGaussQuadrature(nq, 0.0, 1.0, xq, wq));
   for (PetscInt v = 0; v < m->nnodes; v++) pointOf[v] = pairOf[v] = -1;
@@ -215,14 +241,15 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
     PetscCall(DualBasis(m, f, nq, xq, wq, C));
     for (PetscInt a = 0; a < nq; a++)
       for (PetscInt b = 0; b < nq; b++) {
-        PetscReal       N[4], psi[4], x[3], nrm[3], dA, q, bestq = -PETSC_MAX_REAL;
+        PetscReal       N[4], psi[4], x[3], nrm[3], dA, dA0, q, bestq = -PETSC_MAX_REAL;
         MBCContactPoint cp, best;
         PetscBool       found = PETSC_FALSE;
         PetscCall(PetscMemzero(&best, sizeof(best)));
         FacePoint(m, f, xq[a], xq[b], N, x, nrm, &dA);
         dA *= wq[a] * wq[b];
+        dA0 = FaceAreaElement(m, f, m->x0, xq[a], xq[b]) * wq[a] * wq[b];
         for (PetscInt i = 0; i < m->fnv[f]; i++)
-          if (pointOf[fv[i]] >= 0) area[pointOf[fv[i]]] += N[i] * dA;
+          if (pointOf[fv[i]] >= 0) area[pointOf[fv[i]]] += N[i] * dA, area0[pointOf[fv[i]]] += N[i] * dA0;
         for (PetscInt j = 0; j < nface; j++)
           if (MBCCoupleProjectOnFace(c, x, nrm, faces[j], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
             best  = cp;
@@ -237,7 +264,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
         for (PetscInt i = 0; i < m->fnv[f]; i++) {
           const PetscInt k = pointOf[fv[i]];
           if (k < 0) continue;
-          nsum[k] += N[i] * dA;
+          nsum[k] += N[i] * dA0; /* reference area */
           covered[k] += psi[i] * dA;
           gsum[k] += psi[i] * dA * best.gap;
           for (PetscInt j = 0; j < best.nv; j++)
@@ -254,7 +281,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   for (PetscInt k = 0; k < c->npoints; k++) { /* master side: the node alone (dual basis) */
     MBCContactPoint *p = &c->points[k];
     const PetscBool  integrated = (PetscBool)(covered[k] >= 0.25 * area[k] && area[k] > 0);
-    p->area                     = nsum[k] > 0 ? nsum[k] : area[k];
+    p->area                     = nsum[k] > 0 ? nsum[k] : area0[k]; /* per reference area, as the stresses */
     PetscCall(EntryAdd(&ml, (PetscInt64)k * m->nnodes + p->master, integrated ? covered[k] : area[k]));
     if (integrated) continue;
     covered[k] = area[k];
@@ -271,6 +298,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   PetscCall(PetscFree(faces));
   PetscCall(PetscFree2(xq, wq));
   PetscCall(PetscFree4(area, covered, gsum, nsum));
+  PetscCall(PetscFree(area0));
   PetscCall(PetscFree2(pointOf, pairOf));
   PetscFunctionReturn(0);
 }

@@ -197,8 +197,10 @@ static PetscReal BodyEnergyTerm(MBCBody body, PetscInt i)
   return i == 0 ? body->wext : body->wdamp;
 }
 
-/* kinetic, strain, external work, damping dissipation, summed over bodies. */
-PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[4])
+/* kinetic, strain, external work, damping dissipation (summed over bodies), frictional
+   dissipation and the energy taken by the normal contact forces: total = kinetic + strain - work
+   + the three dissipations stays at its initial value (0) up to the integrator's error. */
+PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[MBC_NENERGY])
 {
   PetscReal local[2] = {0, 0}, works[2];
 
@@ -224,6 +226,8 @@ PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[4])
   PetscCall(SolverSumOverBodies(s, 2, BodyEnergyTerm, works));
   energy[2] = works[0];
   energy[3] = works[1];
+  energy[4] = s->wfriction;
+  energy[5] = s->wcontact;
   PetscFunctionReturn(0);
 }
 
@@ -261,11 +265,33 @@ static PetscErrorCode SolverContact(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* Work of the step's mean contact force z on the bodies, z . H^T du per point: u = D lambda_n+1 +
+   q is (g_n, 0, 0) + H^T du (g_n the gap the step started from, still in igap: the search comes
+   after the step), in the frames the multipliers live in; friction dissipates -z_t . du_t >= 0,
+   the normal contact takes -z_n (g_n+1 - g_n) = z_n g_n >= 0 where complementarity holds. The
+   trapezoidal rule's energy balance holds with the step's mean force, so with these the total is
+   conserved to the PGS tolerance. Replicated data (couple order): the same on every rank. */
+static void SolverContactWork(MBCSolver s)
+{
+  MBCContact c = s->contact;
+
+  for (PetscInt k = 0; k < s->ncontact; k++) {
+    const PetscInt o = s->coff[k], dim = s->coff[k + 1] - o;
+    const PetscReal g = c->couples[s->kcouple[k]].igap[s->kpoint[k]];
+    for (PetscInt d = 0; d < dim; d++) {
+      const PetscReal z = s->theta * s->rall[o + d] / s->dscale, du = s->uall[o + d] - (d ? 0 : g);
+      if (d) s->wfriction -= z * du;
+      else s->wcontact -= z * du;
+    }
+  }
+}
+
 /* The multipliers of the step: du += A^-1 H lambda. */
 static PetscErrorCode SolverContactForces(MBCSolver s)
 {
   PetscFunctionBegin;
   PetscCall(MBCSolverContactSolve(s));
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) SolverContactWork(s);
   if (s->monitor && s->ncontact) {
     PetscInt count[3] = {0, 0, 0};
     PetscCall(MBCSolverContactStates(s, count, NULL, NULL));
@@ -278,7 +304,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 
 static PetscErrorCode SolverMonitor(MBCSolver s)
 {
-  PetscReal umax = 0, e[4];
+  PetscReal umax = 0, e[MBC_NENERGY];
   char      timing[128];
 
   PetscFunctionBegin;
@@ -294,7 +320,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   PetscCall(MBCSolverMonitorTiming(s, timing, sizeof(timing)));
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscCall(MBCSolverEnergy(s, e));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e total %.6e %s\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3]), timing));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e friction %.6e contact %.6e total %.6e %s\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)e[4], (double)e[5], (double)(e[0] + e[1] - e[2] + e[3] + e[4] + e[5]), timing));
   } else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e %s\n", s->step, (double)s->time, (double)umax, timing));
   fflush(PETSC_STDOUT); /* a line per step as it happens, also through a pipe (tee, a job log) */
   PetscFunctionReturn(0);
@@ -495,6 +521,7 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
 
   PetscFunctionBegin;
   s->theta = gamma; /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
+  s->wfriction = s->wcontact = 0;
   s->carry = (1 - gamma) / gamma;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];

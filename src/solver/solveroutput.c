@@ -175,7 +175,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   s->h5_size  = 0;
   if (fields || s->contact) {
     hid_t file_id;
-    int   version = 1;
+    int   version = 2; /* 2: stress in XDMF's Tensor6 order (1: xx yy zz xy yz xz) */
     PetscCall(PetscSNPrintf(s->h5file, sizeof(s->h5file), "%s.h5", s->output));
     PetscCall(MBCH5FileCreate(s->comm, s->h5file, &file_id));
     s->h5 = file_id;
@@ -199,7 +199,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC && !rank) {
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
-    fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,total\n");
+    fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,friction_dissipation,contact_dissipation,total\n");
   }
   PetscCall(MBCSolverOutputReactionsOpen(s));
   PetscCall(SolverFlushCsv(s));
@@ -248,9 +248,9 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
   if (scene->npoints) PetscCall(SolverOutputPoints(s));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC) {
-    PetscReal e[4];
+    PetscReal e[MBC_NENERGY];
     PetscCall(MBCSolverEnergy(s, e));
-    if (s->energy_csv) fprintf(s->energy_csv, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)(e[0] + e[1] - e[2] + e[3]));
+    if (s->energy_csv) fprintf(s->energy_csv, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)e[4], (double)e[5], (double)(e[0] + e[1] - e[2] + e[3] + e[4] + e[5]));
   }
   PetscCall(MBCSolverOutputContactStep(s, fieldstep));
   PetscCall(MBCSolverOutputReactionsStep(s));

@@ -16,6 +16,11 @@ static const PetscInt ToXdmf[2][8] = {
   {0, 3, 2, 1, 4, 5, 6, 7}  /* hex8 */
 };
 
+/* Component c of XDMF's Tensor6 (xx xy xz yy yz zz, what ParaView shows) is Voigt component
+   VoigtOfTensor6[c] of the stress field (xx yy zz xy yz xz, bodypointwise.c): the file stores the
+   tensor in XDMF's order, so the .xmf points at the dataset as it is. */
+static const PetscInt VoigtOfTensor6[6] = {0, 3, 5, 1, 4, 2};
+
 /* Rows [*start, *start + *n) of N for this rank of comm: blocks in rank order. */
 static PetscErrorCode SplitRows(MPI_Comm comm, PetscInt N, PetscInt *start, PetscInt *n)
 {
@@ -224,8 +229,8 @@ static PetscErrorCode BodyFields(MBCScene scene, MBCBody body, MBCBodyOutput *o)
     PetscCall(DMGetGlobalVector(body->dmStress, &stress));
     PetscCall(MBCBodyComputeStress(body, body->u, stress));
     PetscCall(VecGetArrayRead(stress, &sa));
-    for (PetscInt i = 0; i < o->ncown; i++)
-      for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(sa[o->crow[i] + c]);
+    for (PetscInt i = 0; i < o->ncown; i++) /* Voigt (xx yy zz xy yz xz) into XDMF's Tensor6 order (xx xy xz yy yz zz) */
+      for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(sa[o->crow[i] + VoigtOfTensor6[c]]);
     PetscCall(VecRestoreArrayRead(stress, &sa));
     PetscCall(DMRestoreGlobalVector(body->dmStress, &stress));
     PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));

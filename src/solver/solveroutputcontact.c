@@ -62,6 +62,10 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
       const MBCContactPoint *p = &cp->points[j];
       const PetscReal       *z = &lam[3 * k];
+      /* the multipliers and the slip are in the frames D was built with; the search after the
+         step has already moved p's frame (its tangents may even have turned by 90 degrees) */
+      const PetscBool  built = (PetscBool)(np == s->ncontact && s->frames);
+      const PetscReal *n = built ? &s->frames[9 * k] : p->n, *t1 = built ? &s->frames[9 * k + 3] : p->t1, *t2 = built ? &s->frames[9 * k + 6] : p->t2;
       couple[k] = (int)cp->k;
       istate[k] = (int)state[k];
       gap[k]    = cp->igap[j];
@@ -69,10 +73,10 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       for (PetscInt d = 0; d < 3; d++) {
         x[3 * k + d]        = cp->master.x[3 * p->master + d];
         x0[3 * k + d]       = cp->master.x0[3 * p->master + d];
-        nrm[3 * k + d]      = p->n[d];
-        force[3 * k + d]    = z[0] * p->n[d] + z[1] * p->t1[d] + z[2] * p->t2[d];
-        traction[3 * k + d] = area[k] > 0 ? (z[1] * p->t1[d] + z[2] * p->t2[d]) / area[k] : 0;
-        slip[3 * k + d]     = cp->mu > 0 && np == s->ncontact ? s->slip[3 * k + 1] * p->t1[d] + s->slip[3 * k + 2] * p->t2[d] : (cp->mu > 0 ? 0 : NAN);
+        nrm[3 * k + d]      = n[d];
+        force[3 * k + d]    = z[0] * n[d] + z[1] * t1[d] + z[2] * t2[d];
+        traction[3 * k + d] = area[k] > 0 ? (z[1] * t1[d] + z[2] * t2[d]) / area[k] : 0;
+        slip[3 * k + d]     = cp->mu > 0 && np == s->ncontact ? s->slip[3 * k + 1] * t1[d] + s->slip[3 * k + 2] * t2[d] : (cp->mu > 0 ? 0 : NAN);
         f[d] += force[3 * k + d];
       }
       maxslip = PetscMax(maxslip, PetscSqrtReal(PetscSqr(slip[3 * k]) + PetscSqr(slip[3 * k + 1]) + PetscSqr(slip[3 * k + 2])));

@@ -31,18 +31,17 @@ def levels(tmp_path_factory):
 
 def test_cylinders_against_hertz_and_ansys(levels):
     """hc = 0.01 mm (b / 19): the half-width b (from the nodal pressures, p^2 linear in x^2
-    extrapolated to 0, in reference coordinates) within 1 % of Hertz for the computed P
-    (measured +0.26 %), the upper and lower surfaces' u_y at the paper's five abscissae within
-    1 % of ANSYS (measured 0.6 %). p_max is asserted within 1.5 % (measured +1.04 %, the paper
-    -2.81 %): it converges to +1.0 %, not 0, because the finite cylinders depart from Hertz's
-    half-spaces by O(b / R) (b / R = 0.038 here; at a quarter of the approach the same mesh
-    gives +0.48 %: test_cylinders_departure_from_hertz_scales_with_b_over_r). The reaction is
-    P = 1308 N/mm for the paper's -0.03 mm (the paper quotes 1234.42 N/mm)."""
+    extrapolated to 0, in reference coordinates) and the peak pressure p_max (contact force per
+    reference area) within 0.5 % of Hertz for the computed P (measured +0.26 % and +0.02 %; the
+    paper +1.6 % and -2.81 %), the upper and lower surfaces' u_y at the paper's five abscissae
+    within 1 % of ANSYS (measured 0.6 %). Per deformed area p_max read +1.04 %: the surface
+    shrinks sideways by (1 + nu)(1 - 2 nu) p / E = 1.09 % at the centre under plane strain. The
+    reaction is P = 1308 N/mm for the paper's -0.03 mm (the paper quotes 1234.42 N/mm)."""
     res, err = levels[0.01]
     print(f"\nhc 0.01: P {res['P']:.2f} N/mm, b {res['b']:.5f} ({err['b']:+.2%}), p_max {res['p_max']:.1f} ({err['p_max']:+.2%}), "
           f"u_y vs ANSYS upper {err['upper']:.2%} lower {err['lower']:.2%}")
-    assert abs(err["b"]) < 0.01
-    assert abs(err["p_max"]) < 0.015
+    assert abs(err["b"]) < 0.005
+    assert abs(err["p_max"]) < 0.005
     assert err["upper"] < 0.01 and err["lower"] < 0.01
     assert abs(res["P"] / 1308.3 - 1) < 0.01
     assert res["upper"][0] == pytest.approx(-0.015, rel=1e-3) and res["lower"][0] == pytest.approx(-0.015, rel=1e-3)  # symmetry
@@ -50,8 +49,8 @@ def test_cylinders_against_hertz_and_ansys(levels):
 
 def test_cylinders_error_decreases_with_refinement(levels):
     """|error of b| falls with the mesh: 5.4 % (0.04 mm), 1.0 % (0.02), 0.26 % (0.01); the
-    paper's 0.1 mm elements gave +1.6 %. p_max settles at +1.0 % (see above): it may not grow
-    by more than 0.1 % from one level to the next."""
+    paper's 0.1 mm elements gave +1.6 %. p_max: +0.31 %, -0.00 %, +0.02 %; it may not grow by
+    more than 0.1 % from one level to the next."""
     eb = [abs(levels[hc][1]["b"]) for hc in (0.04, 0.02, 0.01)]
     ep = [levels[hc][1]["p_max"] for hc in (0.04, 0.02, 0.01)]
     print(f"\n|b error| {eb}, p_max error {ep}")
@@ -59,26 +58,31 @@ def test_cylinders_error_decreases_with_refinement(levels):
     assert ep[2] < ep[0] and abs(ep[2] - ep[1]) < 1e-3
 
 
-def test_cylinders_departure_from_hertz_scales_with_b_over_r(tmp_path):
-    """A quarter of the approach (0.0075 mm) halves b / R: p_max's departure from Hertz halves
-    too (+0.48 % at hc 0.005, measured; asserted < 0.75 % at hc 0.01, b / 10), so the +1 % at
-    the paper's load is the model's geometry, not the discretisation."""
+def test_cylinders_at_a_quarter_of_the_approach(tmp_path):
+    """A quarter of the approach (0.0075 mm, P = 275 N/mm) halves b / R to 0.017: hc 0.01 mm is
+    then b / 9, and b and p_max are still within 0.5 % of Hertz for the computed P (measured
+    -0.22 % and +0.09 %). Per deformed area p_max read +0.48 % here and +1.0 % at the full
+    approach, which had been taken for the finite cylinders' departure from Hertz."""
     res, err = cylinders(tmp_path, 0.01, delta=build.DELTA / 4)
     print(f"\nquarter approach: P {res['P']:.2f}, b/R {res['b'] / build.R:.4f}, b {err['b']:+.2%}, p_max {err['p_max']:+.2%}")
-    assert abs(err["p_max"]) < 0.0075 and abs(err["b"]) < 0.01
+    assert abs(err["p_max"]) < 0.005 and abs(err["b"]) < 0.005
 
 
 def test_sphere_on_half_space(tmp_path):
-    """An eighth of a sphere R = 10 mm on a quarter block, -0.02 mm imposed, 0.09 mm elements at
-    the pole (a / 5): the contact radius a (least-squares fit of p^2 linear in r^2 over the
-    points above p0 / 3) and the peak pressure p0 within 3 % of Hertz point contact for the
-    computed P (measured +0.03 % and -0.7 %)."""
-    h5 = build.build_sphere(str(tmp_path), 0.09, 0.8)
+    """An eighth of a sphere R = 10 mm on a quarter block, -0.02 mm imposed, the ball graded from
+    0.09 mm (its pole elements 0.064 mm, a / 7: the cube-to-sphere map), the block from 0.06 mm:
+    the contact radius a (least-squares fit of p^2 linear in r^2 over the points above p0 / 3)
+    and the peak pressure p0 (the pole's force over its reference share) within 0.5 % of Hertz
+    point contact for the computed P (measured -0.01 % and +0.33 %). With the block at 0.09 mm
+    too, the ball (the master side, where the multipliers live) is the finer side at the pole and
+    p0 is -1.5 % (a +0.20 %); the ball at 0.06 on the block at 0.09 gives -7.8 %: a multiplier
+    space finer than the other side's displacements flattens the peak (docs/validation.md)."""
+    h5 = build.build_sphere(str(tmp_path), 0.09, 0.8, block_hc=0.06)
     solve(h5)
     res = report.sphere_results(str(h5)[:-3] + "_result")
     a, p0 = report.hertz_point(res["P"], build.SPHERE_R)
     print(f"\nsphere: P {res['P']:.1f} N, a {res['a']:.4f} ({res['a'] / a - 1:+.2%}), p0 {res['p0']:.1f} ({res['p0'] / p0 - 1:+.2%})")
-    assert abs(res["a"] / a - 1) < 0.03 and abs(res["p0"] / p0 - 1) < 0.03
+    assert abs(res["a"] / a - 1) < 0.005 and abs(res["p0"] / p0 - 1) < 0.005
 
 
 def test_cylinders_dynamic_route_matches_static(tmp_path, levels):

@@ -30,7 +30,7 @@ typedef struct {
 typedef struct {
   PetscInt  master, face, nv;
   PetscReal w[MBC_MAX_FACE_NODES], p[3], n[3], t1[3], t2[3], gap;
-  PetscReal area;   /* the master node's share of the contact surface (integrated: the part that projects onto slave faces) */
+  PetscReal area;   /* the master node's share of the contact surface on the reference (undeformed) geometry (integrated: the part that projects onto slave faces); pressure and traction are per this area */
 } MBCContactPoint;
 
 typedef struct {

@@ -26,6 +26,7 @@ typedef struct {
 } MBCBodyOutput;
 
 #define MBC_PAIR_SIZE 4
+#define MBC_NENERGY   6 /* kinetic, strain, external work, damping, friction, normal contact */
 
 typedef enum {
   MBC_CONTACT_SEPARATED = 0,
@@ -121,6 +122,9 @@ struct _n_MBCSolver {
 
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
+  /* energy bookkeeping (dynamic): the work the step's mean contact force z takes from the bodies,
+     -z . H^T du summed over the steps, tangential (friction) and normal */
+  PetscReal wfriction, wcontact;
 
   /* long runs (solveroutput.c, solvermonitor.c): wall-clock times of the stepping's start and
      of the last monitored step */
@@ -147,7 +151,7 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscInt);
-PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[MBC_NENERGY]);
 PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
