@@ -14,6 +14,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->comm        = comm;
   c->scene       = scene;
   c->cell_factor = 1.0;
+  c->extension   = 0.1;
   c->integrate   = PETSC_TRUE;
   c->nquad       = 4;
   c->ncouples    = scene->ncouples;
@@ -33,6 +34,8 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c)
   PetscOptionsBegin(c->comm, NULL, "mbcontact contact search options", "MBCContact");
   PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
+  PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_check_search", "After every search, pair every master node with every slave face by brute force and stop at a pair the search missed (debug)", "MBCContactSetFromOptions", c->check, &c->check, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
@@ -40,6 +43,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c)
   PetscOptionsEnd();
   PetscCheck(c->nquad >= 1 && c->nquad <= 16, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_quadrature %" PetscInt_FMT " must lie in [1, 16]", c->nquad);
   PetscCheck(c->cell_factor > 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_cell_factor %g must be positive", (double)c->cell_factor);
+  PetscCheck(c->extension >= 0 && c->extension <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_extension %g must lie in [0, 0.5]", (double)c->extension);
   PetscCheck(c->margin >= 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_margin %g must not be negative", (double)c->margin);
   PetscFunctionReturn(0);
 }
@@ -335,6 +339,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCall(SurfaceFromRecords(&cp->master, rec, nrec, i, 0));
     PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
     PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
+    cp->extension = c->extension;
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));

@@ -224,7 +224,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
         for (PetscInt i = 0; i < m->fnv[f]; i++)
           if (pointOf[fv[i]] >= 0) area[pointOf[fv[i]]] += N[i] * dA;
         for (PetscInt j = 0; j < nface; j++)
-          if (MBCCoupleProjectOnFace(c, x, nrm, faces[j], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
+          if (MBCCoupleProjectOnFace(c, x, nrm, faces[j], PETSC_FALSE, &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
             best  = cp;
             bestq = q;
             found = PETSC_TRUE;

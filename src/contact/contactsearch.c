@@ -11,12 +11,13 @@ PetscErrorCode MBCSurfaceReset(MBCSurface *s)
   PetscCall(PetscFree3(s->fnv, s->fnode, s->fbody));
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
+  PetscCall(PetscFree(s->ffree));
   PetscCall(PetscMemzero(s, sizeof(*s)));
   PetscFunctionReturn(0);
 }
 
-/* Face normals (Newell), centres, node -> face map and averaged nodal normals (mean of the
-   unit normals of the faces around the node), from the current coordinates. */
+/* Face normals (Newell), centres, node -> face map, free-boundary edges and averaged nodal
+   normals (mean of the unit normals of the faces around the node), from the current coordinates. */
 PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
 {
   PetscInt *count;
@@ -25,6 +26,7 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree(s->nnormal));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
+  PetscCall(PetscFree(s->ffree));
   PetscCall(PetscCalloc2(3 * s->nfaces, &s->fnormal, 3 * s->nfaces, &s->fcenter));
   PetscCall(PetscCalloc1(3 * s->nnodes, &s->nnormal));
   for (PetscInt f = 0; f < s->nfaces; f++) {
@@ -53,6 +55,20 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
   }
   PetscCall(PetscFree(count));
   for (PetscInt v = 0; v < s->nnodes; v++) MBCNormalize(&s->nnormal[3 * v]);
+  PetscCall(PetscMalloc1(MBC_MAX_FACE_NODES * s->nfaces + 1, &s->ffree));
+  for (PetscInt f = 0; f < s->nfaces; f++) { /* edge (a, b) is free when no other face around a has b */
+    const PetscInt nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
+    for (PetscInt i = 0; i < MBC_MAX_FACE_NODES; i++) {
+      PetscBool shared = PETSC_FALSE;
+      if (i < nv)
+        for (PetscInt k = s->n2foff[fv[i]]; k < s->n2foff[fv[i] + 1] && !shared; k++) {
+          const PetscInt g = s->n2f[k];
+          if (g == f) continue;
+          for (PetscInt j = 0; j < s->fnv[g]; j++) shared = (PetscBool)(shared || s->fnode[MBC_MAX_FACE_NODES * g + j] == fv[(i + 1) % nv]);
+        }
+      s->ffree[MBC_MAX_FACE_NODES * f + i] = (PetscBool)(i < nv && !shared);
+    }
+  }
   PetscFunctionReturn(0);
 }
 
@@ -183,31 +199,43 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
 
 /* Projects the point xm along the unit direction nm (a master node's averaged normal, or its
    interpolation) onto slave face f; returns PETSC_TRUE and the contact point (slave weights,
-   projection, gap, normal) when the face opposes nm and the projection falls inside it. */
-PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, MBCContactPoint *cp, PetscReal *quality)
+   projection, gap, normal) when the face opposes nm and the projection falls inside it: within
+   2e-6 of an edge across an edge shared with another face (that face takes the point), within
+   c->extension of the edge's length beyond an edge on the slave surface's free boundary. Beyond
+   a free edge the weights are those of the point clamped onto the face's boundary (the gap along
+   n_f is the same on a planar face), so a master node above the edge of a slave surface of the
+   same footprint does not drop out of contact when the two bodies' edges move apart by rounding
+   or an unbalanced iterate. quality: the smallest weight inside, the most negative edge distance
+   over the edge length outside, so the face that holds the point wins. With force the inside test
+   is skipped (the caller knows the point lies on f: a segment of the mortar integration). */
+PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, PetscBool force, MBCContactPoint *cp, PetscReal *quality)
 {
   MBCSurface      *s = &c->slave;
   const PetscReal *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
   const PetscInt   nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
   const PetscReal  cosang = MBCDot(nm, nf);
-  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wsum = 0, wmin = PETSC_MAX_REAL;
+  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wsum = 0, wmin = PETSC_MAX_REAL, out = 0;
 
   if (!(cosang < 0)) return PETSC_FALSE; /* the face must face the node */
   MBCSub(cf, xm, e);
   t = MBCDot(e, nf) / cosang;
   for (PetscInt d = 0; d < 3; d++) p[d] = xm[d] + t * nm[d];
-  /* inside/outside: the sub-triangles (p, x_i, x_i+1) all turn like the face */
+  /* inside/outside: the sub-triangles (p, x_i, x_i+1) all turn like the face; sub_i = |e_i| d_i / 2
+     with d_i the signed distance of p to edge i */
   for (PetscInt i = 0; i < nv; i++) {
     const PetscReal *a = &s->x[3 * fv[i]], *b = &s->x[3 * fv[(i + 1) % nv]];
+    const PetscReal  tol = s->ffree && s->ffree[MBC_MAX_FACE_NODES * f + i] ? PetscMax(c->extension, 2e-6) : 2e-6;
     PetscReal        ab[3];
     sub[i] = MBCArea(p, a, b, nf);
     MBCSub(b, a, ab);
-    if (sub[i] < -1e-6 * MBCDot(ab, ab)) return PETSC_FALSE; /* outside by more than 2e-6 of the edge */
+    if (!force && sub[i] < -0.5 * tol * MBCDot(ab, ab)) return PETSC_FALSE;
+    out = PetscMin(out, 2 * sub[i] / MBCDot(ab, ab));
   }
   cp->nv = nv;
-  if (nv == 3) { /* area coordinates */
-    for (PetscInt i = 0; i < 3; i++) area += sub[i];
-    for (PetscInt i = 0; i < 3; i++) cp->w[i] = sub[(i + 1) % 3] / area;
+  if (nv == 3) { /* area coordinates (clamped onto the face outside it) */
+    for (PetscInt i = 0; i < 3; i++) area += PetscMax(sub[i], 0);
+    if (!(area > 0)) return PETSC_FALSE;
+    for (PetscInt i = 0; i < 3; i++) cp->w[i] = PetscMax(sub[(i + 1) % 3], 0) / area;
     cp->w[3] = 0;
   } else { /* Wachspress coordinates from the four sub-areas: bilinear on parallelograms */
     for (PetscInt i = 0; i < 4; i++) {
@@ -226,7 +254,7 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
   }
   MBCSub(xm, p, e);
   cp->gap  = MBCDot(e, nf);
-  *quality = wmin;
+  *quality = out < 0 ? out : wmin;
   return PETSC_TRUE;
 }
 
@@ -268,7 +296,7 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
         c->ntests++;
         /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order
            wins, so rounding does not move the point between faces from one step to the next */
-        if (MBCCoupleProjectOnFace(c, &c->master.x[3 * pair->master], &c->master.nnormal[3 * pair->master], s->n2f[k], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
+        if (MBCCoupleProjectOnFace(c, &c->master.x[3 * pair->master], &c->master.nnormal[3 * pair->master], s->n2f[k], PETSC_FALSE, &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
           best  = cp;
           bestq = q;
           found = PETSC_TRUE;
