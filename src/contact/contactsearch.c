@@ -214,7 +214,7 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
   const PetscReal *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
   const PetscInt   nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
   const PetscReal  cosang = MBCDot(nm, nf);
-  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wsum = 0, wmin = PETSC_MAX_REAL, out = 0;
+  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wmin = PETSC_MAX_REAL, out = 0;
 
   if (!(cosang < 0)) return PETSC_FALSE; /* the face must face the node */
   MBCSub(cf, xm, e);
@@ -237,14 +237,27 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
     if (!(area > 0)) return PETSC_FALSE;
     for (PetscInt i = 0; i < 3; i++) cp->w[i] = PetscMax(sub[(i + 1) % 3], 0) / area;
     cp->w[3] = 0;
-  } else { /* Wachspress coordinates from the four sub-areas: bilinear on parallelograms */
+  } else { /* the face's bilinear shape functions at p (inverse of the bilinear map in the face's
+              plane, Newton from the centre; clamped onto the face outside it): the trace of the
+              slave element, so the slave nodes get consistent loads on any convex quad */
+    PetscReal e1[3], e2[3], Y[4][2], y[2], u, v, a;
+    MBCSub(&s->x[3 * fv[1]], &s->x[3 * fv[0]], e1);
+    a = MBCDot(e1, nf);
+    for (PetscInt d = 0; d < 3; d++) e1[d] -= a * nf[d];
+    MBCNormalize(e1);
+    MBCCross(nf, e1, e2);
     for (PetscInt i = 0; i < 4; i++) {
-      const PetscReal Ci = MBCArea(&s->x[3 * fv[(i + 3) % 4]], &s->x[3 * fv[i]], &s->x[3 * fv[(i + 1) % 4]], nf);
-      cp->w[i]           = Ci * PetscMax(sub[(i + 1) % 4], 0) * PetscMax(sub[(i + 2) % 4], 0);
-      wsum += cp->w[i];
+      MBCSub(&s->x[3 * fv[i]], cf, e);
+      Y[i][0] = MBCDot(e, e1);
+      Y[i][1] = MBCDot(e, e2);
     }
-    if (!(wsum > 0)) return PETSC_FALSE;
-    for (PetscInt i = 0; i < 4; i++) cp->w[i] /= wsum;
+    MBCSub(p, cf, e);
+    y[0] = MBCDot(e, e1);
+    y[1] = MBCDot(e, e2);
+    if (!MBCBilinearInverse(Y, y, &u, &v)) return PETSC_FALSE;
+    u        = PetscMin(PetscMax(u, 0), 1);
+    v        = PetscMin(PetscMax(v, 0), 1);
+    cp->w[0] = (1 - u) * (1 - v), cp->w[1] = u * (1 - v), cp->w[2] = u * v, cp->w[3] = (1 - u) * v;
   }
   for (PetscInt i = 0; i < nv; i++) wmin = PetscMin(wmin, cp->w[i]);
   cp->face = f;
@@ -256,6 +269,31 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
   cp->gap  = MBCDot(e, nf);
   *quality = out < 0 ? out : wmin;
   return PETSC_TRUE;
+}
+
+/* (u, v) in [0,1]^2 of the bilinear map of the plane quad Y (vertices counter-clockwise) with image y:
+   Newton from the centre, exact in one step on parallelograms. */
+PetscBool MBCBilinearInverse(const PetscReal Y[][2], const PetscReal y[], PetscReal *u, PetscReal *v)
+{
+  *u = 0.5, *v = 0.5;
+  for (PetscInt it = 0; it < 30; it++) {
+    const PetscReal U = *u, V = *v, N[4] = {(1 - U) * (1 - V), U * (1 - V), U * V, (1 - U) * V}, dNu[4] = {-(1 - V), 1 - V, V, -V}, dNv[4] = {-(1 - U), -U, U, 1 - U};
+    PetscReal       r[2] = {-y[0], -y[1]}, J[2][2] = {{0, 0}, {0, 0}}, det, du, dv;
+    for (PetscInt i = 0; i < 4; i++)
+      for (PetscInt d = 0; d < 2; d++) {
+        r[d] += N[i] * Y[i][d];
+        J[d][0] += dNu[i] * Y[i][d];
+        J[d][1] += dNv[i] * Y[i][d];
+      }
+    det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    if (!(PetscAbsReal(det) > 0)) return PETSC_FALSE;
+    du = (J[1][1] * r[0] - J[0][1] * r[1]) / det;
+    dv = (J[0][0] * r[1] - J[1][0] * r[0]) / det;
+    *u -= du;
+    *v -= dv;
+    if (PetscAbsReal(du) + PetscAbsReal(dv) < 1e-13) return PETSC_TRUE;
+  }
+  return PETSC_FALSE;
 }
 
 /* Tangents: t1 = e x n with e the axis least aligned with n, t2 = n x t1. */

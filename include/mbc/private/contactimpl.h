@@ -83,6 +83,7 @@ PETSC_EXTERN PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *, PetscReal, PetscR
 PETSC_EXTERN PetscErrorCode MBCCoupleLocalSearch(MBCCouple *);
 PETSC_EXTERN PetscErrorCode MBCCoupleIntegrate(MBCCouple *, PetscBool, PetscInt);
 PETSC_EXTERN PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *);
+PETSC_INTERN PetscBool      MBCBilinearInverse(const PetscReal[][2], const PetscReal[], PetscReal *, PetscReal *);
 PETSC_INTERN PetscBool      MBCCoupleProjectOnFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, PetscBool, MBCContactPoint *, PetscReal *);
 
 static inline void MBCSub(const PetscReal a[], const PetscReal b[], PetscReal c[])
