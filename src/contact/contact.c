@@ -310,6 +310,30 @@ static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodi
   PetscFunctionReturn(0);
 }
 
+/* -mbc_contact_check_search: the search's pairs and the integration's slave faces against brute force. */
+static PetscErrorCode ContactCheck(MBCContact c, MBCCouple *cp)
+{
+  PetscInt  v, f, k;
+  PetscReal gap, a, b;
+
+  PetscFunctionBegin;
+  PetscCall(MBCCoupleCheckSearch(cp, &v, &f, &gap));
+  if (v >= 0) {
+    const PetscReal *x = &cp->master.x[3 * v];
+    PetscInt         at = -1;
+    for (PetscInt j = 0; j < cp->npoints; j++)
+      if (cp->points[j].master == v) at = cp->points[j].face;
+    SETERRQ(c->comm, PETSC_ERR_PLIB, "-mbc_contact_check_search, couple k = %" PetscInt_FMT ": master node (%g, %g, %g) of body '%s' projects onto slave face %" PetscInt_FMT " of body '%s' (centre (%g, %g, %g), gap %g) by brute force, but the search paired it with %s%s", cp->k, (double)x[0], (double)x[1], (double)x[2], c->scene->bodies[cp->master.nbody[v]].name, f, c->scene->bodies[cp->slave.fbody[f]].name, (double)cp->slave.fcenter[3 * f], (double)cp->slave.fcenter[3 * f + 1], (double)cp->slave.fcenter[3 * f + 2], (double)gap, at < 0 ? "no face" : "a worse face", "");
+  }
+  if (!c->integrate) PetscFunctionReturn(0);
+  PetscCall(MBCCoupleCheckIntegrate(cp, c->nquad, &k, &a, &b));
+  if (k >= 0) {
+    const PetscReal *x = &cp->master.x[3 * cp->points[k].master];
+    SETERRQ(c->comm, PETSC_ERR_PLIB, "-mbc_contact_check_search, couple k = %" PetscInt_FMT ": the integrated constraint of master node (%g, %g, %g) of body '%s' covers %.12g of its share, %.12g with every slave face: the integration missed slave faces", cp->k, (double)x[0], (double)x[1], (double)x[2], c->scene->bodies[cp->master.nbody[cp->points[k].master]].name, (double)a, (double)b);
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Gathers the couples' surfaces at the current displacements; a global search runs when asked,
    the first time, or when a body moved more than half the margin since the last one; the local
    search runs every time. */
@@ -343,6 +367,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
+    if (c->check) PetscCall(ContactCheck(c, cp));
   }
   PetscCall(PetscFree(rec));
   if (global) {

@@ -437,3 +437,29 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   PetscCall(PetscFree4(area, covered, gsum, nsum));
   PetscFunctionReturn(0);
 }
+
+/* -mbc_contact_check_search: the integration again over every slave face; *missed is the first
+   point whose covered share differs from the flood's by more than 1e-9 of its share (-1 if none). */
+PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *c, PetscInt nq, PetscInt *missed, PetscReal *flood, PetscReal *brute)
+{
+  PetscReal *area, *covered, *nsum, *gsum, *area2, *covered2, *nsum2, *gsum2;
+  EntryList  sl = {NULL, 0, 0}, sl2 = {NULL, 0, 0};
+
+  PetscFunctionBegin;
+  *missed = -1;
+  PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
+  PetscCall(PetscCalloc4(c->npoints + 1, &area2, c->npoints + 1, &covered2, c->npoints + 1, &gsum2, c->npoints + 1, &nsum2));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_TRUE, area2, covered2, gsum2, nsum2, &sl2));
+  for (PetscInt k = 0; k < c->npoints && *missed < 0; k++)
+    if (PetscAbsReal(covered[k] - covered2[k]) > 1e-9 * area[k]) {
+      *missed = k;
+      *flood  = covered[k] / area[k];
+      *brute  = covered2[k] / area[k];
+    }
+  PetscCall(PetscFree(sl.e));
+  PetscCall(PetscFree(sl2.e));
+  PetscCall(PetscFree4(area, covered, gsum, nsum));
+  PetscCall(PetscFree4(area2, covered2, gsum2, nsum2));
+  PetscFunctionReturn(0);
+}

@@ -315,37 +315,116 @@ static void Frame(MBCContactPoint *cp)
 PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
 {
   MBCSurface *s = &c->slave;
+  PetscInt   *mark, *queue;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_LocalSearch, 0, 0, 0, 0));
   PetscCall(PetscFree(c->points));
   PetscCall(PetscMalloc1(c->npairs, &c->points));
+  PetscCall(PetscMalloc2(s->nfaces + 1, &mark, s->nfaces + 1, &queue));
+  for (PetscInt f = 0; f < s->nfaces; f++) mark[f] = -1;
   c->npoints = 0;
   c->ntests  = 0;
   for (PetscInt i = 0; i < c->npairs; i++) {
     const MBCTestPair *pair = &c->pairs[i];
+    const PetscReal   *xm = &c->master.x[3 * pair->master], *nm = &c->master.nnormal[3 * pair->master];
     MBCContactPoint    best, cp;
     PetscReal          bestq = -PETSC_MAX_REAL, q;
     PetscBool          found = PETSC_FALSE;
+    PetscInt           nq = 0;
 
+#define TRY(g) \
+  do { \
+    c->ntests++; \
+    /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order \
+       wins, so rounding does not move the point between faces from one step to the next */ \
+    if (MBCCoupleProjectOnFace(c, xm, nm, (g), PETSC_FALSE, &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) { \
+      best  = cp; \
+      bestq = q; \
+      found = PETSC_TRUE; \
+    } \
+  } while (0)
     for (PetscInt j = 0; j < pair->ncand && !found; j++) {
       const PetscInt node = pair->cand[j];
       for (PetscInt k = s->n2foff[node]; k < s->n2foff[node + 1]; k++) {
-        c->ntests++;
-        /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order
-           wins, so rounding does not move the point between faces from one step to the next */
-        if (MBCCoupleProjectOnFace(c, &c->master.x[3 * pair->master], &c->master.nnormal[3 * pair->master], s->n2f[k], PETSC_FALSE, &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
-          best  = cp;
-          bestq = q;
-          found = PETSC_TRUE;
-        }
+        if (mark[s->n2f[k]] == i) continue;
+        mark[s->n2f[k]] = i;
+        queue[nq++]     = s->n2f[k];
+        TRY(s->n2f[k]);
       }
     }
+    /* none accepts (the nearest slave nodes are not vertices of the face under the node: a curved
+       or fine slave surface): walk from those faces over their vertex neighbours within 2h of the
+       node until one accepts, then try the faces around that one (ties) */
+    for (PetscInt at = 0; at < nq && !found; at++) {
+      const PetscInt g = queue[at];
+      for (PetscInt l = 0; l < s->fnv[g] && !found; l++) {
+        const PetscInt v = s->fnode[MBC_MAX_FACE_NODES * g + l];
+        for (PetscInt k = s->n2foff[v]; k < s->n2foff[v + 1]; k++) {
+          const PetscInt h = s->n2f[k];
+          PetscReal      e[3];
+          if (mark[h] == i) continue;
+          mark[h] = i;
+          MBCSub(&s->fcenter[3 * h], xm, e);
+          if (MBCDot(e, e) > 4 * c->h * c->h) continue;
+          queue[nq++] = h;
+          TRY(h);
+        }
+      }
+      if (found)
+        for (PetscInt l = 0; l < best.nv; l++) {
+          const PetscInt v = s->fnode[MBC_MAX_FACE_NODES * best.face + l];
+          for (PetscInt k = s->n2foff[v]; k < s->n2foff[v + 1]; k++)
+            if (mark[s->n2f[k]] != i) {
+              mark[s->n2f[k]] = i;
+              TRY(s->n2f[k]);
+            }
+        }
+    }
+#undef TRY
     if (!found || best.gap < -c->h) continue;
     best.master = pair->master;
     Frame(&best);
     c->points[c->npoints++] = best;
   }
+  PetscCall(PetscFree2(mark, queue));
   PetscCall(PetscLogEventEnd(MBC_LocalSearch, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* -mbc_contact_check_search: every master node against every slave face, with the local search's
+   acceptance and tie rules; *missed is the first master node whose brute-force pair (a face at
+   |gap| <= 0.7 h, so that one of its vertices lies within h of the node and the search could see
+   it) the search missed or paired with a worse face, -1 if none; *face its brute-force face. */
+PetscErrorCode MBCCoupleCheckSearch(MBCCouple *c, PetscInt *missed, PetscInt *face, PetscReal *gap)
+{
+  MBCSurface *m = &c->master, *s = &c->slave;
+  PetscInt   *pointOf;
+
+  PetscFunctionBegin;
+  *missed = -1;
+  PetscCall(PetscMalloc1(m->nnodes, &pointOf));
+  for (PetscInt v = 0; v < m->nnodes; v++) pointOf[v] = -1;
+  for (PetscInt k = 0; k < c->npoints; k++) pointOf[c->points[k].master] = k;
+  for (PetscInt v = 0; v < m->nnodes && *missed < 0; v++) {
+    MBCContactPoint best, cp;
+    PetscReal       bestq = -PETSC_MAX_REAL, q, qs = -PETSC_MAX_REAL;
+    PetscBool       found = PETSC_FALSE;
+    best.face = -1;
+    for (PetscInt f = 0; f < s->nfaces; f++)
+      if (MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], f, PETSC_FALSE, &cp, &q) && PetscAbsReal(cp.gap) <= 0.7 * c->h && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
+        best  = cp;
+        bestq = q;
+        found = PETSC_TRUE;
+      }
+    if (!found) continue;
+    if (pointOf[v] >= 0) (void)MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], c->points[pointOf[v]].face, PETSC_FALSE, &cp, &qs);
+    if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9)) {
+      *missed = v;
+      *face   = best.face;
+      *gap    = best.gap;
+    }
+  }
+  PetscCall(PetscFree(pointOf));
   PetscFunctionReturn(0);
 }
