@@ -14,6 +14,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->comm        = comm;
   c->scene       = scene;
   c->cell_factor = 1.0;
+  c->extension   = 0.1;
   c->integrate   = PETSC_TRUE;
   c->nquad       = 4;
   c->ncouples    = scene->ncouples;
@@ -33,6 +34,8 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c)
   PetscOptionsBegin(c->comm, NULL, "mbcontact contact search options", "MBCContact");
   PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
+  PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_check_search", "After every search, pair every master node with every slave face by brute force and stop at a pair the search missed (debug)", "MBCContactSetFromOptions", c->check, &c->check, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
@@ -40,6 +43,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c)
   PetscOptionsEnd();
   PetscCheck(c->nquad >= 1 && c->nquad <= 16, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_quadrature %" PetscInt_FMT " must lie in [1, 16]", c->nquad);
   PetscCheck(c->cell_factor > 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_cell_factor %g must be positive", (double)c->cell_factor);
+  PetscCheck(c->extension >= 0 && c->extension <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_extension %g must lie in [0, 0.5]", (double)c->extension);
   PetscCheck(c->margin >= 0, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_margin %g must not be negative", (double)c->margin);
   PetscFunctionReturn(0);
 }
@@ -306,6 +310,30 @@ static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodi
   PetscFunctionReturn(0);
 }
 
+/* -mbc_contact_check_search: the search's pairs and the integration's slave faces against brute force. */
+static PetscErrorCode ContactCheck(MBCContact c, MBCCouple *cp)
+{
+  PetscInt  v, f, k;
+  PetscReal gap, a, b;
+
+  PetscFunctionBegin;
+  PetscCall(MBCCoupleCheckSearch(cp, &v, &f, &gap));
+  if (v >= 0) {
+    const PetscReal *x = &cp->master.x[3 * v];
+    PetscInt         at = -1;
+    for (PetscInt j = 0; j < cp->npoints; j++)
+      if (cp->points[j].master == v) at = cp->points[j].face;
+    SETERRQ(c->comm, PETSC_ERR_PLIB, "-mbc_contact_check_search, couple k = %" PetscInt_FMT ": master node (%g, %g, %g) of body '%s' projects onto slave face %" PetscInt_FMT " of body '%s' (centre (%g, %g, %g), gap %g) by brute force, but the search paired it with %s%s", cp->k, (double)x[0], (double)x[1], (double)x[2], c->scene->bodies[cp->master.nbody[v]].name, f, c->scene->bodies[cp->slave.fbody[f]].name, (double)cp->slave.fcenter[3 * f], (double)cp->slave.fcenter[3 * f + 1], (double)cp->slave.fcenter[3 * f + 2], (double)gap, at < 0 ? "no face" : "a worse face", "");
+  }
+  if (!c->integrate) PetscFunctionReturn(0);
+  PetscCall(MBCCoupleCheckIntegrate(cp, c->nquad, &k, &a, &b));
+  if (k >= 0) {
+    const PetscReal *x = &cp->master.x[3 * cp->points[k].master];
+    SETERRQ(c->comm, PETSC_ERR_PLIB, "-mbc_contact_check_search, couple k = %" PetscInt_FMT ": the integrated constraint of master node (%g, %g, %g) of body '%s' covers %.12g of its share, %.12g with every slave face: the integration missed slave faces", cp->k, (double)x[0], (double)x[1], (double)x[2], c->scene->bodies[cp->master.nbody[cp->points[k].master]].name, (double)a, (double)b);
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Gathers the couples' surfaces at the current displacements; a global search runs when asked,
    the first time, or when a body moved more than half the margin since the last one; the local
    search runs every time. */
@@ -335,9 +363,11 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCall(SurfaceFromRecords(&cp->master, rec, nrec, i, 0));
     PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
     PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
+    cp->extension = c->extension;
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
+    if (c->check) PetscCall(ContactCheck(c, cp));
   }
   PetscCall(PetscFree(rec));
   if (global) {

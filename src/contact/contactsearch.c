@@ -11,12 +11,13 @@ PetscErrorCode MBCSurfaceReset(MBCSurface *s)
   PetscCall(PetscFree3(s->fnv, s->fnode, s->fbody));
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
+  PetscCall(PetscFree(s->ffree));
   PetscCall(PetscMemzero(s, sizeof(*s)));
   PetscFunctionReturn(0);
 }
 
-/* Face normals (Newell), centres, node -> face map and averaged nodal normals (mean of the
-   unit normals of the faces around the node), from the current coordinates. */
+/* Face normals (Newell), centres, node -> face map, free-boundary edges and averaged nodal
+   normals (mean of the unit normals of the faces around the node), from the current coordinates. */
 PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
 {
   PetscInt *count;
@@ -25,6 +26,7 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree(s->nnormal));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
+  PetscCall(PetscFree(s->ffree));
   PetscCall(PetscCalloc2(3 * s->nfaces, &s->fnormal, 3 * s->nfaces, &s->fcenter));
   PetscCall(PetscCalloc1(3 * s->nnodes, &s->nnormal));
   for (PetscInt f = 0; f < s->nfaces; f++) {
@@ -53,6 +55,20 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
   }
   PetscCall(PetscFree(count));
   for (PetscInt v = 0; v < s->nnodes; v++) MBCNormalize(&s->nnormal[3 * v]);
+  PetscCall(PetscMalloc1(MBC_MAX_FACE_NODES * s->nfaces + 1, &s->ffree));
+  for (PetscInt f = 0; f < s->nfaces; f++) { /* edge (a, b) is free when no other face around a has b */
+    const PetscInt nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
+    for (PetscInt i = 0; i < MBC_MAX_FACE_NODES; i++) {
+      PetscBool shared = PETSC_FALSE;
+      if (i < nv)
+        for (PetscInt k = s->n2foff[fv[i]]; k < s->n2foff[fv[i] + 1] && !shared; k++) {
+          const PetscInt g = s->n2f[k];
+          if (g == f) continue;
+          for (PetscInt j = 0; j < s->fnv[g]; j++) shared = (PetscBool)(shared || s->fnode[MBC_MAX_FACE_NODES * g + j] == fv[(i + 1) % nv]);
+        }
+      s->ffree[MBC_MAX_FACE_NODES * f + i] = (PetscBool)(i < nv && !shared);
+    }
+  }
   PetscFunctionReturn(0);
 }
 
@@ -183,40 +199,65 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
 
 /* Projects the point xm along the unit direction nm (a master node's averaged normal, or its
    interpolation) onto slave face f; returns PETSC_TRUE and the contact point (slave weights,
-   projection, gap, normal) when the face opposes nm and the projection falls inside it. */
-PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, MBCContactPoint *cp, PetscReal *quality)
+   projection, gap, normal) when the face opposes nm and the projection falls inside it: within
+   2e-6 of an edge across an edge shared with another face (that face takes the point), within
+   c->extension of the edge's length beyond an edge on the slave surface's free boundary. Beyond
+   a free edge the weights are those of the point clamped onto the face's boundary (the gap along
+   n_f is the same on a planar face), so a master node above the edge of a slave surface of the
+   same footprint does not drop out of contact when the two bodies' edges move apart by rounding
+   or an unbalanced iterate. quality: the smallest weight inside, the most negative edge distance
+   over the edge length outside, so the face that holds the point wins. With force the inside test
+   is skipped (the caller knows the point lies on f: a segment of the mortar integration). */
+PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, PetscBool force, MBCContactPoint *cp, PetscReal *quality)
 {
   MBCSurface      *s = &c->slave;
   const PetscReal *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
   const PetscInt   nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
   const PetscReal  cosang = MBCDot(nm, nf);
-  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wsum = 0, wmin = PETSC_MAX_REAL;
+  PetscReal        e[3], t, p[3], sub[MBC_MAX_FACE_NODES], area = 0, wmin = PETSC_MAX_REAL, out = 0;
 
   if (!(cosang < 0)) return PETSC_FALSE; /* the face must face the node */
   MBCSub(cf, xm, e);
   t = MBCDot(e, nf) / cosang;
   for (PetscInt d = 0; d < 3; d++) p[d] = xm[d] + t * nm[d];
-  /* inside/outside: the sub-triangles (p, x_i, x_i+1) all turn like the face */
+  /* inside/outside: the sub-triangles (p, x_i, x_i+1) all turn like the face; sub_i = |e_i| d_i / 2
+     with d_i the signed distance of p to edge i */
   for (PetscInt i = 0; i < nv; i++) {
     const PetscReal *a = &s->x[3 * fv[i]], *b = &s->x[3 * fv[(i + 1) % nv]];
+    const PetscReal  tol = s->ffree && s->ffree[MBC_MAX_FACE_NODES * f + i] ? PetscMax(c->extension, 2e-6) : 2e-6;
     PetscReal        ab[3];
     sub[i] = MBCArea(p, a, b, nf);
     MBCSub(b, a, ab);
-    if (sub[i] < -1e-6 * MBCDot(ab, ab)) return PETSC_FALSE; /* outside by more than 2e-6 of the edge */
+    if (!force && sub[i] < -0.5 * tol * MBCDot(ab, ab)) return PETSC_FALSE;
+    out = PetscMin(out, 2 * sub[i] / MBCDot(ab, ab));
   }
   cp->nv = nv;
-  if (nv == 3) { /* area coordinates */
-    for (PetscInt i = 0; i < 3; i++) area += sub[i];
-    for (PetscInt i = 0; i < 3; i++) cp->w[i] = sub[(i + 1) % 3] / area;
+  if (nv == 3) { /* area coordinates (clamped onto the face outside it) */
+    for (PetscInt i = 0; i < 3; i++) area += PetscMax(sub[i], 0);
+    if (!(area > 0)) return PETSC_FALSE;
+    for (PetscInt i = 0; i < 3; i++) cp->w[i] = PetscMax(sub[(i + 1) % 3], 0) / area;
     cp->w[3] = 0;
-  } else { /* Wachspress coordinates from the four sub-areas: bilinear on parallelograms */
+  } else { /* the face's bilinear shape functions at p (inverse of the bilinear map in the face's
+              plane, Newton from the centre; clamped onto the face outside it): the trace of the
+              slave element, so the slave nodes get consistent loads on any convex quad */
+    PetscReal e1[3], e2[3], Y[4][2], y[2], u, v, a;
+    MBCSub(&s->x[3 * fv[1]], &s->x[3 * fv[0]], e1);
+    a = MBCDot(e1, nf);
+    for (PetscInt d = 0; d < 3; d++) e1[d] -= a * nf[d];
+    MBCNormalize(e1);
+    MBCCross(nf, e1, e2);
     for (PetscInt i = 0; i < 4; i++) {
-      const PetscReal Ci = MBCArea(&s->x[3 * fv[(i + 3) % 4]], &s->x[3 * fv[i]], &s->x[3 * fv[(i + 1) % 4]], nf);
-      cp->w[i]           = Ci * PetscMax(sub[(i + 1) % 4], 0) * PetscMax(sub[(i + 2) % 4], 0);
-      wsum += cp->w[i];
+      MBCSub(&s->x[3 * fv[i]], cf, e);
+      Y[i][0] = MBCDot(e, e1);
+      Y[i][1] = MBCDot(e, e2);
     }
-    if (!(wsum > 0)) return PETSC_FALSE;
-    for (PetscInt i = 0; i < 4; i++) cp->w[i] /= wsum;
+    MBCSub(p, cf, e);
+    y[0] = MBCDot(e, e1);
+    y[1] = MBCDot(e, e2);
+    if (!MBCBilinearInverse(Y, y, &u, &v)) return PETSC_FALSE;
+    u        = PetscMin(PetscMax(u, 0), 1);
+    v        = PetscMin(PetscMax(v, 0), 1);
+    cp->w[0] = (1 - u) * (1 - v), cp->w[1] = u * (1 - v), cp->w[2] = u * v, cp->w[3] = (1 - u) * v;
   }
   for (PetscInt i = 0; i < nv; i++) wmin = PetscMin(wmin, cp->w[i]);
   cp->face = f;
@@ -226,8 +267,33 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
   }
   MBCSub(xm, p, e);
   cp->gap  = MBCDot(e, nf);
-  *quality = wmin;
+  *quality = out < 0 ? out : wmin;
   return PETSC_TRUE;
+}
+
+/* (u, v) in [0,1]^2 of the bilinear map of the plane quad Y (vertices counter-clockwise) with image y:
+   Newton from the centre, exact in one step on parallelograms. */
+PetscBool MBCBilinearInverse(const PetscReal Y[][2], const PetscReal y[], PetscReal *u, PetscReal *v)
+{
+  *u = 0.5, *v = 0.5;
+  for (PetscInt it = 0; it < 30; it++) {
+    const PetscReal U = *u, V = *v, N[4] = {(1 - U) * (1 - V), U * (1 - V), U * V, (1 - U) * V}, dNu[4] = {-(1 - V), 1 - V, V, -V}, dNv[4] = {-(1 - U), -U, U, 1 - U};
+    PetscReal       r[2] = {-y[0], -y[1]}, J[2][2] = {{0, 0}, {0, 0}}, det, du, dv;
+    for (PetscInt i = 0; i < 4; i++)
+      for (PetscInt d = 0; d < 2; d++) {
+        r[d] += N[i] * Y[i][d];
+        J[d][0] += dNu[i] * Y[i][d];
+        J[d][1] += dNv[i] * Y[i][d];
+      }
+    det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    if (!(PetscAbsReal(det) > 0)) return PETSC_FALSE;
+    du = (J[1][1] * r[0] - J[0][1] * r[1]) / det;
+    dv = (J[0][0] * r[1] - J[1][0] * r[0]) / det;
+    *u -= du;
+    *v -= dv;
+    if (PetscAbsReal(du) + PetscAbsReal(dv) < 1e-13) return PETSC_TRUE;
+  }
+  return PETSC_FALSE;
 }
 
 /* Tangents: t1 = e x n with e the axis least aligned with n, t2 = n x t1. */
@@ -249,37 +315,116 @@ static void Frame(MBCContactPoint *cp)
 PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
 {
   MBCSurface *s = &c->slave;
+  PetscInt   *mark, *queue;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_LocalSearch, 0, 0, 0, 0));
   PetscCall(PetscFree(c->points));
   PetscCall(PetscMalloc1(c->npairs, &c->points));
+  PetscCall(PetscMalloc2(s->nfaces + 1, &mark, s->nfaces + 1, &queue));
+  for (PetscInt f = 0; f < s->nfaces; f++) mark[f] = -1;
   c->npoints = 0;
   c->ntests  = 0;
   for (PetscInt i = 0; i < c->npairs; i++) {
     const MBCTestPair *pair = &c->pairs[i];
+    const PetscReal   *xm = &c->master.x[3 * pair->master], *nm = &c->master.nnormal[3 * pair->master];
     MBCContactPoint    best, cp;
     PetscReal          bestq = -PETSC_MAX_REAL, q;
     PetscBool          found = PETSC_FALSE;
+    PetscInt           nq = 0;
 
+#define TRY(g) \
+  do { \
+    c->ntests++; \
+    /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order \
+       wins, so rounding does not move the point between faces from one step to the next */ \
+    if (MBCCoupleProjectOnFace(c, xm, nm, (g), PETSC_FALSE, &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) { \
+      best  = cp; \
+      bestq = q; \
+      found = PETSC_TRUE; \
+    } \
+  } while (0)
     for (PetscInt j = 0; j < pair->ncand && !found; j++) {
       const PetscInt node = pair->cand[j];
       for (PetscInt k = s->n2foff[node]; k < s->n2foff[node + 1]; k++) {
-        c->ntests++;
-        /* weights within 1e-9 tie (a point on a shared edge): the first face in canonical order
-           wins, so rounding does not move the point between faces from one step to the next */
-        if (MBCCoupleProjectOnFace(c, &c->master.x[3 * pair->master], &c->master.nnormal[3 * pair->master], s->n2f[k], &cp, &q) && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
-          best  = cp;
-          bestq = q;
-          found = PETSC_TRUE;
-        }
+        if (mark[s->n2f[k]] == i) continue;
+        mark[s->n2f[k]] = i;
+        queue[nq++]     = s->n2f[k];
+        TRY(s->n2f[k]);
       }
     }
+    /* none accepts (the nearest slave nodes are not vertices of the face under the node: a curved
+       or fine slave surface): walk from those faces over their vertex neighbours within 2h of the
+       node until one accepts, then try the faces around that one (ties) */
+    for (PetscInt at = 0; at < nq && !found; at++) {
+      const PetscInt g = queue[at];
+      for (PetscInt l = 0; l < s->fnv[g] && !found; l++) {
+        const PetscInt v = s->fnode[MBC_MAX_FACE_NODES * g + l];
+        for (PetscInt k = s->n2foff[v]; k < s->n2foff[v + 1]; k++) {
+          const PetscInt h = s->n2f[k];
+          PetscReal      e[3];
+          if (mark[h] == i) continue;
+          mark[h] = i;
+          MBCSub(&s->fcenter[3 * h], xm, e);
+          if (MBCDot(e, e) > 4 * c->h * c->h) continue;
+          queue[nq++] = h;
+          TRY(h);
+        }
+      }
+      if (found)
+        for (PetscInt l = 0; l < best.nv; l++) {
+          const PetscInt v = s->fnode[MBC_MAX_FACE_NODES * best.face + l];
+          for (PetscInt k = s->n2foff[v]; k < s->n2foff[v + 1]; k++)
+            if (mark[s->n2f[k]] != i) {
+              mark[s->n2f[k]] = i;
+              TRY(s->n2f[k]);
+            }
+        }
+    }
+#undef TRY
     if (!found || best.gap < -c->h) continue;
     best.master = pair->master;
     Frame(&best);
     c->points[c->npoints++] = best;
   }
+  PetscCall(PetscFree2(mark, queue));
   PetscCall(PetscLogEventEnd(MBC_LocalSearch, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* -mbc_contact_check_search: every master node against every slave face, with the local search's
+   acceptance and tie rules; *missed is the first master node whose brute-force pair (a face at
+   |gap| <= 0.7 h, so that one of its vertices lies within h of the node and the search could see
+   it) the search missed or paired with a worse face, -1 if none; *face its brute-force face. */
+PetscErrorCode MBCCoupleCheckSearch(MBCCouple *c, PetscInt *missed, PetscInt *face, PetscReal *gap)
+{
+  MBCSurface *m = &c->master, *s = &c->slave;
+  PetscInt   *pointOf;
+
+  PetscFunctionBegin;
+  *missed = -1;
+  PetscCall(PetscMalloc1(m->nnodes, &pointOf));
+  for (PetscInt v = 0; v < m->nnodes; v++) pointOf[v] = -1;
+  for (PetscInt k = 0; k < c->npoints; k++) pointOf[c->points[k].master] = k;
+  for (PetscInt v = 0; v < m->nnodes && *missed < 0; v++) {
+    MBCContactPoint best, cp;
+    PetscReal       bestq = -PETSC_MAX_REAL, q, qs = -PETSC_MAX_REAL;
+    PetscBool       found = PETSC_FALSE;
+    best.face = -1;
+    for (PetscInt f = 0; f < s->nfaces; f++)
+      if (MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], f, PETSC_FALSE, &cp, &q) && PetscAbsReal(cp.gap) <= 0.7 * c->h && (q > bestq + 1e-9 || (q >= bestq - 1e-9 && cp.face < best.face))) {
+        best  = cp;
+        bestq = q;
+        found = PETSC_TRUE;
+      }
+    if (!found) continue;
+    if (pointOf[v] >= 0) (void)MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], c->points[pointOf[v]].face, PETSC_FALSE, &cp, &qs);
+    if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9)) {
+      *missed = v;
+      *face   = best.face;
+      *gap    = best.gap;
+    }
+  }
+  PetscCall(PetscFree(pointOf));
   PetscFunctionReturn(0);
 }

@@ -45,10 +45,14 @@ def couple_scene(mesh, bodies, master, slave, k=1):
 
 
 def search(folder, scene, *options, nproc=1, tag="dump"):
-    """prep + one search-only run; returns (pairs, points, stdout, couple seen by the solver)."""
+    """prep + one search-only run; returns (pairs, points, stdout, couple seen by the solver).
+    The geometry checked here is the search's without the extension beyond the slave surface's
+    free boundary (the static patch tests cover that); the solver's brute-force cross-check
+    (-mbc_contact_check_search) runs on every geometry too."""
     h5 = prep(folder, scene)
     prefix = str(folder / tag)
-    r = solve(h5, "-mbc_contact_search_only", "-mbc_contact_dump", prefix, *options, nproc=nproc)
+    r = solve(h5, "-mbc_contact_search_only", "-mbc_contact_dump", prefix, "-mbc_contact_extension", "0",
+              "-mbc_contact_check_search", *options, nproc=nproc)
     pairs, points = read_csv(prefix + "_pairs.csv"), read_csv(prefix + "_points.csv")
     return pairs, points, r.stdout, Couple(folder / "scene.yaml", scene["couples"][0]["k"])
 
@@ -177,19 +181,29 @@ def assert_canonical(body, xyz):
 
 
 def wachspress(xyz, p, n):
-    """Reference weights: area coordinates (tri3), Wachspress (quad4); signed areas against n."""
+    """Reference weights: area coordinates (tri3); quad4: the bilinear shape functions at the
+    (u, v) whose bilinear image is p in the face's plane (the slave element's trace), found here
+    by scipy's root finder independently of the solver's Newton."""
+    from scipy.optimize import fsolve
     nv = len(xyz)
-
-    def area(a, b, c):
-        return 0.5 * np.dot(np.cross(b - a, c - a), n)
-
     if nv == 3:
+        def area(a, b, c):
+            return 0.5 * np.dot(np.cross(b - a, c - a), n)
         w = np.array([area(p, xyz[(i + 1) % 3], xyz[(i + 2) % 3]) for i in range(3)])
-    else:
-        delta = [area(p, xyz[i], xyz[(i + 1) % 4]) for i in range(4)]
-        c = [area(xyz[i - 1], xyz[i], xyz[(i + 1) % 4]) for i in range(4)]
-        w = np.array([c[i] * delta[(i + 1) % 4] * delta[(i + 2) % 4] for i in range(4)])
-    return w / w.sum()
+        return w / w.sum()
+    e1 = xyz[1] - xyz[0]
+    e1 = e1 - np.dot(e1, n) * n
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    Y = np.array([[np.dot(x, e1), np.dot(x, e2)] for x in xyz])
+    y = np.array([np.dot(p, e1), np.dot(p, e2)])
+
+    def shape(uv):
+        u, v = uv
+        return np.array([(1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v])
+
+    uv = fsolve(lambda uv: shape(uv) @ Y - y, [0.5, 0.5], xtol=1e-14)
+    return shape(uv)
 
 
 def check_points(couple, points):

@@ -19,6 +19,7 @@ typedef struct {
   PetscReal *fnormal;       /* per face: unit outward normal (Newell: area-weighted, warped quads too) */
   PetscReal *fcenter;
   PetscInt  *n2foff, *n2f;  /* node -> faces (CSR) */
+  PetscBool *ffree;         /* per face edge i (vertex i to i+1): on the surface's free boundary (no other face shares it) */
 } MBCSurface;
 
 typedef struct {
@@ -38,6 +39,7 @@ typedef struct {
   PetscReal  mu;
   MBCSurface master, slave;
   PetscReal  h, margin, lo[3];
+  PetscReal  extension;     /* slave faces reach this fraction of their edge beyond the slave surface's free boundary */
   PetscInt   npairs, ntests;
   MBCTestPair *pairs;
   PetscInt   npoints;
@@ -55,6 +57,8 @@ struct _n_MBCContact {
   PetscInt   ncouples;
   MBCCouple *couples;
   PetscReal  cell_factor, margin;   /* margin <= 0: one cell edge */
+  PetscReal  extension;     /* -mbc_contact_extension */
+  PetscBool  check;         /* -mbc_contact_check_search: brute-force cross-check of every search */
   PetscBool  integrate;     /* constraints averaged over each master node's share of the surface (else at the node) */
   PetscInt   nquad;         /* Gauss points per direction on a master face */
   PetscBool  view;
@@ -79,7 +83,10 @@ PETSC_EXTERN PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *, PetscReal, PetscR
 PETSC_EXTERN PetscErrorCode MBCCoupleLocalSearch(MBCCouple *);
 PETSC_EXTERN PetscErrorCode MBCCoupleIntegrate(MBCCouple *, PetscBool, PetscInt);
 PETSC_EXTERN PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *);
-PETSC_INTERN PetscBool      MBCCoupleProjectOnFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, MBCContactPoint *, PetscReal *);
+PETSC_EXTERN PetscErrorCode MBCCoupleCheckSearch(MBCCouple *, PetscInt *, PetscInt *, PetscReal *);
+PETSC_EXTERN PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *, PetscInt, PetscInt *, PetscReal *, PetscReal *);
+PETSC_INTERN PetscBool      MBCBilinearInverse(const PetscReal[][2], const PetscReal[], PetscReal *, PetscReal *);
+PETSC_INTERN PetscBool      MBCCoupleProjectOnFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, PetscBool, MBCContactPoint *, PetscReal *);
 
 static inline void MBCSub(const PetscReal a[], const PetscReal b[], PetscReal c[])
 {
