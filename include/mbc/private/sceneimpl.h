@@ -6,6 +6,8 @@
 #include <petscviewerhdf5.h>
 
 #define MBC_NAME_LEN 256
+/* Friction coefficients above this are refused: mu = 1e3 is a friction angle of 89.94 degrees. */
+#define MBC_MAX_MU 1e3
 
 typedef enum {
   MBC_TIME_CONSTANT, /* present from the start: part of the initial static state */
@@ -89,4 +91,5 @@ struct _n_MBCScene {
 };
 
 PETSC_EXTERN PetscErrorCode MBCTimeFactor(MBCScene, MBCTimeKind, PetscInt, PetscReal, PetscReal *);
+PETSC_INTERN PetscErrorCode MBCSceneCheckMeshes(MBCScene, hid_t);
 PETSC_INTERN PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *, const char[], PetscBool *);
