@@ -68,8 +68,11 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   s->mass     = (MBCMassType)mass;
   s->scene->analysis = s->analysis; /* the bodies read these from the scene */
   s->scene->mass     = s->mass;
-  PetscCheck(s->dt > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive", (double)s->dt);
-  PetscCheck(s->final_time >= s->dt * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be at least one step (%g)", (double)s->final_time, (double)s->dt);
+  PetscCheck(s->dt > 0 && PetscIsNormalReal(s->dt), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive and finite", (double)s->dt);
+  PetscCheck(s->final_time >= s->dt * (1 - 1e-12) && PetscIsNormalReal(s->final_time), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be finite and at least one step (%g)", (double)s->final_time, (double)s->dt);
+  /* checked before the cast to an integer below (undefined beyond its range); the output
+     reserves a few numbers per step up front */
+  PetscCheck(s->final_time / s->dt <= MBC_MAX_STEPS, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g to final time -mbc_final_time %g is %.3g steps, more than %g: use a larger dt", (double)s->dt, (double)s->final_time, (double)(s->final_time / s->dt), (double)MBC_MAX_STEPS);
   PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);

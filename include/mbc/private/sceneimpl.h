@@ -8,6 +8,8 @@
 #define MBC_NAME_LEN 256
 /* Friction coefficients above this are refused: mu = 1e3 is a friction angle of 89.94 degrees. */
 #define MBC_MAX_MU 1e3
+/* Step counts above this are refused (one FE solve per step; the output reserves memory per step). */
+#define MBC_MAX_STEPS 1e7
 
 typedef enum {
   MBC_TIME_CONSTANT, /* present from the start: part of the initial static state */
