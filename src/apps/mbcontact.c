@@ -4,6 +4,8 @@ static const char help[] = "mbcontact: finite-element multibody contact with Cou
                            "Make SCENE.h5 with mbcontact-prep SCENE.yaml -o SCENE.h5.\n\n";
 
 #include <mbc/private/pgsimpl.h>
+#include <hdf5.h>
+#include <unistd.h>
 
 /* User errors print one line that names the input; -mbc_error_traceback keeps PETSc's full report. */
 static PetscErrorCode MBCErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
@@ -55,7 +57,8 @@ static PetscErrorCode RunFclib(const char *file, PetscBool *converged)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode Run(PetscInt *status)
+/* The solver is main's: after an error it is destroyed there, which closes its files. */
+static PetscErrorCode Run(PetscInt *status, MBCSolver *solverp)
 {
   char      file[PETSC_MAX_PATH_LEN] = "";
   PetscBool set, help;
@@ -82,11 +85,12 @@ static PetscErrorCode Run(PetscInt *status)
   }
   PetscCheck(set && file[0], PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "No scene file: give -scene SCENE.h5 (make one with mbcontact-prep)");
   PetscCall(MBCSceneLoad(PETSC_COMM_WORLD, file, &scene));
-  PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, &solver));
+  PetscCall(MBCSolverCreate(PETSC_COMM_WORLD, solverp));
+  solver = *solverp;
   PetscCall(MBCSolverSetScene(solver, scene));
   PetscCall(MBCSolverSetFromOptions(solver));
   PetscCall(MBCSolverSolve(solver));
-  PetscCall(MBCSolverDestroy(&solver));
+  PetscCall(MBCSolverDestroy(solverp));
   PetscFunctionReturn(0);
 }
 
@@ -97,15 +101,28 @@ int main(int argc, char **argv)
 
   PetscBool      traceback = PETSC_FALSE;
   PetscInt       status    = 0;
+  MBCSolver      solver    = NULL;
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
   PetscCall(PetscOptionsGetBool(NULL, NULL, "-mbc_error_traceback", &traceback, NULL));
   if (!traceback) PetscCall(PetscPushErrorHandler(MBCErrorHandler, NULL));
-  ierr = Run(&status);
+  ierr = Run(&status, &solver);
   if (ierr) {
     /* A user error may be found on some ranks only; the others must not wait in a collective. */
     PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
     if (size > 1) MPI_Abort(PETSC_COMM_WORLD, 1);
+    /* One rank: close the files (a result file left open is flushed by HDF5 at exit, after
+       MPI_Finalize: a segfault); a second error (the disk still full) is not reported again. */
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    (void)MBCSolverDestroy(&solver);
+    PetscCall(PetscPopErrorHandler());
+    /* A result file whose close failed (the disk full) stays in HDF5's list, and HDF5 1.10 crashes
+       closing it again inside MPI_Finalize: leave without finalising then. */
+    if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE) > 0) {
+      fflush(stdout);
+      fflush(stderr);
+      _exit(1);
+    }
     PetscFinalize();
     return 1;
   }

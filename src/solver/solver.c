@@ -1,5 +1,6 @@
 /* The solver: places bodies on sub-communicators, sets them up, steps in time. */
 #include <mbc/private/solverimpl.h>
+#include <mbc/private/h5util.h>
 #include <ctype.h>
 
 PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
@@ -575,6 +576,15 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
+  /* still open after an error during the run: HDF5 would flush it at exit, after MPI_Finalize */
+  if (s->points_csv) fclose(s->points_csv);
+  if (s->energy_csv) fclose(s->energy_csv);
+  s->points_csv = s->energy_csv = NULL;
+  if (s->h5 >= 0) {
+    hid_t file = (hid_t)s->h5;
+    s->h5      = -1;
+    PetscCall(MBCH5FileClose(&file));
+  }
   PetscCall(MBCSolverContactDestroy(s));
   PetscCall(MBCContactDestroy(&s->contact));
   PetscCall(MBCPGSReset(&s->pgs));

@@ -73,11 +73,15 @@ def scene_two(d):
 
 def run(cmd, timeout):
     t0 = time.time()
-    try:
-        r = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=timeout, errors="replace")
-        return r.returncode, r.stdout + r.stderr, time.time() - t0
-    except subprocess.TimeoutExpired as e:
-        return None, "", time.time() - t0
+    for attempt in range(5):
+        try:
+            r = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=timeout, errors="replace")
+            return r.returncode, r.stdout + r.stderr, time.time() - t0
+        except subprocess.TimeoutExpired:
+            return None, "", time.time() - t0
+        except OSError:  # the binary being relinked: not the mutant's fault
+            time.sleep(2)
+    raise RuntimeError(f"cannot run {cmd[0]}")
 
 
 def make_bases(d):
