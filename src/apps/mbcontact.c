@@ -94,6 +94,27 @@ static PetscErrorCode Run(PetscInt *status, MBCSolver *solverp)
   PetscFunctionReturn(0);
 }
 
+/* Like -options_left, for our own options only: an -mbc_ option nothing read is a typo
+   (-mbc_dtt 1) or an option of another mode; a warning after the run, on rank 0. */
+static PetscErrorCode WarnUnusedOptions(void)
+{
+  PetscInt  n;
+  char    **names, **values;
+  PetscBool help;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  if (help) PetscFunctionReturn(0);
+  PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
+  for (PetscInt i = 0; i < n; i++) {
+    PetscBool ours;
+    PetscCall(PetscStrncmp(names[i], "mbc_", 4, &ours));
+    if (ours) PetscCall(PetscPrintf(PETSC_COMM_WORLD, "mbcontact: warning: option -%s%s%s was not used (misspelt, or not an option of this run; -help lists them)\n", names[i], values[i] ? " " : "", values[i] ? values[i] : ""));
+  }
+  PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscErrorCode ierr;
@@ -126,6 +147,7 @@ int main(int argc, char **argv)
     PetscFinalize();
     return 1;
   }
+  PetscCall(WarnUnusedOptions());
   if (!traceback) PetscCall(PetscPopErrorHandler());
   PetscCall(PetscFinalize());
   return (int)status;

@@ -48,7 +48,7 @@ static PetscErrorCode H5ReadInt1(hid_t loc, const char *file, const char *path, 
   PetscCheck(n == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: %s must hold one integer", file, path);
   PetscCall(H5ReadArray(loc, file, path, H5T_NATIVE_LLONG, &x, &n));
   /* PetscInt is 32-bit here: a larger size would be cut to another number */
-  PetscCheck(x > PETSC_MIN_INT && x < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: %s = %lld is outside the range of a 32-bit integer", file, path, x);
+  PetscCheck(x >= PETSC_MIN_INT && x <= PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: %s = %lld is outside the range of a 32-bit integer", file, path, x);
   *v = (PetscInt)x;
   PetscFunctionReturn(0);
 }

@@ -66,7 +66,7 @@ static PetscErrorCode H5ReadReals(H5Node *node, const char *name, PetscInt nvalu
   PetscCheck(H5Aread(attr, H5T_NATIVE_DOUBLE, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not a number", node->file, name, node->path);
   H5Aclose(attr);
   for (PetscInt i = 0; i < nvalues; i++) {
-    PetscCheck(PetscIsNormalReal(buf[i]) || buf[i] == 0.0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not finite (%g)", node->file, name, node->path, buf[i]);
+    PetscCheck(!PetscIsInfOrNanReal(buf[i]), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not finite (%g)", node->file, name, node->path, buf[i]);
     values[i] = (PetscReal)buf[i];
   }
   PetscCall(PetscFree(buf));
@@ -99,7 +99,7 @@ static PetscErrorCode H5ReadInt(H5Node *node, const char *name, PetscInt *value,
   PetscCheck(H5Aread(attr, H5T_NATIVE_LLONG, &v) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not an integer", node->file, name, node->path);
   H5Aclose(attr);
   /* PetscInt is 32-bit here: a larger value would wrap into a wrong one */
-  PetscCheck(v > PETSC_MIN_INT && v < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is %lld, outside the range of a 32-bit integer", node->file, name, node->path, v);
+  PetscCheck(v >= PETSC_MIN_INT && v <= PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is %lld, outside the range of a 32-bit integer", node->file, name, node->path, v);
   *value = (PetscInt)v;
   PetscFunctionReturn(0);
 }

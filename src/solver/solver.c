@@ -286,6 +286,44 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* A displacement beyond ten times the model's extent is no small-strain answer: a load or a
+   material far off (E = 1e-300, a pressure of 1e308, mixed units) that would be written as
+   results. Collective on the solver's communicator. */
+static PetscErrorCode SolverCheckDisplacementSize(MBCSolver s)
+{
+  PetscReal *ub, box[6], size = 0;
+  PetscInt   worst = 0;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(s->nbodies, &ub));
+  for (PetscInt d = 0; d < 3; d++) box[d] = box[3 + d] = PETSC_MIN_REAL; /* -lo, hi */
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    Vec     X;
+    if (!body || !body->u) continue;
+    PetscCall(DMGetCoordinates(body->dm, &X));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscReal lo, hi;
+      PetscCall(VecStrideMin(X, d, NULL, &lo));
+      PetscCall(VecStrideMax(X, d, NULL, &hi));
+      box[d]     = PetscMax(box[d], -lo);
+      box[3 + d] = PetscMax(box[3 + d], hi);
+    }
+    PetscCall(VecNorm(body->u, NORM_INFINITY, &ub[b]));
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, box, 6, MPIU_REAL, MPIU_MAX, s->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, ub, (PetscMPIInt)s->nbodies, MPIU_REAL, MPIU_MAX, s->comm));
+  for (PetscInt d = 0; d < 3; d++) size = PetscMax(size, box[3 + d] + box[d]);
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (ub[b] > ub[worst]) worst = b;
+  {
+    const PetscReal u = ub[worst];
+    PetscCall(PetscFree(ub));
+    PetscCheck(u <= 10 * size, s->comm, PETSC_ERR_USER_INPUT, "Scene file %s: at t = %g body '%s' moves by %g, more than ten times the model's extent %g: no small-strain answer (check E, the loads and their units)", s->scene->filename, (double)s->time, s->scene->bodies[worst].name, (double)u, (double)size);
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Static analysis in the incremental form of the dynamic one, without inertia:
    (K + eps diag K) du = F(t) - K u + H lambda, u += du, repeated within a step until the
    out-of-balance force of the last iterate, max|A du|, is below rtol max|K u|. The spring
@@ -365,6 +403,7 @@ static PetscErrorCode SolverStatic(MBCSolver s)
       PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->pgs.rtol > s->static_rtol ? "; or -mbc_pgs_rtol is looser than -mbc_static_rtol" : "");
     }
     PetscCall(SolverMonitor(s));
+    PetscCall(SolverCheckDisplacementSize(s));
     PetscCall(MBCSolverOutputStep(s));
   }
   PetscFunctionReturn(0);
@@ -448,6 +487,7 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
   s->time = 0;
   PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   PetscCall(SolverMonitor(s));
+  PetscCall(SolverCheckDisplacementSize(s));
   PetscCall(MBCSolverOutputStep(s));
   for (s->step = 1; s->step <= s->nsteps; s->step++) {
     s->time = s->step * dt;
@@ -501,6 +541,7 @@ static PetscErrorCode SolverDynamic(MBCSolver s)
     }
     PetscCall(SolverContact(s));
     PetscCall(SolverMonitor(s));
+    PetscCall(SolverCheckDisplacementSize(s));
     PetscCall(MBCSolverOutputStep(s));
   }
   PetscFunctionReturn(0);

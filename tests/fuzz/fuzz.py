@@ -84,6 +84,40 @@ def run(cmd, timeout):
     raise RuntimeError(f"cannot run {cmd[0]}")
 
 
+def write_matrix(g, a, fmt):
+    """FCLIB matrix group from dense a: fmt "csr" (nz = -2), "csc" (-1) or "triplet" (nz >= 0)."""
+    import scipy.sparse as sp
+    m, n = a.shape
+    if fmt == "triplet":
+        c = sp.coo_matrix(a)
+        p, i, x, nz = c.col, c.row, c.data, c.nnz
+    else:
+        c = sp.csr_matrix(a) if fmt == "csr" else sp.csc_matrix(a)
+        p, i, x, nz = c.indptr, c.indices, c.data, -2 if fmt == "csr" else -1
+    for k, v in (("m", [m]), ("n", [n]), ("nz", [nz]), ("nzmax", [len(x)]), ("p", p), ("i", i)):
+        g[k] = np.asarray(v, dtype=np.int32)
+    g["x"] = np.asarray(x, dtype=float)
+
+
+def write_global_fclib(path, nc=2):
+    """A small FCLIB global problem M v = H r + f, u = H^T v + w: M SPD tridiagonal (CSR), H with
+    two entries per column (triplets), so W = H^T M^-1 H has a positive normal diagonal."""
+    n = 3 * nc + 3
+    M = 4 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    H = np.zeros((n, 3 * nc))
+    for j in range(3 * nc):
+        H[j, j], H[j + 3, j] = 1.0, -0.5
+    with h5py.File(path, "w") as f:
+        g = f.create_group("fclib_global")
+        g["spacedim"] = np.array([3], dtype=np.int32)
+        write_matrix(g.create_group("M"), M, "csr")
+        write_matrix(g.create_group("H"), H, "triplet")
+        v = g.create_group("vectors")
+        v["f"] = np.linspace(-1, 1, n)
+        v["w"] = np.tile([0.1, 0.0, 0.0], nc)
+        v["mu"] = np.full(nc, 0.3)
+
+
 def make_bases(d):
     """Writes the base YAML scenes, their .h5 files and two FCLIB problems into d; returns their paths."""
     bases = {"yaml": [], "h5": [], "fclib": []}
@@ -97,11 +131,12 @@ def make_bases(d):
         assert rc == 0, out
         bases["yaml"].append(yml)
         bases["h5"].append(h5)
-    glob = os.path.join(d, "two_global.hdf5")
-    rc, out, _ = run([SOLVER, "-scene", bases["h5"][1], "-mbc_output", os.path.join(d, "two_base"), "-mbc_fclib_write", glob], 120)
+    loc = os.path.join(d, "two_local.hdf5")  # the solver's own multiplier problem (local, CSR)
+    rc, out, _ = run([SOLVER, "-scene", bases["h5"][1], "-mbc_output", os.path.join(d, "two_base"), "-mbc_fclib_write", loc], 120)
     assert rc == 0, out
-    loc = os.path.join(d, "two_local.hdf5")
-    rc, out, _ = run([SOLVER, "-fclib", glob, "-fclib_write", loc], 120)
+    glob = os.path.join(d, "global.hdf5")
+    write_global_fclib(glob)
+    rc, out, _ = run([SOLVER, "-fclib", glob], 120)
     assert rc == 0, out
     bases["fclib"] = [glob, loc]
     return bases
