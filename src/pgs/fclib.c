@@ -69,7 +69,7 @@ static PetscErrorCode H5ReadAlloc(hid_t loc, const char *file, const char *group
 /* A FCLIB matrix group (m, n, nz, p, i, x): nz = -2 compressed rows, -1 compressed columns,
    >= 0 triplets (i row, p column; duplicates add). The structure is checked before any use:
    p starts at 0 and never decreases, every index lies in the matrix, every value is finite. */
-static PetscErrorCode ReadMatrix(hid_t loc, const char *file, const char *name, Mat *A)
+static PetscErrorCode ReadMatrix(hid_t loc, const char *file, const char *name, PetscInt mexp, Mat *A)
 {
   char       path[256];
   PetscInt   m, n, nz, cnt, nouter, *row, *col, *nnz;
@@ -104,6 +104,10 @@ static PetscErrorCode ReadMatrix(hid_t loc, const char *file, const char *name, 
     else PetscCheck(j >= 0 && j < (nz == -2 ? n : m), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: matrix %s/i[%" PetscInt_FMT "] = %lld outside [0, %" PetscInt_FMT ")", file, name, e, j, nz == -2 ? n : m);
     PetscCheck(PetscAbsReal(x[e]) <= MBC_FCLIB_MAX_ABS, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: matrix %s/x[%" PetscInt_FMT "] = %g is not finite or beyond %g", file, name, e, x[e], MBC_FCLIB_MAX_ABS);
   }
+  /* W and M have a nonzero diagonal, H a nonzero normal column per contact, and H as many rows as
+     M (mexp): a size far beyond the entries is a corrupt size field that would be allocated */
+  if (mexp >= 0) PetscCheck(m == mexp, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: matrix %s has %" PetscInt_FMT " rows, expected %" PetscInt_FMT, file, name, m, mexp);
+  PetscCheck((mexp >= 0 || m <= 3 * PetscMax(cnt, 1)) && n <= 3 * PetscMax(cnt, 1), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: matrix %s is %" PetscInt_FMT " x %" PetscInt_FMT " but holds %" PetscInt_FMT " entries (more than two thirds of its %s empty)", file, name, m, n, cnt, n > 3 * PetscMax(cnt, 1) ? "columns" : "rows");
   PetscCall(PetscMalloc2(cnt, &row, cnt, &col));
   PetscCall(PetscCalloc1(m, &nnz));
   for (PetscInt k = 0, e = 0; nz < 0 && k < nouter; k++)
@@ -170,9 +174,9 @@ static PetscErrorCode CondenseGlobal(hid_t g, const char *file, MBCFrictionProbl
   PetscInt       m, n, mm, nm;
 
   PetscFunctionBegin;
-  PetscCall(ReadMatrix(g, file, "M", &M));
-  PetscCall(ReadMatrix(g, file, "H", &H));
+  PetscCall(ReadMatrix(g, file, "M", -1, &M));
   PetscCall(MatGetSize(M, &mm, &nm));
+  PetscCall(ReadMatrix(g, file, "H", mm, &H));
   PetscCall(MatGetSize(H, &m, &n));
   PetscCheck(mm == nm, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: M is %" PetscInt_FMT " x %" PetscInt_FMT ", not square", file, mm, nm);
   PetscCheck(m == mm, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: H has %" PetscInt_FMT " rows but M is %" PetscInt_FMT " x %" PetscInt_FMT, file, m, mm, mm);
@@ -245,7 +249,7 @@ static PetscErrorCode FclibReadGroup(hid_t h5, const char file[], MBCFrictionPro
   }
   if (global) PetscCall(CondenseGlobal(g, file, fp));
   else {
-    PetscCall(ReadMatrix(g, file, "W", &fp->W));
+    PetscCall(ReadMatrix(g, file, "W", -1, &fp->W));
     PetscCall(MatGetSize(fp->W, &n, &nw));
     PetscCheck(n == nw, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: W is %" PetscInt_FMT " x %" PetscInt_FMT ", not square", file, n, nw);
     PetscCheck(n % 3 == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "FCLIB file %s: W has %" PetscInt_FMT " rows, not 3 per contact", file, n);
