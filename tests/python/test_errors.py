@@ -35,7 +35,7 @@ def expect_error(h5, *words, options=(), nproc=1):
     assert "mbcontact: error:" in text, text
     for w in words:
         assert w in text, (w, text)
-    for crash in ("Segmentation", "signal 11", "Caught signal", "core dumped"):
+    for crash in ("Segmentation", "signal 11", "Caught signal", "core dumped", "AddressSanitizer", "runtime error:"):
         assert crash not in text, text
     return text
 
