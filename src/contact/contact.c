@@ -17,7 +17,8 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->integrate   = PETSC_TRUE;
   c->nquad       = 4;
   c->ncouples    = scene->ncouples;
-  c->penetration_tol = -0.05;
+  c->penetration_tol   = -0.05;
+  c->check_penetration = PETSC_TRUE;
   PetscCall(PetscCalloc1(c->ncouples, &c->couples));
   for (PetscInt i = 0; i < c->ncouples; i++) {
     c->couples[i].k  = scene->couples[i].k;
@@ -374,7 +375,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
   }
   PetscCall(PetscFree(rec));
-  if (c->nsearches == 0) PetscCall(ContactCheckInitialPenetration(c));
+  if (c->nsearches == 0 && c->check_penetration) PetscCall(ContactCheckInitialPenetration(c));
   if (global) {
     c->nsearches++;
     for (PetscInt b = 0; b < nbodies; b++) {

@@ -1,6 +1,7 @@
 /* Reads the metadata of a scene file (layout: docs/scene-h5.md) with the HDF5 C API.
    Every rank reads it: it is small, and the bodies' meshes are read by PETSc itself. */
 #include <mbc/private/sceneimpl.h>
+#include <mbc/private/h5util.h>
 #include <hdf5.h>
 
 const char *const MBCAnalysisTypes[] = {"static", "dynamic", "MBCAnalysisType", "MBC_ANALYSIS_", NULL};
@@ -423,6 +424,14 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
     MBCLoadDesc *l = &s->loads[i];
     PetscCall(PetscSNPrintf(where, sizeof(where), "loads/%" PetscInt_FMT, i));
     PetscCall(CheckNameList(s, l->bodies, s->nbodies, BodyName, "body", where));
+    if (l->kind == MBC_LOAD_GRAVITY) { /* the force per volume, density times acceleration, must be a number */
+      const PetscReal g = PetscMax(PetscMax(PetscAbsReal(l->vector[0]), PetscAbsReal(l->vector[1])), PetscAbsReal(l->vector[2]));
+      for (PetscInt b = 0; b < s->nbodies; b++) {
+        PetscBool applies;
+        PetscCall(MBCLoadAppliesToBody(l, s->bodies[b].name, &applies));
+        PetscCheck(!applies || !PetscIsInfOrNanReal(s->bodies[b].density * g), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s': density %g times the gravity of loads/%" PetscInt_FMT " (%g) overflows", s->filename, s->bodies[b].name, (double)s->bodies[b].density, i, (double)g);
+      }
+    }
     if (l->kind == MBC_LOAD_GRAVITY || l->kind == MBC_LOAD_BODY_FORCE) continue;
     PetscBool same;
     PetscCheck(l->surface_id >= 1 && l->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: loads/%" PetscInt_FMT " has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, i, l->surface_id, s->nsurfaces);
@@ -562,6 +571,7 @@ PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scen
   PetscCall(PetscLogEventBegin(MBC_SceneLoad, 0, 0, 0, 0));
   PetscCall(PetscTestFile(filename, 'r', &exists));
   PetscCheck(exists, comm, PETSC_ERR_FILE_OPEN, "Scene file %s does not exist or cannot be read", filename);
+  PetscCall(MBCH5CheckPathLength(filename, "scene file")); /* the meshes are read through MPI-IO */
   PetscCall(PetscNew(&s));
   PetscCall(PetscStrncpy(s->filename, filename, sizeof(s->filename)));
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* our messages replace HDF5's error stack dump */

@@ -552,6 +552,7 @@ PetscErrorCode MBCSolverSolve(MBCSolver s)
   PetscFunctionBegin;
   PetscCall(MBCSolverSetUp(s));
   if (s->contact) {
+    s->contact->check_penetration = (PetscBool)!s->search_only; /* the search report shows the gaps (-mbc_contact_view) */
     PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_TRUE, NULL));
     if (s->contact->view) PetscCall(MBCContactView(s->contact, PETSC_VIEWER_STDOUT_(s->comm)));
   }
