@@ -380,3 +380,16 @@ def test_long_path_refused(tmp_path, which):
         expect_error(deep / "s.h5", "scene file", "OMPI_MCA_io=romio321", options=("-mbc_output", str(tmp_path / "r")))
     else:
         expect_error(h5, "result file", "OMPI_MCA_io=romio321", options=("-mbc_output", str(deep / "r")))
+
+
+def test_stretched_cell(tmp_path):
+    """A vertex of the tet4 body moved to y = 1e9 (fuzzed): no cell inverted, but a mesh no more;
+    the model's extent grew with it, so the displacement-size check let it through (exit 0)."""
+    h5 = good_scene(tmp_path, two=True)
+    with h5py.File(h5, "a") as f:
+        c = f["topologies/b2/dms/coordinateDM/vecs/coordinates/coordinates"]
+        x = c[...].reshape(-1, 3)
+        top = np.flatnonzero((x[:, 1] == 1) & (x[:, 2] == 2))[0]
+        x[top, 1] = 1e9
+        c[...] = x.ravel()
+    expect_error(h5, "b2", "is degenerate", "cube of its longest edge")
