@@ -16,7 +16,7 @@ DEBS := build-essential cmake pkg-config petsc-dev python3-petsc4py libmetis-dev
         python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 python3-dev \
         libopenblas0-serial
 
-.PHONY: all deps build run test test-c test-python clean
+.PHONY: all deps build run test test-c test-python fuzz sanitize clean
 all: build
 
 # Installs only the Debian packages that are missing (idempotent; quiet when all are there).
@@ -39,5 +39,20 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure
 	$(PYTHON) -m pytest -q tests/python
 
+# Long fuzzing run (tests/fuzz/fuzz.py): make fuzz N=10000 SEED=1 (N mutants of each kind).
+N    ?= 1000
+SEED ?= 1
+fuzz: build
+	$(PYTHON) tests/fuzz/fuzz.py -n $(N) --seed $(SEED) -j $(JOBS)
+
+# ASan + UBSan build in build-asan: the C tests and the fast Python tests of bad input run on it.
+# Leak reports are off: MPI and PETSc keep their memory until exit.
+SAN_ENV := ASAN_OPTIONS=detect_leaks=0:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 MBC_BUILD_DIR=$(CURDIR)/build-asan
+sanitize: deps
+	@cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DMBC_SANITIZE=ON > /dev/null
+	@cmake --build build-asan -j $(JOBS)
+	cd build-asan && $(SAN_ENV) ctest --output-on-failure
+	$(SAN_ENV) $(PYTHON) -m pytest -q tests/python/test_errors.py tests/python/test_fuzz.py
+
 clean:
-	rm -rf $(BUILD)
+	rm -rf $(BUILD) build-asan

@@ -116,11 +116,19 @@ def real(value, where, gt=None, ge=None, lt=None):
     return value
 
 
-def integer(value, where, ge=None):
+INT32_MAX = 2**31 - 1  # the scene file stores integers as int32; a larger one would wrap
+NAME_MAX = 255  # the solver's buffer for a name or the title (MBC_NAME_LEN - 1)
+MAX_STEPS = 10**7  # the solver refuses more steps (docs/scene.md)
+MAX_MU = 1e3  # the solver refuses larger friction coefficients (MBC_MAX_MU)
+
+
+def integer(value, where, ge=None, le=INT32_MAX):
     if isinstance(value, bool) or not isinstance(value, int):
         raise InputError(f"{where}: expected an integer, got {_describe(value)}")
     if ge is not None and value < ge:
         raise InputError(f"{where}: must be >= {ge}, got {value}")
+    if le is not None and value > le:
+        raise InputError(f"{where}: must be <= {le}, got {value}")
     return value
 
 
@@ -136,9 +144,11 @@ def vector3(value, where):
     return np.array([real(v, f"{where}[{i}]") for i, v in enumerate(value)])
 
 
-def string(value, where, choices=None):
+def string(value, where, choices=None, maxlen=NAME_MAX):
     if not isinstance(value, str) or not value:
         raise InputError(f"{where}: expected a non-empty string, got {_describe(value)}")
+    if maxlen is not None and len(value) > maxlen:
+        raise InputError(f"{where}: longer than {maxlen} characters ({len(value)})")
     if not value.isascii():
         raise InputError(f"{where}: must be ASCII, got {value!r}")
     if choices is not None and value not in choices:
@@ -188,7 +198,7 @@ def time_spec(value, where, kinds, base_dir="."):
         return Time(value)
     if isinstance(value, dict) and "csv" in value:
         spec = mapping(value, where, ("csv", "shift"), required=("csv",))
-        path = os.path.join(base_dir, string(spec["csv"], f"{where}.csv"))
+        path = os.path.join(base_dir, string(spec["csv"], f"{where}.csv", maxlen=None))
         table = _csv_table(path, f"{where}.csv")
         table[:, 0] += real(spec.get("shift", 0.0), f"{where}.shift")
         return Time("table", table)
@@ -358,7 +368,7 @@ def _meshes(value, base_dir):
     meshes = named(value, "meshes")
     if not meshes:
         raise InputError("meshes: at least one mesh is needed (name: file)")
-    return {name: os.path.join(base_dir, string(path, f"meshes.{name}"))
+    return {name: os.path.join(base_dir, string(path, f"meshes.{name}", maxlen=None))
             for name, path in meshes.items()}
 
 
@@ -403,6 +413,9 @@ def _couples(value):
         couples.append(Couple(k, name_list(spec["master"], f"{where}.master (couple k={k})"),
                               name_list(spec["slave"], f"{where}.slave (couple k={k})"),
                               real(spec.get("mu", 0.0), f"{where}.mu", ge=0)))
+        if couples[-1].mu > MAX_MU:
+            raise InputError(f"{where}.mu: {couples[-1].mu:g} is not a friction coefficient (at most "
+                             f"{MAX_MU:g}, a friction angle of 89.94 degrees)")
     return couples
 
 
@@ -479,6 +492,9 @@ def _analysis(value):
     a.final_time = real(spec.get("final_time", a.dt), "analysis.final_time")
     if a.final_time < a.dt:
         raise InputError(f"analysis.final_time: must be >= dt = {a.dt:g}, got {a.final_time:g}")
+    if a.final_time / a.dt > MAX_STEPS:
+        raise InputError(f"analysis.dt: {a.dt:g} to final_time {a.final_time:g} is {a.final_time / a.dt:.3g} "
+                         f"steps, more than {MAX_STEPS:g}")
     newmark = mapping(spec.get("newmark"), "analysis.newmark", ("beta", "gamma"))
     a.newmark_beta = real(newmark.get("beta", a.newmark_beta), "analysis.newmark.beta", gt=0)
     a.newmark_gamma = real(newmark.get("gamma", a.newmark_gamma), "analysis.newmark.gamma", gt=0)

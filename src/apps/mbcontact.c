@@ -5,6 +5,8 @@ static const char help[] = "mbcontact: finite-element multibody contact with Cou
 
 #include <mbc/private/multiplierimpl.h>
 #include <mbcontact.h>
+#include <hdf5.h>
+#include <unistd.h>
 
 /* User errors print one line that names the input; -mbc_error_traceback keeps PETSc's full report. */
 static PetscErrorCode MBCErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
@@ -117,6 +119,27 @@ static PetscErrorCode Run(PetscInt *status, MBCSolver *solver)
   PetscFunctionReturn(0);
 }
 
+/* Like -options_left, for our own options only: an -mbc_ option nothing read is a typo
+   (-mbc_dtt 1) or an option of another mode; a warning after the run, on rank 0. */
+static PetscErrorCode WarnUnusedOptions(void)
+{
+  PetscInt  n;
+  char    **names, **values;
+  PetscBool help;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  if (help) PetscFunctionReturn(0);
+  PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
+  for (PetscInt i = 0; i < n; i++) {
+    PetscBool ours;
+    PetscCall(PetscStrncmp(names[i], "mbc_", 4, &ours));
+    if (ours) PetscCall(PetscPrintf(PETSC_COMM_WORLD, "mbcontact: warning: option -%s%s%s was not used (misspelt, or not an option of this run; -help lists them)\n", names[i], values[i] ? " " : "", values[i] ? values[i] : ""));
+  }
+  PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscErrorCode ierr;
@@ -140,9 +163,17 @@ int main(int argc, char **argv)
     MBCSolverOutputAbort(solver);
     if (!all) MPI_Abort(PETSC_COMM_WORLD, sig ? 128 + sig : 1);
     MBCStopFinalize();
+    /* A result file whose close failed (the disk full) stays in HDF5's list, and HDF5 1.10 crashes
+       closing it again inside MPI_Finalize: leave without finalising then. */
+    if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE) > 0) {
+      fflush(stdout);
+      fflush(stderr);
+      _exit(sig ? 128 + sig : 1);
+    }
     PetscFinalize();
     return sig ? 128 + sig : 1;
   }
+  PetscCall(WarnUnusedOptions());
   if (!traceback) PetscCall(PetscPopErrorHandler());
   PetscCall(MBCStopFinalize());
   PetscCall(PetscFinalize());

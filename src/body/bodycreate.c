@@ -7,8 +7,8 @@
 static PetscErrorCode BodyCheckGeometry(MBCBody body)
 {
   PetscQuadrature q;
-  PetscInt        cStart, cEnd, nq, bad = -1;
-  PetscReal      *v0, *J, *invJ, *detJ, worst = 0;
+  PetscInt        cStart, cEnd, nq, bad = -1, badq = -1;
+  PetscReal      *v0, *J, *invJ, *detJ, worst = 0, worstq = 0;
   IS              cellNumbering;
   const PetscInt *gnum;
 
@@ -19,7 +19,12 @@ static PetscErrorCode BodyCheckGeometry(MBCBody body)
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
   PetscCall(DMPlexGetCellNumbering(body->dm, &cellNumbering));
   PetscCall(ISGetIndices(cellNumbering, &gnum));
-  for (PetscInt c = cStart; c < cEnd && bad < 0; c++) {
+  for (PetscInt c = cStart; c < cEnd && bad < 0 && badq < 0; c++) {
+    PetscBool          isDG;
+    PetscInt           nx;
+    const PetscScalar *array;
+    PetscScalar       *x;
+    PetscReal          L = 0;
     PetscCall(DMPlexComputeCellGeometryFEM(body->dm, c, q, v0, J, invJ, detJ));
     for (PetscInt i = 0; i < nq; i++) {
       if (!(detJ[i] > 0)) {
@@ -28,10 +33,27 @@ static PetscErrorCode BodyCheckGeometry(MBCBody body)
         break;
       }
     }
+    /* a cell stretched far beyond its volume (one vertex moved 1e9 away) is not inverted but no
+       mesh: detJ / L^3 is 1e-6 for a sliver of aspect 1000, 1e-18 for that one */
+    PetscCall(DMPlexGetCellCoordinates(body->dm, c, &isDG, &nx, &array, &x));
+    for (PetscInt a = 0; a < nx / 3; a++)
+      for (PetscInt b = a + 1; b < nx / 3; b++) {
+        PetscReal d2 = 0;
+        for (PetscInt k = 0; k < 3; k++) d2 += PetscSqr(PetscRealPart(x[3 * a + k] - x[3 * b + k]));
+        L = PetscMax(L, PetscSqrtReal(d2));
+      }
+    PetscCall(DMPlexRestoreCellCoordinates(body->dm, c, &isDG, &nx, &array, &x));
+    for (PetscInt i = 0; i < nq && bad < 0; i++)
+      if (detJ[i] < 1e-12 * L * L * L) {
+        badq   = gnum[c - cStart] < 0 ? -(gnum[c - cStart] + 1) : gnum[c - cStart];
+        worstq = detJ[i] / (L * L * L);
+        break;
+      }
   }
   PetscCall(ISRestoreIndices(cellNumbering, &gnum));
   PetscCall(PetscFree4(v0, J, invJ, detJ));
   PetscCheck(bad < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s': cell %" PetscInt_FMT " is inverted or degenerate (Jacobian determinant %g at a quadrature point)", body->scene->filename, body->name, bad, (double)worst);
+  PetscCheck(badq < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s': cell %" PetscInt_FMT " is degenerate (its Jacobian determinant is %g times the cube of its longest edge)", body->scene->filename, body->name, badq, (double)worstq);
   PetscFunctionReturn(0);
 }
 

@@ -58,7 +58,7 @@ static PetscErrorCode EntryCSR(EntryList *l, PetscInt npoints, PetscInt nnodes, 
   size_t n = 0;
 
   PetscFunctionBegin;
-  qsort(l->e, l->n, sizeof(Entry), CompareEntry);
+  if (l->n) qsort(l->e, l->n, sizeof(Entry), CompareEntry); /* qsort(NULL, 0) is undefined (UBSan) */
   for (size_t i = 0; i < l->n; i++) { /* merge duplicates in place */
     if (n && l->e[n - 1].key == l->e[i].key) l->e[n - 1].w += l->e[i].w;
     else l->e[n++] = l->e[i];

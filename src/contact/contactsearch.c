@@ -140,6 +140,8 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
   for (PetscInt d = 0; d < 3; d++) {
     c->lo[d] -= c->margin;
     hi[d] += c->margin;
+    /* the cell keys are int64: a margin or box far beyond the cell size would overflow them */
+    PetscCheck(c->h > 0 && (hi[d] - c->lo[d]) / c->h < 1e6, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Contact couple k = %" PetscInt_FMT ": the search box is %g long in %c, %g search cells of %g (lower -mbc_contact_margin %g)", c->k, (double)(hi[d] - c->lo[d]), "xyz"[d], (double)((hi[d] - c->lo[d]) / c->h), (double)c->h, (double)c->margin);
     ncell[d] = (PetscInt64)PetscCeilReal((hi[d] - c->lo[d]) / c->h) + 1;
   }
 #define CELL(x, d) ((PetscInt64)PetscFloorReal(((x) - c->lo[d]) / c->h))

@@ -1,6 +1,7 @@
 /* Reads the metadata of a scene file (layout: docs/scene-h5.md) with the HDF5 C API.
    Every rank reads it: it is small, and the bodies' meshes are read by PETSc itself. */
 #include <mbc/private/sceneimpl.h>
+#include <mbc/private/h5util.h>
 #include <hdf5.h>
 
 const char *const MBCAnalysisTypes[] = {"static", "dynamic", "MBCAnalysisType", "MBC_ANALYSIS_", NULL};
@@ -56,11 +57,17 @@ static PetscErrorCode H5ReadReals(H5Node *node, const char *name, PetscInt nvalu
   n     = H5Sget_simple_extent_npoints(space);
   H5Sclose(space);
   PetscCheck(n == nvalues, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s has %lld values, expected %" PetscInt_FMT, node->file, name, node->path, (long long)n, nvalues);
+  {
+    hid_t       type = H5Aget_type(attr);
+    H5T_class_t cls  = H5Tget_class(type);
+    H5Tclose(type);
+    PetscCheck(cls == H5T_FLOAT || cls == H5T_INTEGER, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not a number", node->file, name, node->path);
+  }
   PetscCall(PetscMalloc1(nvalues + 1, &buf));
   PetscCheck(H5Aread(attr, H5T_NATIVE_DOUBLE, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not a number", node->file, name, node->path);
   H5Aclose(attr);
   for (PetscInt i = 0; i < nvalues; i++) {
-    PetscCheck(PetscIsNormalReal(buf[i]) || buf[i] == 0.0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not finite (%g)", node->file, name, node->path, buf[i]);
+    PetscCheck(!PetscIsInfOrNanReal(buf[i]), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is not finite (%g)", node->file, name, node->path, buf[i]);
     values[i] = (PetscReal)buf[i];
   }
   PetscCall(PetscFree(buf));
@@ -82,8 +89,18 @@ static PetscErrorCode H5ReadInt(H5Node *node, const char *name, PetscInt *value,
   PetscFunctionBegin;
   if (optional && H5Aexists(node->obj, name) <= 0) PetscFunctionReturn(0);
   PetscCall(H5AttrOpen(node, name, &attr));
+  {
+    hid_t    type  = H5Aget_type(attr), space = H5Aget_space(attr);
+    hssize_t n     = H5Sget_simple_extent_npoints(space);
+    PetscBool isint = (PetscBool)(H5Tget_class(type) == H5T_INTEGER);
+    H5Tclose(type);
+    H5Sclose(space);
+    PetscCheck(isint && n == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s must be one integer", node->file, name, node->path);
+  }
   PetscCheck(H5Aread(attr, H5T_NATIVE_LLONG, &v) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: attribute %s of %s is not an integer", node->file, name, node->path);
   H5Aclose(attr);
+  /* PetscInt is 32-bit here: a larger value would wrap into a wrong one */
+  PetscCheck(v >= PETSC_MIN_INT && v <= PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: attribute %s of %s is %lld, outside the range of a 32-bit integer", node->file, name, node->path, v);
   *value = (PetscInt)v;
   PetscFunctionReturn(0);
 }
@@ -163,9 +180,15 @@ static PetscErrorCode H5ReadEnum(H5Node *node, const char *name, const char *con
 
 static PetscErrorCode H5ReadCount(H5Node *node, PetscInt *count)
 {
+  H5G_info_t info;
+
   PetscFunctionBegin;
   PetscCall(H5ReadInt(node, "count", count, PETSC_FALSE));
   PetscCheck(*count >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: negative count in %s", node->file, node->path);
+  /* a count beyond the entries present would allocate for nothing, then miss an entry; entries
+     beyond count are ignored (a list is cut by lowering its count) */
+  PetscCheck(H5Gget_info(node->obj, &info) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot list %s", node->file, node->path);
+  PetscCheck((hsize_t)*count <= info.nlinks, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s has count = %" PetscInt_FMT " but holds only %llu entries", node->file, node->path, *count, (unsigned long long)info.nlinks);
   PetscFunctionReturn(0);
 }
 
@@ -290,9 +313,13 @@ static PetscErrorCode ReadOutput(H5Node *root, MBCScene s)
   PetscCall(H5ReadInt(&e, "energy", &energy, PETSC_TRUE));
   s->output_energy = energy ? PETSC_TRUE : PETSC_FALSE;
   PetscCall(H5ReadInt(&e, "points_count", &s->npoints, PETSC_TRUE));
+  PetscCheck(s->npoints >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: output/points_count = %" PetscInt_FMT " is negative", s->filename, s->npoints);
   if (s->npoints > 0) {
-    PetscCall(PetscCalloc1(s->npoints, &s->points));
+    PetscInt count;
     PetscCall(H5NodeOpen(s->filename, e.obj, e.path, "points", &pts));
+    PetscCall(H5ReadCount(&pts, &count));
+    PetscCheck(count == s->npoints, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: output/points_count = %" PetscInt_FMT " but output/points has count = %" PetscInt_FMT, s->filename, s->npoints, count);
+    PetscCall(PetscCalloc1(s->npoints, &s->points));
     for (PetscInt i = 0; i < s->npoints; i++) {
       PetscCall(H5EntryOpen(&pts, i, &p));
       PetscCall(H5ReadString(&p, "name", s->points[i].name, MBC_NAME_LEN, NULL, PETSC_FALSE));
@@ -315,6 +342,107 @@ static PetscErrorCode ReadList(H5Node *root, const char *name, H5Node *list, Pet
   if (H5Lexists(root->obj, name, H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
   PetscCall(H5NodeOpen(root->file, root->obj, root->path, name, list));
   PetscCall(H5ReadCount(list, count));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode FindName(const char *name, PetscInt n, const char *(*get)(MBCScene, PetscInt), MBCScene s, PetscInt *index)
+{
+  PetscBool same = PETSC_FALSE;
+
+  PetscFunctionBegin;
+  *index = -1;
+  for (PetscInt i = 0; i < n && !same; i++) {
+    PetscCall(PetscStrcmp(name, get(s, i), &same));
+    if (same) *index = i;
+  }
+  PetscFunctionReturn(0);
+}
+static const char *BodyName(MBCScene s, PetscInt i) { return s->bodies[i].name; }
+static const char *SurfaceName(MBCScene s, PetscInt i) { return s->surfaces[i].name; }
+
+/* Each name of a ","-joined list must be one of n names. */
+static PetscErrorCode CheckNameList(MBCScene s, const char *list, PetscInt n, const char *(*get)(MBCScene, PetscInt), const char *what, const char *where)
+{
+  char    *copy, *tok, *save = NULL;
+  PetscInt idx;
+
+  PetscFunctionBegin;
+  PetscCall(PetscStrallocpy(list, &copy));
+  for (tok = strtok_r(copy, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+    PetscCall(FindName(tok, n, get, s, &idx));
+    PetscCheck(idx >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s names %s '%s', which the scene does not have", s->filename, where, what, tok);
+  }
+  PetscCall(PetscFree(copy));
+  PetscFunctionReturn(0);
+}
+
+/* References between the lists (the prep writes them consistent; a hand-edited file must not
+   drop a condition or a load silently). */
+static PetscErrorCode SceneCheckReferences(MBCScene s)
+{
+  char where[64];
+
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < s->nbodies; i++) {
+    MBCBodyDesc *b = &s->bodies[i];
+    PetscBool    tet, hex;
+    PetscInt     j;
+    PetscCheck(b->name[0] && !strchr(b->name, ',') && !strchr(b->name, '/'), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: bodies/%" PetscInt_FMT " has the name '%s' (empty, or with ',' or '/')", s->filename, i, b->name);
+    PetscCall(FindName(b->name, i, BodyName, s, &j));
+    PetscCheck(j < 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: bodies/%" PetscInt_FMT " and bodies/%" PetscInt_FMT " are both called '%s'", s->filename, j, i, b->name);
+    PetscCall(PetscStrcmp(b->cell_type, "tet4", &tet));
+    PetscCall(PetscStrcmp(b->cell_type, "hex8", &hex));
+    PetscCheck(tet || hex, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has cell_type '%s', not tet4 or hex8", s->filename, b->name, b->cell_type);
+    PetscCheck(b->num_cells >= 1 && b->num_vertices >= 4, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " cells and %" PetscInt_FMT " vertices", s->filename, b->name, b->num_cells, b->num_vertices);
+  }
+  for (PetscInt i = 0; i < s->nsurfaces; i++) {
+    PetscInt j;
+    PetscCheck(s->surfaces[i].id == i + 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: surfaces/%" PetscInt_FMT " has id %" PetscInt_FMT ", expected %" PetscInt_FMT, s->filename, i, s->surfaces[i].id, i + 1);
+    PetscCall(FindName(s->surfaces[i].name, i, SurfaceName, s, &j));
+    PetscCheck(j < 0 && s->surfaces[i].name[0], PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: surfaces/%" PetscInt_FMT " has the name '%s' (empty or already used)", s->filename, i, s->surfaces[i].name);
+  }
+  for (PetscInt i = 0; i < s->ncouples; i++) {
+    MBCCoupleDesc *c = &s->couples[i];
+    PetscCall(PetscSNPrintf(where, sizeof(where), "couples/%" PetscInt_FMT " (master)", i));
+    PetscCall(CheckNameList(s, c->master, s->nsurfaces, SurfaceName, "surface", where));
+    PetscCall(PetscSNPrintf(where, sizeof(where), "couples/%" PetscInt_FMT " (slave)", i));
+    PetscCall(CheckNameList(s, c->slave, s->nsurfaces, SurfaceName, "surface", where));
+    PetscCheck(c->master[0] && c->slave[0], PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couples/%" PetscInt_FMT " needs master and slave surfaces", s->filename, i);
+    for (PetscInt j = 0; j < i; j++) PetscCheck(s->couples[j].k != c->k, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couples/%" PetscInt_FMT " and couples/%" PetscInt_FMT " have the same k = %" PetscInt_FMT, s->filename, j, i, c->k);
+    /* mu tan(phi): above 1e3 (a friction angle within 0.06 degrees of 90) the cone is numerically a cylinder */
+    PetscCheck(c->mu <= MBC_MAX_MU, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g; values above %g are not physical (use a bonded couple instead)", s->filename, c->k, (double)c->mu, (double)MBC_MAX_MU);
+    for (PetscInt j = 0; j < s->nbodies; j++) PetscCheck(c->master_faces[j] >= 0 && c->slave_faces[j] >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couples/%" PetscInt_FMT " has a negative face count for body '%s'", s->filename, i, s->bodies[j].name);
+  }
+  for (PetscInt i = 0; i < s->ndirichlet; i++) {
+    MBCDirichletDesc *d = &s->dirichlet[i];
+    PetscBool         same;
+    PetscCheck(d->surface_id >= 1 && d->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: dirichlet/%" PetscInt_FMT " has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, i, d->surface_id, s->nsurfaces);
+    PetscCall(PetscStrcmp(d->surface, s->surfaces[d->surface_id - 1].name, &same));
+    PetscCheck(same, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: dirichlet/%" PetscInt_FMT " names surface '%s' but its surface_id %" PetscInt_FMT " is '%s'", s->filename, i, d->surface, d->surface_id, s->surfaces[d->surface_id - 1].name);
+  }
+  for (PetscInt i = 0; i < s->nloads; i++) {
+    MBCLoadDesc *l = &s->loads[i];
+    PetscCall(PetscSNPrintf(where, sizeof(where), "loads/%" PetscInt_FMT, i));
+    PetscCall(CheckNameList(s, l->bodies, s->nbodies, BodyName, "body", where));
+    if (l->kind == MBC_LOAD_GRAVITY) { /* the force per volume, density times acceleration, must be a number */
+      const PetscReal g = PetscMax(PetscMax(PetscAbsReal(l->vector[0]), PetscAbsReal(l->vector[1])), PetscAbsReal(l->vector[2]));
+      for (PetscInt b = 0; b < s->nbodies; b++) {
+        PetscBool applies;
+        PetscCall(MBCLoadAppliesToBody(l, s->bodies[b].name, &applies));
+        PetscCheck(!applies || !PetscIsInfOrNanReal(s->bodies[b].density * g), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s': density %g times the gravity of loads/%" PetscInt_FMT " (%g) overflows", s->filename, s->bodies[b].name, (double)s->bodies[b].density, i, (double)g);
+      }
+    }
+    if (l->kind == MBC_LOAD_GRAVITY || l->kind == MBC_LOAD_BODY_FORCE) continue;
+    PetscBool same;
+    PetscCheck(l->surface_id >= 1 && l->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: loads/%" PetscInt_FMT " has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, i, l->surface_id, s->nsurfaces);
+    PetscCall(PetscStrcmp(l->surface, s->surfaces[l->surface_id - 1].name, &same));
+    PetscCheck(same, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: loads/%" PetscInt_FMT " names surface '%s' but its surface_id %" PetscInt_FMT " is '%s'", s->filename, i, l->surface, l->surface_id, s->surfaces[l->surface_id - 1].name);
+  }
+  for (PetscInt i = 0; i < s->npoints; i++) {
+    PetscInt j = 0;
+    if (s->points[i].body[0]) PetscCall(FindName(s->points[i].body, s->nbodies, BodyName, s, &j));
+    PetscCheck(j >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: output point '%s' names body '%s', which the scene does not have", s->filename, s->points[i].name, s->points[i].body);
+  }
   PetscFunctionReturn(0);
 }
 
@@ -427,6 +555,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
 
   PetscCall(ReadOutput(&root, s));
   PetscCall(H5NodeClose(&root));
+  PetscCall(SceneCheckReferences(s));
   PetscFunctionReturn(0);
 }
 
@@ -440,23 +569,28 @@ static PetscErrorCode SceneCreate(MPI_Comm comm, MBCScene *scene)
 
 PetscErrorCode MBCSceneLoad(MPI_Comm comm, const char filename[], MBCScene *scene)
 {
-  MBCScene  s;
-  PetscBool exists;
-  hid_t     file;
+  MBCScene       s;
+  PetscBool      exists;
+  hid_t          file;
+  PetscErrorCode ierr;
 
   PetscFunctionBegin;
   PetscCall(MBCInitializePackage());
   PetscCall(PetscLogEventBegin(MBC_SceneLoad, 0, 0, 0, 0));
   PetscCall(PetscTestFile(filename, 'r', &exists));
   PetscCheck(exists, comm, PETSC_ERR_FILE_OPEN, "Scene file %s does not exist or cannot be read", filename);
+  PetscCall(MBCH5CheckPathLength(filename, "scene file")); /* the meshes are read through MPI-IO */
   PetscCall(SceneCreate(comm, &s));
   PetscCall(PetscStrncpy(s->filename, filename, sizeof(s->filename)));
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* our messages replace HDF5's error stack dump */
   PetscCheck(H5Fis_hdf5(filename) > 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s is not an HDF5 file; make scene files with mbcontact-prep", filename);
   file = H5Fopen(filename, H5F_ACC_RDONLY, H5P_DEFAULT);
   PetscCheck(file >= 0, comm, PETSC_ERR_FILE_OPEN, "Cannot open scene file %s", filename);
-  PetscCall(SceneRead(s, file));
+  /* the file is closed on the error paths too */
+  ierr = SceneRead(s, file);
+  if (!ierr) ierr = MBCSceneCheckMeshes(s, file);
   H5Fclose(file);
+  PetscCall(ierr);
   PetscCall(PetscLogEventEnd(MBC_SceneLoad, 0, 0, 0, 0));
   *scene = s;
   PetscCall(PetscObjectViewFromOptions((PetscObject)s, NULL, "-mbc_scene_view"));

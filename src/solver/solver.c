@@ -1,5 +1,6 @@
 /* The solver: places bodies on sub-communicators, sets them up, steps in time. */
 #include <mbc/private/solverimpl.h>
+#include <mbc/private/h5util.h>
 #include <ctype.h>
 
 PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
@@ -76,8 +77,11 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   s->mass     = (MBCMassType)mass;
   s->scene->analysis = s->analysis; /* the bodies read these from the scene */
   s->scene->mass     = s->mass;
-  PetscCheck(s->dt > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive", (double)s->dt);
-  PetscCheck(s->final_time >= s->dt * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be at least one step (%g)", (double)s->final_time, (double)s->dt);
+  PetscCheck(s->dt > 0 && PetscIsNormalReal(s->dt), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive and finite", (double)s->dt);
+  PetscCheck(s->final_time >= s->dt * (1 - 1e-12) && PetscIsNormalReal(s->final_time), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be finite and at least one step (%g)", (double)s->final_time, (double)s->dt);
+  /* checked before the cast to an integer below (undefined beyond its range); the output
+     reserves a few numbers per step up front */
+  PetscCheck(s->final_time / s->dt <= MBC_MAX_STEPS, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g to final time -mbc_final_time %g is %.3g steps, more than %g: use a larger dt", (double)s->dt, (double)s->final_time, (double)(s->final_time / s->dt), (double)MBC_MAX_STEPS);
   PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);
@@ -326,6 +330,44 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* A displacement beyond ten times the model's extent is no small-strain answer: a load or a
+   material far off (E = 1e-300, a pressure of 1e308, mixed units) that would be written as
+   results. Collective on the solver's communicator. */
+static PetscErrorCode SolverCheckDisplacementSize(MBCSolver s)
+{
+  PetscReal *ub, box[6], size = 0;
+  PetscInt   worst = 0;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(s->nbodies, &ub));
+  for (PetscInt d = 0; d < 3; d++) box[d] = box[3 + d] = PETSC_MIN_REAL; /* -lo, hi */
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    Vec     X;
+    if (!body || !body->u) continue;
+    PetscCall(DMGetCoordinates(body->dm, &X));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscReal lo, hi;
+      PetscCall(VecStrideMin(X, d, NULL, &lo));
+      PetscCall(VecStrideMax(X, d, NULL, &hi));
+      box[d]     = PetscMax(box[d], -lo);
+      box[3 + d] = PetscMax(box[3 + d], hi);
+    }
+    PetscCall(VecNorm(body->u, NORM_INFINITY, &ub[b]));
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, box, 6, MPIU_REAL, MPIU_MAX, s->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, ub, (PetscMPIInt)s->nbodies, MPIU_REAL, MPIU_MAX, s->comm));
+  for (PetscInt d = 0; d < 3; d++) size = PetscMax(size, box[3 + d] + box[d]);
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (ub[b] > ub[worst]) worst = b;
+  {
+    const PetscReal u = ub[worst];
+    PetscCall(PetscFree(ub));
+    PetscCheck(u <= 10 * size, s->comm, PETSC_ERR_USER_INPUT, "Scene file %s: at t = %g body '%s' moves by %g, more than ten times the model's extent %g: no small-strain answer (check E, the loads and their units)", s->scene->filename, (double)s->time, s->scene->bodies[worst].name, (double)u, (double)size);
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Static analysis in the incremental form of the dynamic one, without inertia:
    (K + eps diag K) du = F(t) - K u + H lambda, u += du, repeated within a step until the
    out-of-balance force of the last iterate, max|A du|, is below rtol max|K u|. The spring
@@ -451,6 +493,7 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
       PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
     }
     PetscCall(SolverMonitor(s));
+    PetscCall(SolverCheckDisplacementSize(s));
     PetscCall(MBCSolverOutputStep(s));
   }
   PetscFunctionReturn(0);
@@ -535,6 +578,7 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
   s->time = 0;
   PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   PetscCall(SolverMonitor(s));
+  PetscCall(SolverCheckDisplacementSize(s));
   PetscCall(MBCSolverOutputStep(s));
   PetscFunctionReturn(0);
 }
@@ -599,6 +643,7 @@ static PetscErrorCode SolverDynamicStep(MBCSolver s)
     }
     PetscCall(SolverContact(s));
     PetscCall(SolverMonitor(s));
+    PetscCall(SolverCheckDisplacementSize(s));
     PetscCall(MBCSolverOutputStep(s));
   }
   PetscFunctionReturn(0);
@@ -612,6 +657,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
   if (s->stage == 0) {
     PetscCall(MBCSolverSetUp(s));
     if (s->contact) {
+      s->contact->check_penetration = (PetscBool)!s->search_only; /* the search report shows the gaps (-mbc_contact_view) */
       PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_TRUE, NULL));
       if (s->contact->view) PetscCall(MBCContactView(s->contact, PETSC_VIEWER_STDOUT_(s->comm)));
     }
@@ -793,8 +839,18 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
     PetscFunctionReturn(0);
   }
   if (s->stage == 1) PetscCall(MBCSolverOutputClose(s)); /* stepped part of the way: the files hold what was done */
+  /* still open after an error during the run: HDF5 would flush it at exit, after MPI_Finalize */
+  if (s->points_csv) fclose(s->points_csv);
+  if (s->energy_csv) fclose(s->energy_csv);
+  s->points_csv = s->energy_csv = NULL;
+  if (s->h5 >= 0) {
+    hid_t file = (hid_t)s->h5;
+    s->h5      = -1;
+    PetscCall(MBCH5FileClose(&file));
+  }
   if (s->monitordestroy) PetscCall((*s->monitordestroy)(&s->monitorctx));
   PetscCall(MBCSolverContactPointsFree(s));
+
   PetscCall(MBCSolverContactDestroy(s));
   PetscCall(MBCContactDestroy(&s->contact));
   PetscCall(MBCMultiplierDestroy(&s->mult));

@@ -1,6 +1,7 @@
 /* HDF5 C API helpers: the serial dataset writer of FCLIB, and the collective ones of the result
    file, which every rank of the solver's communicator opens with the MPI-IO driver. */
 #include <mbc/private/h5util.h>
+#include <stdlib.h>
 
 /* Dataset name under loc: n entries of ncomp components (1D when ncomp is 1). */
 PetscErrorCode MBCH5WriteArray(hid_t loc, const char name[], hid_t type, PetscInt n, PetscInt ncomp, const void *buf)
@@ -26,6 +27,20 @@ static void H5Where(hid_t loc, const char name[], char *where, size_t len)
   snprintf(where, len, "%s:%s%s%s", file, path, strcmp(path, "/") ? "/" : "", name);
 }
 
+/* Open MPI 4.1's MPI-IO (ompio, through its sharedfp component) aborts with "buffer overflow
+   detected" on a file path of 246 characters or more, before HDF5 returns: refuse it with a
+   message, unless ROMIO or another sharedfp component is chosen. */
+PetscErrorCode MBCH5CheckPathLength(const char path[], const char what[])
+{
+  const char *io = getenv("OMPI_MCA_io"), *sharedfp = getenv("OMPI_MCA_sharedfp");
+  size_t      len;
+
+  PetscFunctionBegin;
+  PetscCall(PetscStrlen(path, &len));
+  PetscCheck(len < 246 || (io && strstr(io, "romio")) || sharedfp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "The %s %s is %zu characters long: Open MPI's MPI-IO (ompio) aborts on paths of 246 characters or more; use a shorter path, or set OMPI_MCA_io=romio321", what, path, len);
+  PetscFunctionReturn(0);
+}
+
 /* A new file (truncating an old one) on all ranks of comm, with the MPI-IO driver and collective
    metadata operations. HDF5's own error stack is silenced: failures are PETSc errors naming the
    file. */
@@ -34,6 +49,7 @@ PetscErrorCode MBCH5FileCreate(MPI_Comm comm, const char path[], hid_t *file)
   hid_t fapl;
 
   PetscFunctionBegin;
+  PetscCall(MBCH5CheckPathLength(path, "result file"));
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
   fapl = H5Pcreate(H5P_FILE_ACCESS);
   PetscCheck(fapl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "Cannot set up parallel HDF5 (MPI-IO) for %s", path);

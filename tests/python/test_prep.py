@@ -352,6 +352,12 @@ SCENE_ERRORS = [
     ("hydrostatic value", setter("loads", 2, value=HYDROSTATIC | {"value": 1.0}), ["loads[2].value", "unknown key"]),
     ("time csv absent", setter("loads", 3, "time", value={"csv": "nothere.csv"}), ["loads[3].time.csv", "nothere.csv"]),
     ("time csv key", setter("loads", 3, "time", value={"csv": "a.csv", "scale": 2}), ["loads[3].time.scale", "unknown key"]),
+    # issue 13: integers beyond int32 were written wrapped (k 2**31 as -2147483648, every 2**40 as 0)
+    ("k int32", setter("couples", 0, "k", value=2**31), ["couples[0].k", "<= 2147483647"]),
+    ("every int32", setter("output", "every", value=2**40), ["output.every", "<= 2147483647"]),
+    ("title 1 MB", setter("title", value="t" * 2**20), ["title", "longer than 255"]),  # was a traceback
+    ("mu absurd", setter("couples", 0, "mu", value=1e20), ["couples[0].mu", "at most 1000"]),
+    ("dt 1e9 steps", setter("analysis", "dt", value=1e-9), ["analysis.dt", "more than 1e+07"]),
 ]
 
 

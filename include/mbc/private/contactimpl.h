@@ -64,6 +64,9 @@ struct _n_MBCContact {
   PetscBool  view;
   char       dump[PETSC_MAX_PATH_LEN];
   PetscInt   nsearches;     /* global searches so far */
+  PetscReal  penetration_tol;     /* initial penetration refused beyond this (< 0: this times -1 the mean face edge) */
+  PetscBool  accept_penetration;  /* warn instead */
+  PetscBool  check_penetration;   /* off for -mbc_contact_search_only: a report, no steps */
   Vec       *usearch;       /* per body: displacement at the last global search (NULL off the body) */
 };
 

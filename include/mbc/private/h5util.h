@@ -5,6 +5,7 @@
 #include <petscsys.h>
 #include <hdf5.h>
 
+PETSC_INTERN PetscErrorCode MBCH5CheckPathLength(const char[], const char[]);
 PETSC_INTERN PetscErrorCode MBCH5WriteArray(hid_t, const char[], hid_t, PetscInt, PetscInt, const void *);
 
 /* Collective on the file's communicator: every rank calls each one with the same arguments

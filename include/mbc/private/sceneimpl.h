@@ -7,6 +7,10 @@
 #include <petscviewerhdf5.h>
 
 #define MBC_NAME_LEN 256
+/* Friction coefficients above this are refused: mu = 1e3 is a friction angle of 89.94 degrees. */
+#define MBC_MAX_MU 1e3
+/* Step counts above this are refused (one FE solve per step; the output reserves memory per step). */
+#define MBC_MAX_STEPS 1e7
 
 typedef enum {
   MBC_TIME_CONSTANT, /* present from the start: part of the initial static state */
@@ -96,4 +100,5 @@ struct _n_MBCScene {
 };
 
 PETSC_EXTERN PetscErrorCode MBCTimeFactor(MBCScene, MBCTimeKind, PetscInt, PetscReal, PetscReal *);
+PETSC_INTERN PetscErrorCode MBCSceneCheckMeshes(MBCScene, hid_t);
 PETSC_INTERN PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *, const char[], PetscBool *);
