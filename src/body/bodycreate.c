@@ -210,6 +210,10 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(MatDestroy(&b->M));
   PetscCall(MatDestroy(&b->A));
   PetscCall(KSPDestroy(&b->ksp));
+  for (PetscInt l = 0; l < MBC_MAX_CUTS; l++) {
+    PetscCall(KSPDestroy(&b->kspcut[l]));
+    PetscCall(MatDestroy(&b->Acut[l]));
+  }
   PetscCall(MatDestroy(&b->Mc));
   PetscCall(KSPDestroy(&b->kspM));
   PetscCall(VecDestroy(&b->fcontact));

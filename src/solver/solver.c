@@ -17,6 +17,8 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->static_stabilize = -1;
   s->static_rtol      = 1e-6;
   s->static_max_it    = 50;
+  s->dt_cut           = PETSC_TRUE;
+  s->dt_min           = -1;
   s->dblock           = 256;
   *solver = s;
   PetscFunctionReturn(0);
@@ -71,6 +73,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
+  PetscCall(PetscOptionsBool("-mbc_dt_cut", "Dynamic: a step whose contact solve fails is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
+  PetscCall(PetscOptionsReal("-mbc_dt_min", "Dynamic: the smallest step a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
@@ -88,6 +92,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
     for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
   s->nsteps = (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9);
+  if (s->dt_min < 0) s->dt_min = s->dt / 1024;
+  PetscCheck(s->dt_min > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_dt_min %g must be positive", (double)s->dt_min);
   if (s->fclib_step < 0) s->fclib_step = s->nsteps;
   PetscCheck(!s->fclib_file[0] || (s->fclib_step >= 1 && s->fclib_step <= s->nsteps), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT " is not a step of this run (1 to %" PetscInt_FMT ")", s->fclib_step, s->nsteps);
   PetscCheck(s->static_rtol > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_rtol %g must be positive", (double)s->static_rtol);
@@ -260,7 +266,8 @@ static PetscErrorCode SolverContact(MBCSolver s)
       pairs[MBC_PAIR_SIZE * k + 2] = cp->points[j].face;
       pairs[MBC_PAIR_SIZE * k + 3] = (PetscInt)(h & 0x7fffffff);
     }
-  same = (PetscBool)(s->pairs_built && n == s->npairs_built);
+  same = (PetscBool)(s->pairs_built && n == s->npairs_built && !s->force_build); /* force_build: another step size */
+  s->force_build = PETSC_FALSE;
   if (same) PetscCall(PetscArraycmp(pairs, s->pairs_built, MBC_PAIR_SIZE * n, &same));
   if (!same) {
     PetscCall(MBCSolverContactSetUp(s, n, pairs)); /* takes pairs */
@@ -295,6 +302,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 {
   PetscFunctionBegin;
   PetscCall(MBCSolverContactSolve(s));
+  if (s->contact_failed) PetscFunctionReturn(0); /* the step is cut: nothing to count or print */
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) SolverContactWork(s);
   if (s->monitor && s->ncontact) {
     PetscInt count[3] = {0, 0, 0};
@@ -554,13 +562,55 @@ static PetscErrorCode BodyAddDamping(MBCBody body, PetscReal scale, Vec y, Vec x
   PetscFunctionReturn(0);
 }
 
+/* Newmark's coefficients for a step h (incremental form). */
+typedef struct {
+  PetscReal h, a0, a1, a2, a3, a4, a5, a6, a7;
+} NewmarkCoefficients;
+
+static NewmarkCoefficients Newmark(PetscReal h, PetscReal beta, PetscReal gamma)
+{
+  NewmarkCoefficients c;
+  c.h = h, c.a0 = 1 / (beta * h * h), c.a1 = gamma / (beta * h), c.a2 = 1 / (beta * h), c.a3 = 1 / (2 * beta) - 1;
+  c.a4 = gamma / beta - 1, c.a5 = h / 2 * (gamma / beta - 2), c.a6 = h * (1 - gamma), c.a7 = gamma * h;
+  return c;
+}
+
+/* body->ksp, body->A: the factor of step level `level` (h = dt / 2^level), factored once and kept. */
+static PetscErrorCode BodyUseLevel(MBCBody body, PetscInt level, NewmarkCoefficients c)
+{
+  PetscFunctionBegin;
+  body->aK = 1 + c.a1 * body->cK;
+  body->aM = c.a0 + c.a1 * body->cM;
+  if (!body->kspcut[level]) PetscCall(MBCBodyFactor(body, body->aK, body->aM, &body->kspcut[level], &body->Acut[level], level ? "Newmark effective stiffness (cut step)" : "Newmark effective stiffness"));
+  PetscCall(PetscObjectReference((PetscObject)body->kspcut[level]));
+  PetscCall(PetscObjectReference((PetscObject)body->Acut[level]));
+  PetscCall(KSPDestroy(&body->ksp));
+  PetscCall(MatDestroy(&body->A));
+  body->ksp = body->kspcut[level];
+  body->A   = body->Acut[level];
+  PetscFunctionReturn(0);
+}
+
+/* Every body's factor for h = dt / 2^level, and D rebuilt for it (the pairs unchanged). */
+static PetscErrorCode SolverDynamicUseLevel(MBCSolver s, PetscInt level)
+{
+  const NewmarkCoefficients c = Newmark(s->dt / PetscPowInt(2, level), s->beta, s->gamma);
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], level, c));
+  s->level       = level;
+  s->force_build = PETSC_TRUE;
+  PetscCall(SolverContact(s));
+  PetscFunctionReturn(0);
+}
+
 /* Newmark in incremental form: K~ dU = F(t+dt) - K u + M (a2 v + a3 a) + C (a4 v + a5 a),
    K~ = K + a0 M + a1 C factored once (the paper's form; contact adds B lambda to the right).
    Here: the initial state, K~ factored, step 0 (its monitor line and output). */
 static PetscErrorCode SolverDynamicBegin(MBCSolver s)
 {
   const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
-  const PetscReal a0 = 1 / (beta * dt * dt), a1 = gamma / (beta * dt);
 
   PetscFunctionBegin;
   s->theta = gamma; /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
@@ -570,11 +620,10 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
     MBCBody body = s->bodies[b];
     if (!body) continue;
     PetscCall(BodyDynamicInitialState(body));
-    body->aK = 1 + a1 * body->cK;
-    body->aM = a0 + a1 * body->cM;
-    PetscCall(MBCBodyFactor(body, body->aK, body->aM, &body->ksp, &body->A, "Newmark effective stiffness"));
+    PetscCall(BodyUseLevel(body, 0, Newmark(dt, beta, gamma)));
   }
-  s->step = 0;
+  s->level = 0;
+  s->step  = 0;
   s->time = 0;
   PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   PetscCall(SolverMonitor(s));
@@ -583,69 +632,104 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* One Newmark step of c.h ending at s->time; returns with s->contact_failed set and the state
+   untouched when the contact solve did not converge. */
+static PetscErrorCode SolverDynamicIncrement(MBCSolver s, NewmarkCoefficients c)
+{
+  const PetscReal h = c.h, a0 = c.a0, a2 = c.a2, a3 = c.a3, a4 = c.a4, a5 = c.a5, a6 = c.a6, a7 = c.a7;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->f));
+    PetscCall(VecCopy(body->f, body->rhs));
+    PetscCall(MatMult(body->K, body->u, body->work));
+    PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+    PetscCall(VecAXPBY(body->work2, a2, 0.0, body->v)); /* work2 = a2 v + a3 a */
+    PetscCall(VecAXPY(body->work2, a3, body->a));
+    PetscCall(MatMult(body->M, body->work2, body->work));
+    PetscCall(VecAXPY(body->rhs, 1.0, body->work));
+    if (body->cM != 0 || body->cK != 0) {
+      PetscCall(VecAXPBY(body->work2, a4, 0.0, body->v));
+      PetscCall(VecAXPY(body->work2, a5, body->a));
+      PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
+    }
+    PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
+    PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
+  }
+  if (s->contact) { /* du += A^-1 H lambda */
+    PetscCall(SolverContactForces(s));
+    if (s->contact_failed) PetscFunctionReturn(0); /* nothing changed: the caller cuts the step */
+  }
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody     body = s->bodies[b];
+    PetscScalar work, dv;
+    if (!body) continue;
+    PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
+
+    /* trapezoidal work of the external loads */
+    PetscCall(VecAXPY(body->fold, 1.0, body->f));
+    PetscCall(VecDot(body->fold, body->du, &work));
+    body->wext += 0.5 * PetscRealPart(work);
+    PetscCall(VecCopy(body->f, body->fold));
+
+    /* a_new = a0 du - a2 v - a3 a (in work2); v_new = v + a6 a + a7 a_new */
+    PetscCall(VecAXPBY(body->work2, a0, 0.0, body->du));
+    PetscCall(VecAXPY(body->work2, -a2, body->v));
+    PetscCall(VecAXPY(body->work2, -a3, body->a));
+    PetscCall(VecAXPBYPCZ(body->v, a6, a7, 1.0, body->a, body->work2)); /* v = v + a6 a + a7 a_new */
+    PetscCall(VecCopy(body->work2, body->a));
+    PetscCall(VecAXPY(body->u, 1.0, body->du));
+    /* damping dissipation with the mid-step velocity (v_n + v_n+1)/2 = du/dt for gamma = 1/2 */
+    if (body->cM != 0 || body->cK != 0) {
+      PetscCall(VecAXPBY(body->work2, 1.0 / h, 0.0, body->du));
+      PetscCall(VecZeroEntries(body->rhs));
+      PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
+      PetscCall(VecDot(body->work2, body->rhs, &dv));
+      body->wdamp += h * PetscRealPart(dv);
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Advances by h = dt / 2^level from s->time. A step whose contact solve fails is done again as
+   two steps of h / 2 (down to -mbc_dt_min; -mbc_dt_cut 0 turns it off), and says so; the next
+   step of the run is back at the scene's dt. */
+static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
+{
+  const PetscReal t0 = s->time, h = s->dt / PetscPowInt(2, level);
+
+  PetscFunctionBegin;
+  if (level != s->level) PetscCall(SolverDynamicUseLevel(s, level));
+  s->time             = t0 + h;
+  s->contact_failed   = PETSC_FALSE;
+  s->contact_may_fail = (PetscBool)(s->dt_cut && level + 1 < MBC_MAX_CUTS && h / 2 >= s->dt_min * (1 - 1e-12));
+  PetscCall(SolverDynamicIncrement(s, Newmark(h, s->beta, s->gamma)));
+  s->contact_may_fail = PETSC_FALSE;
+  if (!s->contact_failed) {
+    if (level) PetscCall(SolverContact(s)); /* the search between the sub-steps */
+    PetscFunctionReturn(0);
+  }
+  s->ncuts++;
+  PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s at dt %g: the step is cut to two of dt %g\n", s->step, (double)(t0 + h), ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), (double)h, (double)(h / 2)));
+  s->time = t0;
+  PetscCall(SolverDynamicAdvance(s, level + 1));
+  PetscCall(SolverDynamicAdvance(s, level + 1));
+  PetscFunctionReturn(0);
+}
+
 /* Time step s->step. */
 static PetscErrorCode SolverDynamicStep(MBCSolver s)
 {
-  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
-  const PetscReal a0 = 1 / (beta * dt * dt), a2 = 1 / (beta * dt), a3 = 1 / (2 * beta) - 1;
-  const PetscReal a4 = gamma / beta - 1, a5 = dt / 2 * (gamma / beta - 2), a6 = dt * (1 - gamma), a7 = gamma * dt;
-
   PetscFunctionBegin;
-  {
-    s->time = s->step * dt;
-    for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody body = s->bodies[b];
-      if (!body) continue;
-      PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->f));
-      PetscCall(VecCopy(body->f, body->rhs));
-      PetscCall(MatMult(body->K, body->u, body->work));
-      PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-      PetscCall(VecAXPBY(body->work2, a2, 0.0, body->v)); /* work2 = a2 v + a3 a */
-      PetscCall(VecAXPY(body->work2, a3, body->a));
-      PetscCall(MatMult(body->M, body->work2, body->work));
-      PetscCall(VecAXPY(body->rhs, 1.0, body->work));
-      if (body->cM != 0 || body->cK != 0) {
-        PetscCall(VecAXPBY(body->work2, a4, 0.0, body->v));
-        PetscCall(VecAXPY(body->work2, a5, body->a));
-        PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
-      }
-      PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
-      PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
-    }
-    if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda */
-    for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody     body = s->bodies[b];
-      PetscScalar work, dv;
-      if (!body) continue;
-      PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
-
-      /* trapezoidal work of the external loads */
-      PetscCall(VecAXPY(body->fold, 1.0, body->f));
-      PetscCall(VecDot(body->fold, body->du, &work));
-      body->wext += 0.5 * PetscRealPart(work);
-      PetscCall(VecCopy(body->f, body->fold));
-
-      /* a_new = a0 du - a2 v - a3 a (in work2); v_new = v + a6 a + a7 a_new */
-      PetscCall(VecAXPBY(body->work2, a0, 0.0, body->du));
-      PetscCall(VecAXPY(body->work2, -a2, body->v));
-      PetscCall(VecAXPY(body->work2, -a3, body->a));
-      PetscCall(VecAXPBYPCZ(body->v, a6, a7, 1.0, body->a, body->work2)); /* v = v + a6 a + a7 a_new */
-      PetscCall(VecCopy(body->work2, body->a));
-      PetscCall(VecAXPY(body->u, 1.0, body->du));
-      /* damping dissipation with the mid-step velocity (v_n + v_n+1)/2 = du/dt for gamma = 1/2 */
-      if (body->cM != 0 || body->cK != 0) {
-        PetscCall(VecAXPBY(body->work2, 1.0 / dt, 0.0, body->du));
-        PetscCall(VecZeroEntries(body->rhs));
-        PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
-        PetscCall(VecDot(body->work2, body->rhs, &dv));
-        body->wdamp += dt * PetscRealPart(dv);
-      }
-    }
-    PetscCall(SolverContact(s));
-    PetscCall(SolverMonitor(s));
-    PetscCall(SolverCheckDisplacementSize(s));
-    PetscCall(MBCSolverOutputStep(s));
-  }
+  s->time = (s->step - 1) * s->dt;
+  PetscCall(SolverDynamicAdvance(s, 0));
+  s->time = s->step * s->dt; /* not accumulated */
+  PetscCall(SolverContact(s));
+  PetscCall(SolverMonitor(s));
+  PetscCall(SolverCheckDisplacementSize(s));
+  PetscCall(MBCSolverOutputStep(s));
   PetscFunctionReturn(0);
 }
 

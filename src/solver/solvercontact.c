@@ -187,6 +187,7 @@ static PetscErrorCode SolverContactReset(MBCSolver s)
   PetscCall(VecDestroy(&s->lambda));
   PetscCall(VecDestroy(&s->ucontact));
   PetscCall(VecDestroy(&s->lamprev));
+  PetscCall(VecDestroy(&s->lamsave));
   PetscFunctionReturn(0);
 }
 

@@ -103,6 +103,10 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
 
   PetscFunctionBegin;
   if (!nc) PetscFunctionReturn(0);
+  if (s->contact_may_fail) { /* the warm start, for a retry with a smaller step */
+    if (!s->lamsave) PetscCall(VecDuplicate(s->lambda, &s->lamsave)); /* freed with the layout it has */
+    PetscCall(VecCopy(s->lambda, s->lamsave));
+  }
   PetscCall(MBCSolverContactGapRate(s, s->fp.q));
   if (s->carry != 0) { /* q' = q - c D lambda_n (scaled: W = D / dscale) */
     Vec t;
@@ -138,6 +142,11 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
   }
   if (s->fclib_step == s->step && s->fclib_file[0]) PetscCall(SolverContactWriteFclib(s));
   if (s->mult->reason < 0 && s->fp.G) PetscCall(SolverContactFrictionCapacity(s));
+  if (s->mult->reason < 0 && s->contact_may_fail) { /* the caller cuts the step: nothing changed */
+    PetscCall(VecCopy(s->lamsave, s->lambda));
+    s->contact_failed = PETSC_TRUE;
+    PetscFunctionReturn(0);
+  }
   PetscCheck(s->mult->reason > 0, s->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): %s solve %s after %" PetscInt_FMT " iterations, FCLIB merit %g > -mbc_multiplier_rtol %g", s->step, (double)s->time, ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), s->mult->its, (double)s->mult->merit, (double)s->mult->rtol);
   PetscCall(VecAXPBY(s->lamprev, 1.0 / s->dscale, -s->carry, s->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
   PetscCall(MBCSolverContactGather(s, s->lambda, s->rall));

@@ -8,6 +8,8 @@ struct _MBCBodyOps {
   PetscErrorCode (*view)(MBCBody, PetscViewer);
 };
 
+#define MBC_MAX_CUTS 11 /* dt / 1024 */
+
 struct _n_MBCBody {
   PETSCHEADER(struct _MBCBodyOps);
   char        name[MBC_NAME_LEN];
@@ -27,6 +29,8 @@ struct _n_MBCBody {
   PetscReal cM, cK;       /* damping C = cM M + cK K (never formed) */
   Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
   KSP ksp;
+  KSP kspcut[MBC_MAX_CUTS]; /* dynamic: the factor of each step size dt / 2^level used (solver.c) */
+  Mat Acut[MBC_MAX_CUTS];
   Mat Mc;                 /* mass operator of kspM (constrained rows/cols zeroed), made when contact needs it */
   KSP kspM;
   PetscReal a0, a1;       /* coefficients of A = aK K + aM M */

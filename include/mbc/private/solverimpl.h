@@ -103,6 +103,12 @@ struct _n_MBCSolver {
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
+  /* dynamic step control: a step whose contact solve fails is cut in two, down to dt_min */
+  PetscBool  dt_cut, contact_may_fail, contact_failed, force_build;
+  PetscReal  dt_min;
+  PetscInt   level, ncuts; /* the current step is dt / 2^level; steps cut so far */
+  Vec        lamsave;     /* the warm start, restored when a solve that may fail does */
+
   /* static analysis: equilibrium iterations, stabilisation of bodies held only by contact */
   PetscInt   ngrigid, *goff; /* free rigid modes of all bodies; body b's are goff[b].. goff[b+1] (static) */
   PetscScalar *gQ;        /* eigenvectors of G G^T (ng x ng, the k-th at gQ[k ng]) */
