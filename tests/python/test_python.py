@@ -126,3 +126,24 @@ print("ok", sc.filename)
     assert "ok " + str(tmp_path / "built" / "column.h5") in r.stdout, r.stdout + r.stderr
     assert "bad scene: mbcontact.Scene.fromDict('bad')" in r.stdout, r.stdout + r.stderr
     assert "nowhere" in r.stderr, r.stderr  # mbcontact-prep names the missing region
+
+
+hertz = load_script("meshes/hertz/build.py", "hertz_build_py")
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_hertz_from_python(tmp_path, nproc):
+    """The Hertz cylinders (hc 0.04 mm, static, frictionless) solved from Python at 1 and 2
+    ranks: the contact points the binding returns are the result file's, and the executable's
+    run gives the same pressures to rounding (same code, same decomposition). The accuracy
+    against Hertz is test_hertz.py's."""
+    from mbcontact.results import read_contact
+    h5 = hertz.build(str(tmp_path), hc=0.04)
+    solve(h5, "-mbc_output", str(tmp_path / "exe"), nproc=nproc)
+    r = run_python([os.path.join(ROOT, "tests", "python", "drive_hertz.py"), str(h5), str(tmp_path / "py")], nproc=nproc)
+    out = dict(line.split(" ", 1) for line in r.stdout.strip().splitlines())
+    a, b = read_contact(str(tmp_path / "exe.h5")), read_contact(str(tmp_path / "py.h5"))
+    assert int(out["points"]) == len(a["pressure"]) == len(b["pressure"])
+    assert np.abs(a["pressure"] - b["pressure"]).max() <= 1e-10 * np.abs(a["pressure"]).max()
+    assert abs(float(out["p_max"]) / b["pressure"].max() - 1) < 1e-12
+    assert int(out["closed"]) == int((b["state"] > 0).sum()) > 0
