@@ -166,6 +166,7 @@ int main(int argc, char **argv)
     /* A result file whose close failed (the disk full) stays in HDF5's list, and HDF5 1.10 crashes
        closing it again inside MPI_Finalize: leave without finalising then. */
     if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE) > 0) {
+      (void)PetscLogViewFromOptions(); /* -log_view, which PetscFinalize would have printed */
       fflush(stdout);
       fflush(stderr);
       _exit(sig ? 128 + sig : 1);

@@ -5,6 +5,56 @@
 #include <mbc/private/bodyimpl.h>
 #include <petscblaslapack.h>
 
+/* Owned DOFs on a contact surface (labels contact_master, contact_slave): mask[i] for local row i. */
+static PetscErrorCode BodyContactDofs(MBCBody body, PetscBool mask[])
+{
+  const char  *labels[2] = {"contact_master", "contact_slave"};
+  PetscSection gsec;
+  PetscInt     vStart, vEnd, rstart;
+
+  PetscFunctionBegin;
+  PetscCall(DMGetGlobalSection(body->dm, &gsec));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
+  for (PetscInt side = 0; side < 2; side++) {
+    DMLabel label;
+    IS      vals;
+    PetscInt nv;
+    const PetscInt *v;
+    PetscCall(DMGetLabel(body->dm, labels[side], &label));
+    if (!label) continue;
+    PetscCall(DMLabelGetValueIS(label, &vals));
+    PetscCall(ISGetLocalSize(vals, &nv));
+    PetscCall(ISGetIndices(vals, &v));
+    for (PetscInt k = 0; k < nv; k++) {
+      IS              faceIS;
+      const PetscInt *faces;
+      PetscInt        nfaces;
+      PetscCall(DMLabelGetStratumIS(label, v[k], &faceIS));
+      if (!faceIS) continue;
+      PetscCall(ISGetLocalSize(faceIS, &nfaces));
+      PetscCall(ISGetIndices(faceIS, &faces));
+      for (PetscInt f = 0; f < nfaces; f++) {
+        PetscInt *closure = NULL, nclosure;
+        PetscCall(DMPlexGetTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
+        for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+          PetscInt off;
+          if (closure[p] < vStart || closure[p] >= vEnd) continue;
+          PetscCall(PetscSectionGetOffset(gsec, closure[p], &off));
+          if (off < 0) continue; /* owned by another rank */
+          for (PetscInt d = 0; d < 3; d++) mask[off + d - rstart] = PETSC_TRUE;
+        }
+        PetscCall(DMPlexRestoreTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
+      }
+      PetscCall(ISRestoreIndices(faceIS, &faces));
+      PetscCall(ISDestroy(&faceIS));
+    }
+    PetscCall(ISRestoreIndices(vals, &v));
+    PetscCall(ISDestroy(&vals));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* body->rigid: the free modes (orthonormal), body->fix_rows: the DOFs held in K^+. The six rigid
    modes of the mesh, combined by the eigenvectors of C^T C (C: the modes on the prescribed DOFs)
    whose eigenvalues vanish: those combinations do not move any prescribed DOF. */
@@ -40,6 +90,7 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
   body->nrigid = k;
   if (k) {
     PetscReal   *piv, pv;
+    PetscBool   *oncontact;
     PetscScalar *rv;
     Vec         *W;
     PetscCall(PetscMalloc1(k, &body->rigid));
@@ -52,8 +103,16 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
       PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rigid[j])); /* exactly 0 there */
       j++;
     }
-    /* the held DOFs: elimination with full pivoting over the rows of R */
+    /* the held DOFs: elimination with full pivoting over the rows of R, off the contact surfaces
+       where a row nearly as good exists (held DOFs on a contact face made the Newton solve of a
+       one-element block stall: measured, cause not found) */
     PetscCall(VecDuplicateVecs(body->u, k, &W));
+    {
+      PetscInt n;
+      PetscCall(VecGetLocalSize(body->u, &n));
+      PetscCall(PetscCalloc1(n + 1, &oncontact));
+      PetscCall(BodyContactDofs(body, oncontact));
+    }
     for (PetscInt j = 0; j < k; j++) PetscCall(VecCopy(body->rigid[j], W[j]));
     PetscCall(PetscMalloc1(k, &piv));
     for (PetscInt p = 0; p < k; p++) {
@@ -64,8 +123,20 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
       PetscInt n;
       PetscCall(VecGetLocalSize(W[p], &n));
       PetscCall(VecGetArray(W[p], &rv));
-      for (PetscInt i = 0; i < n; i++)
-        if (PetscAbsScalar(rv[i]) > loc.v) loc.v = PetscAbsScalar(rv[i]), loc.row = rstart + i;
+      {
+        PetscReal mx = 0;
+        for (PetscInt i = 0; i < n; i++) mx = PetscMax(mx, PetscAbsScalar(rv[i]));
+        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &mx, 1, MPIU_REAL, MPI_MAX, body->comm));
+        for (PetscInt i = 0; i < n; i++) /* the largest off the contact surfaces, if it is at least half the largest */
+          if (!oncontact[i] && PetscAbsScalar(rv[i]) > loc.v && PetscAbsScalar(rv[i]) >= 0.5 * mx) loc.v = PetscAbsScalar(rv[i]), loc.row = rstart + i;
+        {
+          PetscReal any = loc.v, anyg;
+          PetscCall(MPIU_Allreduce(&any, &anyg, 1, MPIU_REAL, MPI_MAX, body->comm));
+          if (anyg < 0) /* none: the largest anywhere */
+            for (PetscInt i = 0; i < n; i++)
+              if (PetscAbsScalar(rv[i]) > loc.v) loc.v = PetscAbsScalar(rv[i]), loc.row = rstart + i;
+        }
+      }
       PetscCall(VecRestoreArray(W[p], &rv));
       {
         PetscReal   in[2] = {loc.v, (PetscReal)loc.row}, out[2];
@@ -102,6 +173,7 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
       }
     }
     PetscCall(PetscFree(piv));
+    PetscCall(PetscFree(oncontact));
     PetscCall(VecDestroyVecs(k, &W));
     /* owned held rows, sorted, for MatZeroRowsColumns and the right sides */
     body->nfix = 0;

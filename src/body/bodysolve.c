@@ -105,7 +105,7 @@ PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, Pets
     }
   }
   PetscCall(MBCBodySetConstrainedRows(body, g, rhs));
-  if (aK != 0 && aM == 0 && body->nrigid) { /* x = P K^+ P rhs */
+  if (aK != 0 && aM == 0 && body->nrigid) { /* x = K^+ rhs: the held rows 0 */
     PetscCall(MBCBodyZeroHeldRows(body, rhs, NULL));
   }
   PetscCall(KSPSolve(ksp, rhs, x));
