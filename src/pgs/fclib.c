@@ -1,6 +1,6 @@
 /* FCLIB interchange (layout: shared/benchmarks/fclib/README.md) with the HDF5 C API: Debian's
    libfclib links the serial HDF5, which must not share a process with PETSc's MPI HDF5. */
-#include <mbc/private/pgsimpl.h>
+#include <mbc/private/multiplierimpl.h>
 #include <mbc/private/h5util.h>
 
 /* Entries beyond this magnitude overflow the squares in the norms and the merit function. */

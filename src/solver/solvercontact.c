@@ -40,7 +40,7 @@ static PetscInt PointBody(const MBCCouple *cp, PetscInt j)
 }
 
 /* Does the constraint of point j of cp involve body b? */
-static PetscBool PointTouches(const MBCCouple *cp, PetscInt j, PetscInt b)
+PetscBool MBCSolverPointTouches(const MBCCouple *cp, PetscInt j, PetscInt b)
 {
   for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++)
     if (cp->master.nbody[cp->mnode[l]] == b) return PETSC_TRUE;
@@ -95,7 +95,7 @@ static PetscErrorCode BodyColumns(MBCSolver s, PetscInt b, PetscInt first[])
 
   PetscFunctionBegin;
   PetscCall(PetscFree(s->bcols[b]));
-  for (PetscInt k = 0; k < s->ncontact; k++) first[k] = PointTouches(&c->couples[s->kcouple[k]], s->kpoint[k], b) ? 0 : -1;
+  for (PetscInt k = 0; k < s->ncontact; k++) first[k] = MBCSolverPointTouches(&c->couples[s->kcouple[k]], s->kpoint[k], b) ? 0 : -1;
   for (PetscInt p = 0; p < s->ncontact; p++) {
     const PetscInt k = s->order[p];
     if (first[k] < 0) continue;
@@ -666,7 +666,7 @@ static PetscErrorCode SolverContactPreallocation(MBCSolver s, PetscInt rstart, P
     const MBCCouple *cp = &c->couples[s->kcouple[k]];
     PetscInt         bs[2], nb = 0, d = 0, o = 0;
     for (PetscInt b = 0; b < s->nbodies && nb < 2; b++) /* at most two: a master node, a slave face */
-      if (PointTouches(cp, s->kpoint[k], b)) bs[nb++] = b;
+      if (MBCSolverPointTouches(cp, s->kpoint[k], b)) bs[nb++] = b;
     if (nb == 1) {
       for (PetscInt j = 0; j < s->nbcols[bs[0]]; j++) (s->bcols[bs[0]][j] >= rstart && s->bcols[bs[0]][j] < rend) ? d++ : o++;
     } else if (nb == 2) { /* the union of two ascending lists */

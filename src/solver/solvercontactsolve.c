@@ -77,10 +77,7 @@ static PetscErrorCode SolverContactFrictionCapacity(MBCSolver s)
     for (PetscInt k = 0; k < s->ncontact; k++) { /* the points touching b (replicated bookkeeping) */
       const MBCCouple *cp = &c->couples[s->kcouple[k]];
       const PetscInt   j  = s->kpoint[k];
-      PetscBool        touches = PETSC_FALSE;
-      for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1] && !touches; l++) touches = (PetscBool)(cp->master.nbody[cp->mnode[l]] == b);
-      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1] && !touches; l++) touches = (PetscBool)(cp->slave.nbody[cp->snode[l]] == b);
-      if (!touches) continue;
+      if (!MBCSolverPointTouches(cp, j, b)) continue;
       for (PetscInt d = 0; d < 3; d++) n[d] += s->frames[9 * k + d];
       mu = PetscMax(mu, cp->mu);
       cnt++;

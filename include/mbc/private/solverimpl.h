@@ -162,6 +162,7 @@ PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidRHS(MBCSolver);
+PETSC_INTERN PetscBool      MBCSolverPointTouches(const MBCCouple *, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidMotion(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactDestroy(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactToBodies(MBCSolver, Vec);
