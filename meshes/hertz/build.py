@@ -249,6 +249,37 @@ def build_sphere(outdir, hc=0.05, fine=0.8, block_hc=None):
     return prepare(outdir, "sphere", sphere_scene())
 
 
+def two_spheres_scene(delta):
+    material = {"E": E, "nu": NU}
+    return {
+        "title": "Hertz: two equal spheres (an eighth of each)",
+        "meshes": {"m": "two_spheres.msh"},
+        "bodies": {"upper": {"mesh": "m", "regions": "upper", "material": material},
+                   "lower": {"mesh": "m", "regions": "lower", "material": material}},
+        "couples": [{"k": 1, "master": "upper_pole", "slave": "lower_pole", "mu": 0.0}],
+        "dirichlet": [{"surface": f"{b}_sym{a}", "components": [a]} for b in ("upper", "lower") for a in "xy"]
+                     + [{"surface": "upper_flat", "components": ["z"], "value": -delta / 2},
+                        {"surface": "lower_flat", "components": ["z"], "value": delta / 2}],
+        "analysis": {"type": "static"},
+        "output": {"fields": ["displacement"]},
+    }
+
+
+def build_two_spheres(outdir, hc, fine, delta, radius=SPHERE_R):
+    """Two equal spheres of radius R touching at the origin, an eighth of each (the upper one is
+    sphere_parts' ball, the lower its mirror image in z = 0), pressed together by the approach
+    delta of their flat faces (each moves delta / 2). Hertz: the effective radius is R / 2 and
+    a^2 = delta R / 2, so a / R = 0.2 at delta = 0.08 R."""
+    os.makedirs(outdir, exist_ok=True)
+    ball, _ = sphere_parts(radius, hc, fine)
+    upper = meshgen.Part("upper", "hex8", ball.points, ball.cells,
+                         {k.replace("ball", "upper"): f for k, f in ball.surfaces.items()})
+    lower = meshgen.Part("lower", "hex8", ball.points * np.array([1.0, 1.0, -1.0]), ball.cells[:, [4, 5, 6, 7, 0, 1, 2, 3]],
+                         {k.replace("ball", "lower"): f[:, ::-1] for k, f in ball.surfaces.items()})  # a mirror turns cells and faces inside out
+    meshgen.write_parts(os.path.join(outdir, "two_spheres.msh"), [upper, lower])
+    return prepare(outdir, "two_spheres", two_spheres_scene(delta))
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("outdir")

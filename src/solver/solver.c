@@ -448,6 +448,7 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
   {
     PetscReal fmax = 0, kumax = 0;
     s->time = PetscMin(s->step * s->dt, s->final_time);
+    PetscCall(MBCSolverContactStepBegin(s));
     for (s->static_its = 1;; s->static_its++) {
       for (PetscInt b = 0; b < s->nbodies; b++) {
         MBCBody body = s->bodies[b];

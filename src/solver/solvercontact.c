@@ -762,7 +762,7 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
 {
   MBCContact c  = s->contact;
   PetscInt   nc = NumContacts(c), nold = s->npairs_built, *oldpairs = s->pairs_built, *oldoff = NULL, *dims, m, mloc;
-  PetscReal *oldframes = s->frames, *oldlam = NULL, *oldr = NULL, *oldslip = s->slip;
+  PetscReal *oldframes = s->frames, *oldlam = NULL, *oldr = NULL, *oldslip = s->slip, *oldstepslip = s->stepslip;
 
   PetscFunctionBegin;
   PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
@@ -785,7 +785,8 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     }
   }
   s->frames = NULL;
-  s->slip   = NULL;
+  s->slip     = NULL;
+  s->stepslip = NULL;
   PetscCall(SolverContactReset(s));
   s->pairs_built  = pairs;
   s->npairs_built = n;
@@ -794,6 +795,7 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
   PetscCall(PetscMalloc2(nc + 1, &s->kcouple, nc + 1, &s->kpoint));
   PetscCall(PetscMalloc1(9 * nc + 1, &s->frames));
   PetscCall(PetscCalloc1(3 * nc + 1, &s->slip));
+  PetscCall(PetscCalloc1(3 * nc + 1, &s->stepslip));
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const MBCContactPoint *p = &c->couples[i].points[j];
@@ -856,18 +858,20 @@ PetscErrorCode MBCSolverContactSetUp(MBCSolver s, PetscInt n, PetscInt pairs[])
     PetscCall(SolverContactScatterLocal(s, v[0], s->lamprev));
     PetscCall(SolverContactScatterLocal(s, v[1], s->lambda));
     PetscCall(PetscFree2(v[0], v[1]));
-    if (oldslip && nold) { /* the slip so far, (0, t1, t2) in each point's frame */
+    if (oldslip && nold) { /* the slip so far and in this load step, (0, t1, t2) in each point's frame */
       PetscInt        *off3;
-      const PetscReal *old[1] = {oldslip};
+      const PetscReal *old[2] = {oldslip, oldstepslip};
+      PetscReal       *carried[2] = {s->slip, s->stepslip};
       PetscCall(PetscMalloc1(PetscMax(nold, nc) + 1, &off3));
       for (PetscInt i = 0; i <= PetscMax(nold, nc); i++) off3[i] = 3 * i;
-      PetscCall(CarryFields(1, nold, oldpairs, oldframes, off3, old, nc, pairs, s->frames, off3, &s->slip));
-      for (PetscInt k = 0; k < nc; k++) s->slip[3 * k] = 0;
+      PetscCall(CarryFields(2, nold, oldpairs, oldframes, off3, old, nc, pairs, s->frames, off3, carried));
+      for (PetscInt k = 0; k < nc; k++) s->slip[3 * k] = s->stepslip[3 * k] = 0;
       PetscCall(PetscFree(off3));
     }
   }
   PetscCall(PetscFree3(oldoff, oldlam, oldr));
   PetscCall(PetscFree(oldslip));
+  PetscCall(PetscFree(oldstepslip));
   PetscCall(PetscFree(oldframes));
   PetscCall(PetscFree(oldpairs));
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactAccelerationUpdate(s)); /* also when no point is left */
@@ -884,6 +888,7 @@ PetscErrorCode MBCSolverContactDestroy(MBCSolver s)
   PetscCall(PetscFree(s->bcols));
   PetscCall(PetscFree(s->frames));
   PetscCall(PetscFree(s->slip));
+  PetscCall(PetscFree(s->stepslip));
   PetscCall(PetscFree(s->pairs_built));
   PetscFunctionReturn(0);
 }

@@ -92,6 +92,35 @@ static PetscErrorCode SolverContactFrictionCapacity(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* Coulomb's law in a static load step holds for the slip over the whole step: the equilibrium
+   iterations after the first only correct it, so their tangential rates start from the slip the
+   step's earlier iterations made (else a point that slid in the first iteration and not in the
+   next would be taken to stick, its traction inside the cone while the block slides). */
+static PetscErrorCode SolverContactAddStepSlip(MBCSolver s, Vec q)
+{
+  PetscScalar *a;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(q, &rstart, NULL));
+  PetscCall(VecGetArray(q, &a));
+  for (PetscInt p = s->pfirst; p < s->plast; p++) {
+    const PetscInt k = s->order[p];
+    if (s->coff[k + 1] - s->coff[k] == 3)
+      for (PetscInt d = 1; d < 3; d++) a[s->poff[p] + d - rstart] += s->stepslip[3 * k + d];
+  }
+  PetscCall(VecRestoreArray(q, &a));
+  PetscFunctionReturn(0);
+}
+
+/* A static load step begins: its slip counts from here. */
+PetscErrorCode MBCSolverContactStepBegin(MBCSolver s)
+{
+  PetscFunctionBegin;
+  if (s->stepslip) PetscCall(PetscArrayzero(s->stepslip, 3 * s->ncontact));
+  PetscFunctionReturn(0);
+}
+
 /* Given every body's free increment in body->du, solves for the multipliers and adds
    A^-1 H lambda. */
 PetscErrorCode MBCSolverContactSolve(MBCSolver s)
@@ -105,6 +134,7 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
     PetscCall(VecCopy(s->lambda, s->lamsave));
   }
   PetscCall(MBCSolverContactGapRate(s, s->fp.q));
+  if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverContactAddStepSlip(s, s->fp.q));
   if (s->carry != 0) { /* q' = q - c D lambda_n (scaled: W = D / dscale) */
     Vec t;
     PetscCall(VecDuplicate(s->lamprev, &t));
@@ -149,10 +179,14 @@ PetscErrorCode MBCSolverContactSolve(MBCSolver s)
   PetscCall(MBCSolverContactGather(s, s->lambda, s->rall));
   PetscCall(MBCSolverContactGather(s, s->ucontact, s->uall));
   /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the step's slip
-     (H's master weight is 1, so in length units) */
+     (H's master weight is 1, so in length units); in a static step it counts from the step's
+     start (SolverContactAddStepSlip), and this iteration moved the points by u_t - stepslip */
   for (PetscInt k = 0; k < nc; k++)
     if (s->coff[k + 1] - s->coff[k] == 3)
-      for (PetscInt d = 1; d < 3; d++) s->slip[3 * k + d] += s->uall[s->coff[k] + d];
+      for (PetscInt d = 1; d < 3; d++) {
+        s->slip[3 * k + d] += s->uall[s->coff[k] + d] - s->stepslip[3 * k + d];
+        if (s->analysis == MBC_ANALYSIS_STATIC) s->stepslip[3 * k + d] = s->uall[s->coff[k] + d];
+      }
   PetscCall(MBCSolverContactToBodies(s, s->lamprev));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];

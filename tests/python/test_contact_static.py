@@ -281,3 +281,92 @@ def test_ramped_shear_slip_onset(tmp_path):
     assert abs(c["t"][-1] - 0.85) < 1e-9  # the last step in equilibrium
     for t, fx, fz in zip(c["t"], c["fx"], c["fz"]):
         assert abs(fz - p) < 1e-8 * p and abs(fx + 0.7 * p * t) < 1e-8 * p, (t, fx, fz)
+
+
+@pytest.mark.parametrize("base_cell, block_cell, master, nproc", [("hex8", "hex8", "block", 1), ("tet4", "hex8", "block", 1),
+                                                                  ("hex8", "tet4", "base", 1), ("hex8", "hex8", "base", 2)])
+def test_displacement_driven_sliding(tmp_path, base_cell, block_cell, master, nproc):
+    """A slab [0,1]^2 x [1,1.2] pressed on a fixed base by p = 1 MPa and dragged by its top, whose
+    u_x is prescribed and ramped to 1 mm in 20 static steps (u_y = 0), mu = 0.6: the run goes
+    through stick, partial slip and gross slip to the end. Every step balances, fz = p A to 1e-8,
+    and no multiplier leaves the cone. Once the slab slides (t >= 0.75) every point slips, on the
+    cone to rounding (sum |lambda_t| = mu sum lambda_n to 1e-12), and each step's slip is the
+    drag's 0.05 mm to 0.5 % (measured 2.6e-3 in the step whose re-search turned the frames, <=
+    6.4e-4 otherwise: an elastic part that relaxes). In global axes fx / (mu fz) is 1 within 1e-3:
+    the tractions across the drag (in y) that Poisson's ratio made in the first step turn into x
+    one elastic step at a time (1 - 4.2e-6 at t = 1 over tets), and when the base is the master
+    its top tilts by 2.1e-4 under the drag and the frames follow it (1 - 5e-4). Before this, a point that slid in a step's first equilibrium iteration and
+    not in the next was taken to stick, its traction inside the cone: fx / (mu fz) stayed at
+    1 - 2.6e-6 with 4 of 16 points 'stick' while the slab slid."""
+    meshgen.boxes(str(tmp_path / "drag.msh"),
+                  [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(2, 2, 2), name="base", cell=base_cell),
+                   dict(lo=(0, 0, 1), hi=(1, 1, 1.2), n=(3, 3, 1), name="block", cell=block_cell)])
+    p, U, mu = 1.0e6, 1.0e-3, 0.6
+    slave = "base" if master == "block" else "block"
+    scene = {
+        "meshes": {"m": "drag.msh"},
+        "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": 2.0e10, "nu": 0.2}} for b in ("base", "block")},
+        "couples": [{"master": f"{master}_{'zmin' if master == 'block' else 'zmax'}",
+                     "slave": f"{slave}_{'zmin' if slave == 'block' else 'zmax'}", "mu": mu}],
+        "dirichlet": [{"surface": "base_zmin", "components": "all"},
+                      {"surface": "block_zmax", "components": ["x"], "value": U, "time": {"table": [[0, 0], [1, 1]]}},
+                      {"surface": "block_zmax", "components": ["y"]}],
+        "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p}],
+        "analysis": {"type": "static", "dt": 0.05, "final_time": 1.0},
+    }
+    h5 = prep(tmp_path, scene, name="drag")
+    solve(h5, nproc=nproc)
+    c = read_csv(result(h5, "_contact.csv"))
+    assert len(c["t"]) == 20 and abs(c["t"][-1] - 1) < 1e-12
+    sign = 1 if master == "block" else -1  # fx, fz: the force on the master body
+    fx, fz = sign * c["fx"], sign * c["fz"]
+    assert np.all(np.abs(fz / p - 1) < 1e-8), fz / p
+    shortfall = []
+    for step in range(20):
+        m = read_contact(result(h5, ".h5"), step=step)["multiplier"]  # (n, t1, t2)
+        lt = np.hypot(m[:, 1], m[:, 2])
+        assert np.all(lt <= mu * m[:, 0] * (1 + 1e-8) + 1e-9 * p), step
+        shortfall.append(1 - lt.sum() / (mu * m[:, 0].sum()))
+    late = c["t"] > 0.74
+    shortfall = np.array(shortfall)[late]
+    print(f"\nfrom t = 0.75: 1 - sum |lambda_t| / (mu sum lambda_n) {shortfall}, fx / (mu fz) - 1 {fx[late] / (-mu * fz[late]) - 1}")
+    assert np.all(c["slip"][late] == c["points"][late])
+    assert np.all(np.abs(shortfall) < 1e-12)
+    assert np.all(np.abs(-fx[late] / (mu * fz[late]) - 1) < 1e-3)
+    assert np.all(np.abs(np.diff(c["max_slip"][late]) / (0.05 * U) - 1) < 5e-3)
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_no_multiplier_where_no_flexibility(tmp_path, nproc):
+    """Two boxes on rollers at x = 0 and y = 0 under a uniform pressure p = 1 MPa, mu = 0.3, the
+    upper one (E 10 GPa) twice as soft as the lower (E 20 GPa) at the same nu: it expands sideways
+    twice as much, and friction holds it back (tangential tractions up to 0.16 p at the far
+    corner). On the roller x = 0 both sides' u_x are prescribed: the x-direction of those contact
+    points has no flexibility, any multiplier along it would leave every displacement as it is,
+    so the answer is unique only with none: traction_x = 0 there exactly (likewise y on y = 0),
+    while traction_y along the same line is not (friction against the expansion)."""
+    meshgen.boxes(str(tmp_path / "rollers.msh"),
+                  [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(4, 4, 2), name="lower"),
+                   dict(lo=(0, 0, 1), hi=(1, 1, 1.5), n=(4, 4, 2), name="upper")])
+    p = 1.0e6
+    scene = {
+        "meshes": {"m": "rollers.msh"},
+        "bodies": {"lower": {"mesh": "m", "regions": "lower", "material": {"E": 2.0e10, "nu": 0.3}},
+                   "upper": {"mesh": "m", "regions": "upper", "material": {"E": 1.0e10, "nu": 0.3}}},
+        "couples": [{"master": "upper_zmin", "slave": "lower_zmax", "mu": 0.3}],
+        "dirichlet": [{"surface": "lower_zmin", "components": ["z"]}]
+                     + [{"surface": f"{b}_{a}min", "components": [a]} for b in ("lower", "upper") for a in "xy"],
+        "loads": [{"kind": "pressure", "surface": "upper_zmax", "value": p}],
+        "analysis": {"type": "static"},
+    }
+    h5 = prep(tmp_path, scene, name="rollers")
+    solve(h5, nproc=nproc)
+    q = read_contact(result(h5, ".h5"))
+    x, t, m = q["reference"], q["traction"], q["multiplier"]
+    assert len(x) == 25 and np.all(q["pressure"] > 0)
+    assert np.all(np.hypot(m[:, 1], m[:, 2]) <= 0.3 * m[:, 0] * (1 + 1e-8))
+    for a, other in ((0, 1), (1, 0)):
+        on = np.abs(x[:, a]) < 1e-12
+        assert np.all(t[on, a] == 0), t[on]
+        assert np.abs(t[on, other]).max() > 0.1 * p, t[on]
+    assert abs(read_csv(result(h5, "_contact.csv"))["fz"][-1] / p - 1) < 1e-8

@@ -99,6 +99,7 @@ struct _n_MBCSolver {
   PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
   PetscReal *frames;      /* (n, t1, t2) of each point when D was built */
   PetscReal *slip;        /* per point: (0, t1, t2) components of its tangential relative displacement so far (frictional couples) */
+  PetscReal *stepslip;    /* per point, static: the same since the load step began (its earlier equilibrium iterations) */
   PetscBool  search_only;
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
@@ -161,6 +162,7 @@ PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[MBC_NENERGY]);
 PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactStepBegin(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidRHS(MBCSolver);
 PETSC_INTERN PetscBool      MBCSolverPointTouches(const MBCCouple *, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidMotion(MBCSolver);
