@@ -31,6 +31,16 @@ def output_times(path):
         return f["time"][...]
 
 
+def output_cuts(path):
+    """Step halvings before each output step (0: none; a result file older than the step
+    control has no /cuts and gives zeros)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        n = len(f["time"])
+        return f["cuts"][...] if "cuts" in f else np.zeros(n, dtype=int)
+
+
 def body_names(path):
     """Names of the bodies in the result file, in the scene's order."""
     import h5py

@@ -217,6 +217,7 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(MatDestroy(&b->Mc));
   PetscCall(KSPDestroy(&b->kspM));
   PetscCall(VecDestroy(&b->fcontact));
+  PetscCall(VecDestroy(&b->ustart));
   PetscCall(VecDestroy(&b->u));
   PetscCall(VecDestroy(&b->v));
   PetscCall(VecDestroy(&b->a));

@@ -73,8 +73,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
-  PetscCall(PetscOptionsBool("-mbc_dt_cut", "Dynamic: a step whose contact solve fails is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
-  PetscCall(PetscOptionsReal("-mbc_dt_min", "Dynamic: the smallest step a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
+  PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
+  PetscCall(PetscOptionsReal("-mbc_dt_min", "The smallest step (or load step) a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
@@ -439,78 +439,124 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* Equilibrium at load time s->time from the bodies' current state: iterates the contact search
+   and the multipliers until the out-of-balance force is below -mbc_static_rtol. With
+   s->contact_may_fail it gives up (s->contact_failed) where it would stop with an error: the
+   multiplier solve or -mbc_static_max_it iterations did not converge. */
+static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
+{
+  const PetscBool stabilized = s->static_stabilized, floating = s->static_floating;
+  PetscReal       fmax = 0, kumax = 0;
+
+  PetscFunctionBegin;
+  s->contact_failed = PETSC_FALSE;
+  PetscCall(MBCSolverContactStepBegin(s));
+  for (s->static_its = 1;; s->static_its++) {
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody body = s->bodies[b];
+      if (!body) continue;
+      PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
+      for (PetscInt j = 0; j < body->nrigid; j++) { /* the load on each free mode */
+        PetscScalar d;
+        PetscCall(VecDot(body->rhs, body->rigid[j], &d));
+        body->frigid[j] = PetscRealPart(d);
+      }
+      if (body->nrigid) { /* and its resultant (x, y, z interleaved per vertex) */
+        const PetscScalar *fv;
+        PetscInt           n;
+        PetscCall(VecGetLocalSize(body->rhs, &n));
+        PetscCall(VecGetArrayRead(body->rhs, &fv));
+        body->fres[0] = body->fres[1] = body->fres[2] = 0;
+        for (PetscInt i = 0; i < n; i++) body->fres[i % 3] += PetscRealPart(fv[i]);
+        PetscCall(VecRestoreArrayRead(body->rhs, &fv));
+        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, body->fres, 3, MPIU_REAL, MPIU_SUM, body->comm));
+      }
+      PetscCall(MatMult(body->K, body->u, body->work));
+      PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+      for (PetscInt j = 0; j < body->nrigid; j++) { /* the equilibrium's right side -R^T (F - K u) */
+        PetscScalar d;
+        PetscCall(VecDot(body->rhs, body->rigid[j], &d));
+        body->erigid[j] = -PetscRealPart(d);
+      }
+      PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
+      PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
+    }
+    if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda (+ R alpha) */
+    if (s->contact_failed) break; /* the caller cuts the step */
+    fmax = kumax = 0;
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      MBCBody   body = s->bodies[b];
+      PetscReal n;
+      if (!body) continue;
+      PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
+      if (body->nrigid) { /* K du off the prescribed rows: A du is not the force of a rigid motion */
+        PetscCall(MatMult(body->K, body->du, body->work));
+        PetscCall(MBCBodySetConstrainedRows(body, NULL, body->work));
+      } else PetscCall(MatMult(body->A, body->du, body->work));
+      PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
+      fmax = PetscMax(fmax, n);
+      PetscCall(VecAXPY(body->u, 1.0, body->du));
+      PetscCall(MatMult(body->K, body->u, body->work));
+      PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
+      kumax = PetscMax(kumax, n);
+    }
+    {
+      PetscReal mx[2] = {fmax, kumax};
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPIU_REAL, MPIU_MAX, s->comm));
+      fmax = mx[0], kumax = mx[1];
+    }
+    PetscCall(SolverContact(s));
+    if (s->monitor && (s->contact || stabilized || floating)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
+    if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax) break;
+    if (s->static_its == s->static_max_it && s->contact_may_fail) {
+      s->contact_failed = PETSC_TRUE; /* the caller cuts the step */
+      break;
+    }
+    PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The load from t0 (where the bodies are) to t1. A load step that does not converge is done
+   again as two of half the load (down to -mbc_dt_min; -mbc_dt_cut 0 turns it off), and says so.
+   "No static equilibrium" is not cut: it is the load's verdict, not the solver's. */
+static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t1, PetscInt level)
+{
+  const PetscBool may_fail = (PetscBool)(s->dt_cut && level + 1 < MBC_MAX_CUTS && (t1 - t0) / 2 >= s->dt_min * (1 - 1e-12));
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; may_fail && b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    if (!body->ustart) PetscCall(VecDuplicate(body->u, &body->ustart));
+    PetscCall(VecCopy(body->u, body->ustart));
+  }
+  s->time             = t1;
+  s->contact_may_fail = may_fail;
+  PetscCall(SolverStaticEquilibrium(s));
+  s->contact_may_fail = PETSC_FALSE;
+  if (!s->contact_failed) PetscFunctionReturn(0);
+  s->ncuts++;
+  if (s->mult && s->mult->reason < 0) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s: the load step from t %g is cut to two\n", s->step, (double)t1, ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), (double)t0));
+  else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static: no equilibrium after %" PetscInt_FMT " iterations: the load step from t %g is cut to two\n", s->step, (double)t1, s->static_its, (double)t0));
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(VecCopy(s->bodies[b]->ustart, s->bodies[b]->u));
+  PetscCall(MBCSolverContactStepAbandon(s)); /* the slip the attempt made */
+  s->time = t0;
+  PetscCall(SolverContact(s)); /* the search where the step began */
+  PetscCall(SolverStaticAdvance(s, t0, (t0 + t1) / 2, level + 1));
+  PetscCall(SolverStaticAdvance(s, (t0 + t1) / 2, t1, level + 1));
+  PetscFunctionReturn(0);
+}
+
 /* Load step s->step. */
 static PetscErrorCode SolverStaticStep(MBCSolver s)
 {
-  const PetscBool stabilized = s->static_stabilized, floating = s->static_floating;
-
   PetscFunctionBegin;
-  {
-    PetscReal fmax = 0, kumax = 0;
-    s->time = PetscMin(s->step * s->dt, s->final_time);
-    PetscCall(MBCSolverContactStepBegin(s));
-    for (s->static_its = 1;; s->static_its++) {
-      for (PetscInt b = 0; b < s->nbodies; b++) {
-        MBCBody body = s->bodies[b];
-        if (!body) continue;
-        PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
-        for (PetscInt j = 0; j < body->nrigid; j++) { /* the load on each free mode */
-          PetscScalar d;
-          PetscCall(VecDot(body->rhs, body->rigid[j], &d));
-          body->frigid[j] = PetscRealPart(d);
-        }
-        if (body->nrigid) { /* and its resultant (x, y, z interleaved per vertex) */
-          const PetscScalar *fv;
-          PetscInt           n;
-          PetscCall(VecGetLocalSize(body->rhs, &n));
-          PetscCall(VecGetArrayRead(body->rhs, &fv));
-          body->fres[0] = body->fres[1] = body->fres[2] = 0;
-          for (PetscInt i = 0; i < n; i++) body->fres[i % 3] += PetscRealPart(fv[i]);
-          PetscCall(VecRestoreArrayRead(body->rhs, &fv));
-          PetscCall(MPIU_Allreduce(MPI_IN_PLACE, body->fres, 3, MPIU_REAL, MPIU_SUM, body->comm));
-        }
-        PetscCall(MatMult(body->K, body->u, body->work));
-        PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-        for (PetscInt j = 0; j < body->nrigid; j++) { /* the equilibrium's right side -R^T (F - K u) */
-          PetscScalar d;
-          PetscCall(VecDot(body->rhs, body->rigid[j], &d));
-          body->erigid[j] = -PetscRealPart(d);
-        }
-        PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
-        PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
-      }
-      if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda (+ R alpha) */
-      fmax = kumax = 0;
-      for (PetscInt b = 0; b < s->nbodies; b++) {
-        MBCBody   body = s->bodies[b];
-        PetscReal n;
-        if (!body) continue;
-        PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
-        if (body->nrigid) { /* K du off the prescribed rows: A du is not the force of a rigid motion */
-          PetscCall(MatMult(body->K, body->du, body->work));
-          PetscCall(MBCBodySetConstrainedRows(body, NULL, body->work));
-        } else PetscCall(MatMult(body->A, body->du, body->work));
-        PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
-        fmax = PetscMax(fmax, n);
-        PetscCall(VecAXPY(body->u, 1.0, body->du));
-        PetscCall(MatMult(body->K, body->u, body->work));
-        PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
-        kumax = PetscMax(kumax, n);
-      }
-      {
-        PetscReal mx[2] = {fmax, kumax};
-        PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPIU_REAL, MPIU_MAX, s->comm));
-        fmax = mx[0], kumax = mx[1];
-      }
-      PetscCall(SolverContact(s));
-      if (s->monitor && (s->contact || stabilized || floating)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
-      if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax) break;
-      PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
-    }
-    PetscCall(SolverMonitor(s));
-    PetscCall(SolverCheckDisplacementSize(s));
-    PetscCall(MBCSolverOutputStep(s));
-  }
+  PetscCall(SolverStaticAdvance(s, PetscMin((s->step - 1) * s->dt, s->final_time), PetscMin(s->step * s->dt, s->final_time), 0));
+  PetscCall(SolverMonitor(s));
+  PetscCall(SolverCheckDisplacementSize(s));
+  PetscCall(MBCSolverOutputStep(s));
   PetscFunctionReturn(0);
 }
 
@@ -949,7 +995,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));
   PetscCall(MBCSolverOutputBodiesClose(s));
-  PetscCall(PetscFree2(s->output_times, s->output_npoints));
+  PetscCall(PetscFree3(s->output_times, s->output_npoints, s->output_cuts));
   PetscCall(PetscFree(s->points));
   PetscCall(MBCSceneDestroy(&s->scene));
   PetscCall(PetscHeaderDestroy(solver));

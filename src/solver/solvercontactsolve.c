@@ -121,6 +121,15 @@ PetscErrorCode MBCSolverContactStepBegin(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* A static load step is abandoned (to be cut): the slip it made is undone. */
+PetscErrorCode MBCSolverContactStepAbandon(MBCSolver s)
+{
+  PetscFunctionBegin;
+  for (PetscInt i = 0; s->stepslip && i < 3 * s->ncontact; i++) s->slip[i] -= s->stepslip[i];
+  PetscCall(MBCSolverContactStepBegin(s));
+  PetscFunctionReturn(0);
+}
+
 /* Given every body's free increment in body->du, solves for the multipliers and adds
    A^-1 H lambda. */
 PetscErrorCode MBCSolverContactSolve(MBCSolver s)

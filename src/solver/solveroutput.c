@@ -149,6 +149,7 @@ static PetscErrorCode SolverOutputCommit(MBCSolver s)
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(MBCH5WriteRowsGrow(file, "time", H5T_NATIVE_DOUBLE, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_times + s->noutputs - 1 : NULL));
+  PetscCall(MBCH5WriteRowsGrow(file, "cuts", H5T_NATIVE_INT, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_cuts + s->noutputs - 1 : NULL));
   PetscCall(MBCH5WriteAttribute(file, "num_outputs", H5T_NATIVE_INT, 1, &n));
   PetscCall(MBCH5FileFlush(file));
   if (!rank) PetscCall(SolverWriteXdmf(s, &ok));
@@ -170,7 +171,8 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PetscTime(&s->t_start));
   s->t_last = s->t_start;
-  PetscCall(PetscMalloc2(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints));
+  PetscCall(PetscMalloc3(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints, s->nsteps + 2, &s->output_cuts));
+  s->cuts_written = 0;
   s->noutputs = s->xmf_outputs = 0;
   s->h5_size  = 0;
   if (fields || s->contact) {
@@ -257,6 +259,8 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   if (fieldstep) {
     if (fields) PetscCall(MBCSolverOutputBodiesStep(s));
     if (!s->contact) s->output_npoints[s->noutputs] = 0;
+    s->output_cuts[s->noutputs] = (int)(s->ncuts - s->cuts_written);
+    s->cuts_written             = s->ncuts;
     s->output_times[s->noutputs++] = s->time;
     PetscCall(SolverOutputCommit(s));
   }

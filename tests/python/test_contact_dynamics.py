@@ -9,7 +9,7 @@ import pytest
 
 from conftest import prep, result, solve
 from mbcontact import meshgen
-from mbcontact.results import read_contact, read_csv
+from mbcontact.results import output_cuts, read_contact, read_csv
 
 G = 9.81
 RHO, E = 2000.0, 1.0e9  # kg/m3, Pa: a stiff block, elastic displacements ~ rho g h^2 / E ~ 1e-6 m
@@ -343,6 +343,7 @@ def test_failed_contact_solve_cuts_the_step(tmp_path):
     r = solve(h5, *limited)
     cuts = r.stdout.count("the step is cut to two")
     assert cuts > 0, r.stdout[-2000:]
+    assert output_cuts(result(h5, ".h5")).sum() == cuts  # the result file says which steps were cut
     p = read_csv(result(h5, "_points.csv"))
     th = math.radians(30.0)
     exact = G * (math.sin(th) - MU * math.cos(th))

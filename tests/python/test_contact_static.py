@@ -370,3 +370,42 @@ def test_no_multiplier_where_no_flexibility(tmp_path, nproc):
         assert np.all(t[on, a] == 0), t[on]
         assert np.abs(t[on, other]).max() > 0.1 * p, t[on]
     assert abs(read_csv(result(h5, "_contact.csv"))["fz"][-1] / p - 1) < 1e-8
+
+
+def test_static_load_step_cut(tmp_path):
+    """Step control in statics: the block of the ramped-shear test pressed by p and sheared by
+    0.58 p (mu 0.6) in one load step, with the Newton solve held to 3 iterations (it needs 4
+    from rest): the step fails and is done again as two of half the load, recursively (measured:
+    4 halvings, equilibria at t = 0.5, 0.75, 0.8125, 0.875 and 1), said in the output and in
+    the result file's /cuts, and ends in the same equilibrium: friction resultant 0.58 p A and
+    normal p A to 1e-8. "No static equilibrium" (0.62 p) is the load's verdict and is not cut.
+    With -mbc_dt_cut 0 the same run stops with the multiplier solve's message."""
+    from mbcontact.results import output_cuts
+    meshgen.boxes(str(tmp_path / "shear.msh"),
+                  [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(2, 2, 2), name="base"),
+                   dict(lo=(0, 0, 1), hi=(1, 1, 1.5), n=(3, 3, 1), name="block")])
+    p = 1.0e6
+
+    def run(tau, *options):
+        scene = {
+            "meshes": {"m": "shear.msh"},
+            "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": 2.0e10, "nu": 0.2}} for b in ("base", "block")},
+            "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.6}],
+            "dirichlet": [{"surface": "base_zmin", "components": "all"}],
+            "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p},
+                      {"kind": "traction", "surface": "block_zmax", "vector": [tau * p, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
+            "analysis": {"type": "static", "dt": 1.0, "final_time": 1.0},
+        }
+        h5 = prep(tmp_path, scene, name="shear")
+        return h5, solve(h5, "-mbc_multiplier_max_it", "3", *options, check=False, timeout=120)
+
+    h5, r = run(0.58)
+    assert r.returncode == 0, r.stderr
+    cuts = r.stdout.count("is cut to two")
+    assert cuts >= 1 and list(output_cuts(result(h5, ".h5"))) == [cuts], r.stdout
+    c = read_csv(result(h5, "_contact.csv"))
+    assert len(c["t"]) == 1 and abs(c["fx"][-1] + 0.58 * p) < 1e-8 * p and abs(c["fz"][-1] - p) < 1e-8 * p
+    h5, r = run(0.58, "-mbc_dt_cut", "0")
+    assert r.returncode != 0 and "Contact multipliers at step 1" in r.stderr and "DIVERGED_ITS" in r.stderr, r.stderr
+    h5, r = run(0.62)
+    assert r.returncode != 0 and "no static equilibrium" in r.stderr and "cut to two" not in r.stdout, (r.stdout, r.stderr)

@@ -57,6 +57,7 @@ struct _n_MBCBody {
   Vec u, v, a;            /* displacement, velocity, acceleration */
   Vec du, rhs, f, fold, g, work, work2;
   Vec fcontact;           /* dynamic: H lambda_n of the last contact build */
+  Vec ustart;             /* static: u where a load step that may be cut began */
 };
 
 PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, MBCBody *);

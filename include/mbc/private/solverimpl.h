@@ -65,6 +65,8 @@ struct _n_MBCSolver {
   PetscInt  output_every, noutputs;
   PetscReal *output_times;
   PetscInt *output_npoints; /* contact points written at each output (XDMF) */
+  int      *output_cuts;    /* step halvings since the output before (/cuts in the result file) */
+  PetscInt  cuts_written;   /* ncuts at the last output */
   char      h5file[PETSC_MAX_PATH_LEN]; /* <output>.h5: every body and the contact points, written collectively */
   int64_t   h5;           /* its hid_t on every rank, -1 when not open */
   MBCBodyOutput *bout;    /* per body, where the file has fields */
@@ -104,7 +106,8 @@ struct _n_MBCSolver {
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
-  /* dynamic step control: a step whose contact solve fails is cut in two, down to dt_min */
+  /* step control: a dynamic step whose contact solve fails, a static load step that does not
+     converge, is cut in two, down to dt_min */
   PetscBool  dt_cut, contact_may_fail, contact_failed, force_build;
   PetscReal  dt_min;
   PetscInt   level, ncuts; /* the current step is dt / 2^level; steps cut so far */
@@ -163,6 +166,7 @@ PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverContactSetUp(MBCSolver, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCSolverContactSolve(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactStepBegin(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactStepAbandon(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidRHS(MBCSolver);
 PETSC_INTERN PetscBool      MBCSolverPointTouches(const MBCCouple *, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverContactRigidMotion(MBCSolver);
