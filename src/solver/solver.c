@@ -747,14 +747,14 @@ static PetscErrorCode SolverDynamicIncrement(MBCSolver s, NewmarkCoefficients c)
 }
 
 /* Advances by h = dt / 2^level from s->time. A step whose contact solve fails is done again as
-   two steps of h / 2 (down to -mbc_dt_min; -mbc_dt_cut 0 turns it off), and says so; the next
-   step of the run is back at the scene's dt. */
+   two steps of h / 2 (down to -mbc_dt_min; -mbc_dt_cut 0 turns it off), and says so. */
 static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
 {
   const PetscReal t0 = s->time, h = s->dt / PetscPowInt(2, level);
 
   PetscFunctionBegin;
   if (level != s->level) PetscCall(SolverDynamicUseLevel(s, level));
+  s->deepest = PetscMax(s->deepest, level);
   s->time             = t0 + h;
   s->contact_failed   = PETSC_FALSE;
   s->contact_may_fail = (PetscBool)(s->dt_cut && level + 1 < MBC_MAX_CUTS && h / 2 >= s->dt_min * (1 - 1e-12));
@@ -772,12 +772,24 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
   PetscFunctionReturn(0);
 }
 
-/* Time step s->step. */
+/* Time step s->step, as 2^start_level steps of dt / 2^start_level: after a cut the run stays at
+   the step that worked (switching back and forth would refactor nothing, the factors are kept,
+   but rebuild D each time) and the step grows back by one halving after MBC_GOOD_STEPS steps
+   without a cut. */
+#define MBC_GOOD_STEPS 3
 static PetscErrorCode SolverDynamicStep(MBCSolver s)
 {
+  const PetscInt  start = s->start_level, n = PetscPowInt(2, start);
+  const PetscReal t0    = (s->step - 1) * s->dt;
+
   PetscFunctionBegin;
-  s->time = (s->step - 1) * s->dt;
-  PetscCall(SolverDynamicAdvance(s, 0));
+  s->deepest = start;
+  for (PetscInt k = 0; k < n; k++) {
+    s->time = t0 + k * (s->dt / n);
+    PetscCall(SolverDynamicAdvance(s, start));
+  }
+  if (s->deepest > start) s->start_level = s->deepest, s->good_steps = 0;
+  else if (start > 0 && ++s->good_steps >= MBC_GOOD_STEPS) s->start_level--, s->good_steps = 0;
   s->time = s->step * s->dt; /* not accumulated */
   PetscCall(SolverContact(s));
   PetscCall(SolverMonitor(s));

@@ -111,6 +111,7 @@ struct _n_MBCSolver {
   PetscBool  dt_cut, contact_may_fail, contact_failed, force_build;
   PetscReal  dt_min;
   PetscInt   level, ncuts; /* the current step is dt / 2^level; steps cut so far */
+  PetscInt   start_level, good_steps, deepest; /* a scene step starts at dt / 2^start_level; steps since without a cut; finest level of this step */
   Vec        lamsave;     /* the warm start, restored when a solve that may fail does */
 
   /* static analysis: equilibrium iterations, stabilisation of bodies held only by contact */
