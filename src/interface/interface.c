@@ -106,7 +106,7 @@ PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface ifc, Vec *lambda)
   PetscFunctionReturn(0);
 }
 
-/* lambda_n+1 into each body's column layout (MBCInterfaceGetBodyContact); collective. */
+/* lambda_n+1 into each body's column layout (MBCInterfaceBodyForce); collective. */
 PetscErrorCode MBCInterfaceMultipliersToBodies(MBCInterface ifc)
 {
   PetscFunctionBegin;
@@ -114,13 +114,16 @@ PetscErrorCode MBCInterfaceMultipliersToBodies(MBCInterface ifc)
   PetscFunctionReturn(0);
 }
 
-/* Body b's contact matrix H_b and its multipliers (after MBCInterfaceMultipliersToBodies), so
-   that H_b lambda_b is the contact force on it; NULL when no point touches b on this rank. */
-PetscErrorCode MBCInterfaceGetBodyContact(MBCInterface ifc, PetscInt b, Mat *H, Vec *lam)
+/* f = H_b lambda_b, the contact force on body b (add: f += H_b lambda_b), with lambda_n+1 of the
+   last step after MBCInterfaceMultipliersToBodies; f = 0 (add: f unchanged) where no point
+   touches body b. On the body's ranks. */
+PetscErrorCode MBCInterfaceBodyForce(MBCInterface ifc, PetscInt b, PetscBool add, Vec f)
 {
   PetscFunctionBegin;
-  if (H) *H = ifc->H[b];
-  if (lam) *lam = ifc->lam[b];
+  if (!ifc->H[b]) {
+    if (!add) PetscCall(VecZeroEntries(f));
+  } else if (add) PetscCall(MatMultAdd(ifc->H[b], ifc->lam[b], f, f));
+  else PetscCall(MatMult(ifc->H[b], ifc->lam[b], f));
   PetscFunctionReturn(0);
 }
 

@@ -247,13 +247,9 @@ static PetscErrorCode SolverContactForceInAcceleration(MBCSolver s)
   PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
-    Mat     H;
-    Vec     lam;
     if (!body) continue;
-    PetscCall(MBCInterfaceGetBodyContact(s->iface, b, &H, &lam));
     if (!body->fcontact) PetscCall(VecDuplicate(body->u, &body->fcontact));
-    if (H) PetscCall(MatMult(H, lam, body->fcontact));
-    else PetscCall(VecZeroEntries(body->fcontact));
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_FALSE, body->fcontact));
   }
   PetscFunctionReturn(0);
 }
@@ -269,12 +265,9 @@ static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody   body = s->bodies[b];
     PetscReal norm;
-    Mat       H;
-    Vec       lam;
     if (!body) continue;
-    PetscCall(MBCInterfaceGetBodyContact(s->iface, b, &H, &lam));
     PetscCall(VecScale(body->fcontact, -1.0));
-    if (H) PetscCall(MatMultAdd(H, lam, body->fcontact, body->fcontact));
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_TRUE, body->fcontact));
     PetscCall(VecNorm(body->fcontact, NORM_INFINITY, &norm));
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &norm, 1, MPIU_REAL, MPIU_MAX, body->comm));
     if (norm == 0) continue;

@@ -60,13 +60,8 @@ static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, Vec r)
   PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->work));
   PetscCall(VecAXPY(r, -1.0, body->work));
   if (s->iface) { /* H lambda_n+1 of the step (MBCInterfaceMultipliersToBodies) */
-    Mat H;
-    Vec lam;
-    PetscCall(MBCInterfaceGetBodyContact(s->iface, b, &H, &lam));
-    if (H && lam) {
-      PetscCall(MatMult(H, lam, body->work));
-      PetscCall(VecAXPY(r, -1.0, body->work));
-    }
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_FALSE, body->work));
+    PetscCall(VecAXPY(r, -1.0, body->work));
   }
   PetscFunctionReturn(0);
 }
