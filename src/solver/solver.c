@@ -174,11 +174,9 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact));
-    PetscCall(MBCMultiplierCreate(s->comm, &s->mult));
-    PetscCall(MBCMultiplierSetOptionsPrefix(s->mult, "mbc_"));
-    PetscCall(MBCMultiplierSetFromOptions(s->mult));
-    PetscCall(PetscCalloc6(s->nbodies, &s->H, s->nbodies, &s->Hu, s->nbodies, &s->lam, s->nbodies, &s->Hl, s->nbodies, &s->Xl, s->nbodies, &s->nbcols));
-    PetscCall(PetscCalloc1(s->nbodies, &s->bcols));
+    PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, &s->iface));
+    PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
+    PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }
   s->setupcalled = PETSC_TRUE;
   if (s->view) PetscCall(MBCSolverView(s, PETSC_VIEWER_STDOUT_(s->comm)));
@@ -241,81 +239,94 @@ PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[MBC_NENERGY])
   PetscFunctionReturn(0);
 }
 
+/* Dynamic: body->fcontact = H lambda_n, the contact force inside the acceleration, before H is
+   rebuilt. */
+static PetscErrorCode SolverContactForceInAcceleration(MBCSolver s)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    if (!body->fcontact) PetscCall(VecDuplicate(body->u, &body->fcontact));
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_FALSE, body->fcontact));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The acceleration a_n holds M^-1 H_old lambda_n; the next step assumes M^-1 H_new lambda_n' with
+   the carried lambda_n' (points that left the contact carry nothing). a += M^-1 (H_new lambda_n' -
+   H_old lambda_n) keeps M a_n = F_n - K u_n + H lambda_n true (u and v, hence the energy, do not
+   change), so the step stays the trapezoidal rule on the mean contact force. */
+static PetscErrorCode SolverContactAccelerationUpdate(MBCSolver s)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody   body = s->bodies[b];
+    PetscReal norm;
+    if (!body) continue;
+    PetscCall(VecScale(body->fcontact, -1.0));
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_TRUE, body->fcontact));
+    PetscCall(VecNorm(body->fcontact, NORM_INFINITY, &norm));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &norm, 1, MPIU_REAL, MPIU_MAX, body->comm));
+    if (norm == 0) continue;
+    if (!body->kspM) PetscCall(MBCBodyFactor(body, 0.0, 1.0, &body->kspM, &body->Mc, "mass"));
+    PetscCall(VecCopy(body->fcontact, body->rhs));
+    PetscCall(MBCBodyConstrainedSolve(body, body->kspM, 0.0, 1.0, NULL, body->rhs, body->work));
+    PetscCall(VecAXPY(body->a, 1.0, body->work));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* The contact search at the current displacements, then H, X and D rebuilt when the contact
-   pairs (couple, master node, slave face, slave nodes of the integrated constraint) changed: between steps, so that a step's free solve
-   already sees the acceleration made consistent with the carried contact forces. */
+   pairs (couple, master node, slave face, slave nodes of the integrated constraint) changed:
+   between steps, so that a step's free solve already sees the acceleration made consistent with
+   the carried contact forces. */
 static PetscErrorCode SolverContact(MBCSolver s)
 {
   MBCContact c = s->contact;
-  PetscBool  researched, same;
-  PetscInt   n = 0, k = 0, *pairs;
+  PetscBool  researched, changed;
+  PetscInt   n, nmult, *pairs;
 
   PetscFunctionBegin;
   if (!c) PetscFunctionReturn(0);
   PetscCall(MBCContactUpdate(c, s->nbodies, s->bodies, PETSC_FALSE, &researched));
   if (researched && s->monitor && c->nsearches > 1) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: re-search (global search %" PetscInt_FMT ")\n", s->step, (double)s->time, c->nsearches));
-  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
-  PetscCall(PetscMalloc1(MBC_PAIR_SIZE * n + 1, &pairs));
-  for (PetscInt i = 0; i < c->ncouples; i++)
-    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
-      const MBCCouple *cp = &c->couples[i];
-      uint32_t         h  = 2166136261u; /* FNV-1a of the slave nodes the point's constraint involves */
-      PetscReal        wmax = 0;
-      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) wmax = PetscMax(wmax, PetscAbsReal(cp->sw[l]));
-      /* nodes below 1e-2 of the largest weight do not count: the mortar slivers along a shared edge
-         of nearly matching meshes come and go as the bodies vibrate (Hertz, dynamic), and a rebuild
-         every step is what they would cost; their weights stay those of the last rebuild */
-      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++)
-        if (PetscAbsReal(cp->sw[l]) >= 1e-2 * wmax) h = (h ^ (uint32_t)cp->snode[l]) * 16777619u;
-      pairs[MBC_PAIR_SIZE * k]     = i;
-      pairs[MBC_PAIR_SIZE * k + 1] = cp->points[j].master;
-      pairs[MBC_PAIR_SIZE * k + 2] = cp->points[j].face;
-      pairs[MBC_PAIR_SIZE * k + 3] = (PetscInt)(h & 0x7fffffff);
-    }
-  same = (PetscBool)(s->pairs_built && n == s->npairs_built && !s->force_build); /* force_build: another step size */
-  s->force_build = PETSC_FALSE;
-  if (same) PetscCall(PetscArraycmp(pairs, s->pairs_built, MBC_PAIR_SIZE * n, &same));
-  if (!same) {
-    PetscCall(MBCSolverContactSetUp(s, n, pairs)); /* takes pairs */
-    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, s->coff ? s->coff[s->ncontact] : 0));
-  } else PetscCall(PetscFree(pairs));
-  PetscFunctionReturn(0);
-}
-
-/* Work of the step's mean contact force z on the bodies, z . H^T du per point: u = D lambda_n+1 +
-   q is (g_n, 0, 0) + H^T du (g_n the gap the step started from, still in igap: the search comes
-   after the step), in the frames the multipliers live in; friction dissipates -z_t . du_t >= 0,
-   the normal contact takes -z_n (g_n+1 - g_n) = z_n g_n >= 0 where complementarity holds. The
-   trapezoidal rule's energy balance holds with the step's mean force, so with these the total is
-   conserved to the PGS tolerance. Replicated data (couple order): the same on every rank. */
-static void SolverContactWork(MBCSolver s)
-{
-  MBCContact c = s->contact;
-
-  for (PetscInt k = 0; k < s->ncontact; k++) {
-    const PetscInt o = s->coff[k], dim = s->coff[k + 1] - o;
-    const PetscReal g = c->couples[s->kcouple[k]].igap[s->kpoint[k]];
-    for (PetscInt d = 0; d < dim; d++) {
-      const PetscReal z = s->theta * s->rall[o + d] / s->dscale, du = s->uall[o + d] - (d ? 0 : g);
-      if (d) s->wfriction -= z * du;
-      else s->wcontact -= z * du;
-    }
+  PetscCall(MBCInterfaceGetPairs(s->iface, &n, &pairs, &changed));
+  if (!changed && !s->force_build) { /* force_build: another step size */
+    PetscCall(PetscFree(pairs));
+    PetscFunctionReturn(0);
   }
+  s->force_build = PETSC_FALSE;
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactForceInAcceleration(s));
+  PetscCall(MBCInterfaceSetUp(s->iface, n, pairs)); /* takes pairs */
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCall(SolverContactAccelerationUpdate(s)); /* also when no point is left */
+  PetscCall(MBCInterfaceGetSize(s->iface, NULL, &nmult));
+  if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, nmult));
+  PetscFunctionReturn(0);
 }
 
 /* The multipliers of the step: du += A^-1 H lambda. */
 static PetscErrorCode SolverContactForces(MBCSolver s)
 {
+  PetscInt      npoints;
+  MBCMultiplier mult;
+  PetscBool     failed;
+
   PetscFunctionBegin;
-  PetscCall(MBCSolverContactSolve(s));
+  PetscCall(MBCInterfaceSolve(s->iface, s->step, s->time, s->contact_may_fail, &failed));
+  if (failed) s->contact_failed = PETSC_TRUE;
   if (s->contact_failed) PetscFunctionReturn(0); /* the step is cut: nothing to count or print */
-  if (s->analysis == MBC_ANALYSIS_DYNAMIC) SolverContactWork(s);
-  if (s->monitor && s->ncontact) {
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC) MBCInterfaceContactWork(s->iface, &s->wfriction, &s->wcontact);
+  PetscCall(MBCInterfaceGetSize(s->iface, &npoints, NULL));
+  PetscCall(MBCInterfaceGetMultiplier(s->iface, &mult));
+  if (s->monitor && npoints) {
     PetscInt count[3] = {0, 0, 0};
-    PetscCall(MBCSolverContactStates(s, count, NULL, NULL));
+    PetscCall(MBCInterfaceStates(s->iface, count, NULL, NULL));
     MBCMultiplierType type;
-    PetscCall(MBCMultiplierGetType(s->mult, &type));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s %s in %" PetscInt_FMT " iterations (merit %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, type, MBCMultiplierConvergedReasonName(s->mult->reason), s->mult->its, (double)s->mult->merit, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
+    PetscCall(MBCMultiplierGetType(mult, &type));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s %s in %" PetscInt_FMT " iterations (merit %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, type, MBCMultiplierConvergedReasonName(mult->reason), mult->its, (double)mult->merit, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
   }
   PetscFunctionReturn(0);
 }
@@ -397,8 +408,7 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   PetscBool stabilized = PETSC_FALSE, floating = PETSC_FALSE;
 
   PetscFunctionBegin;
-  s->theta = 1; /* no inertia: the contact force of the step is lambda_n+1 */
-  s->carry = 0;
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, 1.0)); /* no inertia: the contact force of the step is lambda_n+1 */
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
@@ -450,7 +460,7 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
 
   PetscFunctionBegin;
   s->contact_failed = PETSC_FALSE;
-  PetscCall(MBCSolverContactStepBegin(s));
+  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface));
   for (s->static_its = 1;; s->static_its++) {
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody body = s->bodies[b];
@@ -512,7 +522,7 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
       s->contact_failed = PETSC_TRUE; /* the caller cuts the step */
       break;
     }
-    PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->contact && s->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
+    PetscCheck(s->static_its < s->static_max_it, s->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no equilibrium after %" PetscInt_FMT " iterations (out-of-balance force max|A du| %g > -mbc_static_rtol %g times max|K u| %g); a body held only by contact may be free to slide, lift off or turn (frictionless or slipping contact, or an initial gap)%s", s->step, (double)s->time, s->static_its, (double)fmax, (double)s->static_rtol, (double)kumax, s->iface && s->iface->mult->rtol > s->static_rtol ? "; or -mbc_multiplier_rtol is looser than -mbc_static_rtol" : "");
   }
   PetscFunctionReturn(0);
 }
@@ -537,11 +547,11 @@ static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t
   s->contact_may_fail = PETSC_FALSE;
   if (!s->contact_failed) PetscFunctionReturn(0);
   s->ncuts++;
-  if (s->mult && s->mult->reason < 0) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s: the load step from t %g is cut to two\n", s->step, (double)t1, ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), (double)t0));
+  if (s->iface && s->iface->mult->reason < 0) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s: the load step from t %g is cut to two\n", s->step, (double)t1, ((PetscObject)s->iface->mult)->type_name, MBCMultiplierConvergedReasonName(s->iface->mult->reason), (double)t0));
   else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static: no equilibrium after %" PetscInt_FMT " iterations: the load step from t %g is cut to two\n", s->step, (double)t1, s->static_its, (double)t0));
   for (PetscInt b = 0; b < s->nbodies; b++)
     if (s->bodies[b]) PetscCall(VecCopy(s->bodies[b]->ustart, s->bodies[b]->u));
-  PetscCall(MBCSolverContactStepAbandon(s)); /* the slip the attempt made */
+  if (s->iface) PetscCall(MBCInterfaceStepAbandon(s->iface)); /* the slip the attempt made */
   s->time = t0;
   PetscCall(SolverContact(s)); /* the search where the step began */
   PetscCall(SolverStaticAdvance(s, t0, (t0 + t1) / 2, level + 1));
@@ -666,9 +676,8 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
   const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
 
   PetscFunctionBegin;
-  s->theta = gamma; /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, gamma)); /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
   s->wfriction = s->wcontact = 0;
-  s->carry = (1 - gamma) / gamma;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
@@ -765,7 +774,11 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
     PetscFunctionReturn(0);
   }
   s->ncuts++;
-  PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s at dt %g: the step is cut to two of dt %g\n", s->step, (double)(t0 + h), ((PetscObject)s->mult)->type_name, MBCMultiplierConvergedReasonName(s->mult->reason), (double)h, (double)(h / 2)));
+  {
+    MBCMultiplier mult;
+    PetscCall(MBCInterfaceGetMultiplier(s->iface, &mult));
+    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s at dt %g: the step is cut to two of dt %g\n", s->step, (double)(t0 + h), ((PetscObject)mult)->type_name, MBCMultiplierConvergedReasonName(mult->reason), (double)h, (double)(h / 2)));
+  }
   s->time = t0;
   PetscCall(SolverDynamicAdvance(s, level + 1));
   PetscCall(SolverDynamicAdvance(s, level + 1));
@@ -867,7 +880,8 @@ PetscErrorCode MBCSolverGetMultipliers(MBCSolver s, Vec *lambda)
   PetscFunctionBegin;
   PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
   PetscValidPointer(lambda, 2);
-  *lambda = s->lamprev; /* NULL before the first contact build or without couples */
+  *lambda = NULL; /* before the first contact build or without couples */
+  if (s->iface) PetscCall(MBCInterfaceGetMultipliers(s->iface, lambda));
   PetscFunctionReturn(0);
 }
 
@@ -1000,9 +1014,8 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   if (s->monitordestroy) PetscCall((*s->monitordestroy)(&s->monitorctx));
   PetscCall(MBCSolverContactPointsFree(s));
 
-  PetscCall(MBCSolverContactDestroy(s));
+  PetscCall(MBCInterfaceDestroy(&s->iface));
   PetscCall(MBCContactDestroy(&s->contact));
-  PetscCall(MBCMultiplierDestroy(&s->mult));
   for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(MBCBodyDestroy(&s->bodies[b]));
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));

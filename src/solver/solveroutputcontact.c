@@ -42,8 +42,9 @@ static PetscErrorCode ContactRows(MBCSolver s, PetscInt n, PetscInt *start, Pets
 /* fields: also write the points to the result file as output number s->noutputs (collective). */
 PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
 {
-  MBCContact c = s->contact;
-  PetscInt   np = 0, count[3], *state;
+  MBCContact   c = s->contact;
+  MBCInterface ifc = s->iface; /* read through its struct: the frames and the slip of the last build */
+  PetscInt     np = 0, count[3], *state;
   PetscReal *lam, *x, *x0, *slip, *nrm, *force, *pressure, *traction, *gap, *area;
   int       *couple, *istate;
 
@@ -53,7 +54,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   PetscCall(PetscCalloc6(3 * np + 1, &lam, 3 * np + 1, &x, 3 * np + 1, &nrm, 3 * np + 1, &force, 3 * np + 1, &traction, np + 1, &state));
   PetscCall(PetscCalloc5(np + 1, &pressure, np + 1, &gap, np + 1, &area, np + 1, &couple, np + 1, &istate));
   PetscCall(PetscCalloc2(3 * np + 1, &x0, 3 * np + 1, &slip));
-  if (np == s->ncontact) PetscCall(MBCSolverContactStates(s, count, state, lam)); /* else: no forces yet */
+  if (np == ifc->ncontact) PetscCall(MBCInterfaceStates(ifc, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
     PetscReal  sum[5] = {0, 0, 0, 0, 0}; /* -, the three states, normal force */
@@ -64,8 +65,8 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       const PetscReal       *z = &lam[3 * k];
       /* the multipliers and the slip are in the frames D was built with; the search after the
          step has already moved p's frame (its tangents may even have turned by 90 degrees) */
-      const PetscBool  built = (PetscBool)(np == s->ncontact && s->frames);
-      const PetscReal *n = built ? &s->frames[9 * k] : p->n, *t1 = built ? &s->frames[9 * k + 3] : p->t1, *t2 = built ? &s->frames[9 * k + 6] : p->t2;
+      const PetscBool  built = (PetscBool)(np == ifc->ncontact && ifc->frames);
+      const PetscReal *n = built ? &ifc->frames[9 * k] : p->n, *t1 = built ? &ifc->frames[9 * k + 3] : p->t1, *t2 = built ? &ifc->frames[9 * k + 6] : p->t2;
       couple[k] = (int)cp->k;
       istate[k] = (int)state[k];
       gap[k]    = cp->igap[j];
@@ -76,7 +77,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
         nrm[3 * k + d]      = n[d];
         force[3 * k + d]    = z[0] * n[d] + z[1] * t1[d] + z[2] * t2[d];
         traction[3 * k + d] = area[k] > 0 ? (z[1] * t1[d] + z[2] * t2[d]) / area[k] : 0;
-        slip[3 * k + d]     = cp->mu > 0 && np == s->ncontact ? s->slip[3 * k + 1] * t1[d] + s->slip[3 * k + 2] * t2[d] : (cp->mu > 0 ? 0 : NAN);
+        slip[3 * k + d]     = cp->mu > 0 && np == ifc->ncontact ? ifc->slip[3 * k + 1] * t1[d] + ifc->slip[3 * k + 2] * t2[d] : (cp->mu > 0 ? 0 : NAN);
         f[d] += force[3 * k + d];
       }
       maxslip = PetscMax(maxslip, PetscSqrtReal(PetscSqr(slip[3 * k]) + PetscSqr(slip[3 * k + 1]) + PetscSqr(slip[3 * k + 2])));

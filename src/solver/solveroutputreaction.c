@@ -59,8 +59,8 @@ static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, Vec r)
   }
   PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->work));
   PetscCall(VecAXPY(r, -1.0, body->work));
-  if (s->H && s->H[b] && s->lam && s->lam[b]) { /* H lambda_n+1 of the step (MBCSolverContactToBodies) */
-    PetscCall(MatMult(s->H[b], s->lam[b], body->work));
+  if (s->iface) { /* H lambda_n+1 of the step (MBCInterfaceMultipliersToBodies) */
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_FALSE, body->work));
     PetscCall(VecAXPY(r, -1.0, body->work));
   }
   PetscFunctionReturn(0);
@@ -78,7 +78,7 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
   PetscCall(PetscMalloc1(scene->ndirichlet, &first));
   PetscCall(PetscCalloc1(3 * scene->ndirichlet, &sum));
   PetscCall(ReactionSurfaces(scene, first, &nsurf));
-  if (s->contact && s->csf && s->lamprev) PetscCall(MBCSolverContactToBodies(s, s->lamprev));
+  if (s->iface) PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody            body = s->bodies[b];
     Vec                r;

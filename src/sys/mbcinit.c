@@ -1,6 +1,6 @@
 /* Package registration: the objects' class ids, and log events so -log_view shows where the time goes. */
 #include <mbc/private/contactimpl.h>
-#include <mbc/private/solverimpl.h>
+#include <mbc/private/interfaceimpl.h>
 
 PetscClassId  MBC_SCENE_CLASSID, MBC_SOLVER_CLASSID, MBC_BODY_CLASSID;
 PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_BodyFactor, MBC_BodySolve, MBC_Output;

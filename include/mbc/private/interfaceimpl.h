@@ -1,0 +1,96 @@
+/* Private: the contact interface, the multiplier problem between the bodies: per body the contact
+   matrix H, the flexibility matrix D = H^T A^-1 H, q, the multipliers, their distribution over
+   the ranks and the per-point bookkeeping (src/interface/). */
+#pragma once
+
+#include <mbc/private/contactimpl.h>
+#include <mbc/private/multiplierimpl.h>
+#include <petscsf.h>
+
+#define MBC_PAIR_SIZE 4
+
+typedef enum {
+  MBC_CONTACT_SEPARATED = 0,
+  MBC_CONTACT_STICK     = 1,
+  MBC_CONTACT_SLIP      = 2 /* also a frictionless point in contact */
+} MBCContactState;
+
+typedef struct _n_MBCInterface *MBCInterface;
+
+struct _n_MBCInterface {
+  MPI_Comm    comm;       /* the solver's (world) communicator */
+  MBCScene    scene;      /* borrowed: names in messages */
+  MBCContact  contact;    /* borrowed: the search's points, frames, weights and gaps */
+  PetscInt    nbodies;
+  MBCBody    *bodies;     /* borrowed: NULL where this rank is not in the body */
+  const PetscMPIInt *body_first_rank, *body_nranks; /* borrowed: each body's ranks, for the rank order */
+  MBCAnalysisType analysis; /* static: free bodies' rigid modes enter the problem */
+
+  /* the multiplier problem: points in couple order (search, output) on every rank; the rows of
+     W, q, lambda in rank order, each point on a rank of the body holding its master node */
+  PetscInt   ncontact;    /* contact points of the last build */
+  PetscInt  *coff, *poff; /* ncontact + 1: first multiplier of each point in couple order / in rank order */
+  PetscInt  *perm, *order; /* couple order k -> rank order perm[k]; rank order p -> couple order order[p] */
+  PetscInt  *kcouple, *kpoint; /* couple order k -> its couple and its index there */
+  PetscInt   pfirst, plast; /* this rank's points [pfirst, plast) in rank order */
+  Mat       *H;           /* per body: contact matrix, the columns of the multipliers touching it (NULL off the body) */
+  PetscInt **bcols, *nbcols; /* per body (every rank): the W rows (rank order) of H's columns */
+  Vec       *Hu, *lam;    /* per body: H^T du, lambda, in H's column layout */
+  Vec       *Hl, *Xl;     /* per body: H lambda and A^-1 H lambda */
+  PetscSF    csf;         /* leaves: the H columns on this rank, body after body; roots: the rows of W */
+  PetscScalar *leaf;
+  VecScatter gather;      /* all multipliers to every rank (rank order), for the output */
+  Vec        gathered;
+  PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
+  PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
+  MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
+  MBCMultiplier mult;     /* the multiplier solve (-mbc_multiplier_type) */
+  PetscReal  dscale;      /* D is scaled by 1/dscale for the PGS: lambda = r / dscale */
+  Vec        lambda, ucontact; /* PGS unknown r (scaled) and u = W r + q */
+  Vec        lamprev;     /* lambda_n+1 after the step (physical): carried in the acceleration */
+  Vec        lamsave;     /* the warm start, restored when a solve that may fail does */
+  PetscReal  theta, carry; /* complementarity on z = theta lambda_n+1 + (1 - theta) lambda_n; carry = (1 - theta) / theta */
+  PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
+  PetscReal *frames;      /* (n, t1, t2) of each point when D was built */
+  PetscReal *slip;        /* per point: (0, t1, t2) components of its tangential relative displacement so far (frictional couples) */
+  PetscReal *stepslip;    /* per point, static: the same since the load step began (its earlier equilibrium iterations) */
+  char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
+  PetscInt   fclib_step;
+
+  /* static analysis: free bodies (FETI's natural coarse space G = R^T H) */
+  PetscInt   ngrigid, *goff; /* free rigid modes of all bodies; body b's are goff[b].. goff[b+1] */
+  PetscScalar *gQ;        /* eigenvectors of G G^T (ng x ng, the k-th at gQ[k ng]) */
+  PetscInt   grank, *grange; /* the rank of G and the eigenvectors of its range (NULL when G has full rank) */
+  PetscReal *gscale;      /* the scale of each row of the problem's G */
+};
+
+PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble;
+
+/* interface.c: the object, the rank order, H and D */
+PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], MBCInterface *);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetSize(MBCInterface, PetscInt *, PetscInt *);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetMultiplier(MBCInterface, MBCMultiplier *);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface, Vec *);
+PETSC_INTERN PetscErrorCode MBCInterfaceMultipliersToBodies(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceBodyForce(MBCInterface, PetscInt, PetscBool, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceDestroy(MBCInterface *);
+PETSC_INTERN PetscBool      MBCInterfacePointTouches(const MBCCouple *, PetscInt, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceToBodies(MBCInterface, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceFromBodies(MBCInterface, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceGapRate(MBCInterface, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceGather(MBCInterface, Vec, PetscReal[]);
+/* interfacerigid.c: free bodies in a static analysis */
+PETSC_INTERN PetscErrorCode MBCInterfaceRigidModes(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceRigidRHS(MBCInterface, PetscInt, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceRigidMotion(MBCInterface);
+/* interfacesolve.c: the multipliers of a step */
+PETSC_INTERN PetscErrorCode MBCInterfaceSolve(MBCInterface, PetscInt, PetscReal, PetscBool, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCInterfaceStepBegin(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceStepAbandon(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceStates(MBCInterface, PetscInt[3], PetscInt[], PetscReal[]);
+PETSC_INTERN void           MBCInterfaceContactWork(MBCInterface, PetscReal *, PetscReal *);

@@ -1,0 +1,731 @@
+/* Contact forces in the Newmark step (the paper's eqs. (2)-(9)): per body K~ dU = dF + H lambda,
+   H mapping each contact point's frame (n, t1, t2) to the master node (+) and the slave face
+   nodes (- weights). With dU_free = A^-1 dF, the multipliers solve u = D lambda + q in the
+   Coulomb cone with D = sum_i H_i^T A_i^-1 H_i, q = (gap, 0, 0) + sum_i H_i^T dU_free_i; then
+   dU = dU_free + A^-1 H lambda (one more solve per body). A frictionless couple's points carry
+   the normal multiplier only.
+
+   Distributed: the search (and the per-point bookkeeping, in couple order) is replicated; the
+   multiplier problem is not. A point's rows of W = D / dscale, q and lambda live on a rank of
+   the body holding its master node (rank order); H_i has columns only for the multipliers of
+   the points touching body i, and D_i = H_i^T A_i^-1 H_i, built by blocks of columns on the
+   body's ranks, is added into W where its rows live. A star forest maps body columns to rows.
+
+   Complementarity is imposed on the step's mean contact force z = theta lambda_n+1 +
+   (1 - theta) lambda_n, theta = gamma (dynamic: the weights of Newmark's velocity update, so
+   z dt is the contact impulse of the step) or 1 (static), not on lambda_n+1. With r = z / theta
+   the problem keeps D: q' = q - c D lambda_n, c = (1 - theta) / theta, lambda_n+1 = r - c lambda_n.
+   For the trapezoidal rule the contact work of a step is then z . (g_n+1 - g_n) = -z . g_n <= 0:
+   a contact that opens gives back no energy. Imposed on lambda_n+1 itself it would be
+   (lambda_n . g_n+1 - lambda_n+1 . g_n) / 2, an energy gain whenever a loaded contact opens (a
+   bouncing block gains energy at every bounce). */
+#include <mbc/private/interfaceimpl.h>
+#include <stdint.h>
+
+PetscLogEvent MBC_FlexibilityAssemble;
+
+/* The interface between the bodies of a scene with couples; it borrows the scene, the search
+   (contact), the bodies and their ranks from the solver, and makes the multiplier solve from the
+   options (prefix mbc_). H and D come with MBCInterfaceSetUp. */
+PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact contact, PetscInt nbodies, MBCBody bodies[], const PetscMPIInt body_first_rank[], const PetscMPIInt body_nranks[], MBCInterface *iface)
+{
+  MBCInterface ifc;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&ifc));
+  ifc->comm            = comm;
+  ifc->scene           = scene;
+  ifc->contact         = contact;
+  ifc->nbodies         = nbodies;
+  ifc->bodies          = bodies;
+  ifc->body_first_rank = body_first_rank;
+  ifc->body_nranks     = body_nranks;
+  ifc->analysis        = scene->analysis;
+  ifc->theta           = 1;
+  ifc->dblock          = 256;
+  ifc->fclib_step      = -1;
+  PetscCall(MBCMultiplierCreate(comm, &ifc->mult));
+  PetscCall(MBCMultiplierSetOptionsPrefix(ifc->mult, "mbc_"));
+  PetscCall(MBCMultiplierSetFromOptions(ifc->mult));
+  PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
+  PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
+  *iface = ifc;
+  PetscFunctionReturn(0);
+}
+
+/* Complementarity on theta lambda_n+1 + (1 - theta) lambda_n (see above): theta = gamma
+   (dynamic) or 1 (static, whose free bodies' rigid modes also enter the problem). Before the
+   first MBCInterfaceSetUp. */
+PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface ifc, MBCAnalysisType analysis, PetscReal theta)
+{
+  PetscFunctionBegin;
+  ifc->analysis = analysis;
+  ifc->theta    = theta;
+  ifc->carry    = (1 - theta) / theta;
+  PetscFunctionReturn(0);
+}
+
+/* Columns of A^-1 H per multi-right-hand-side solve while D is built (-mbc_contact_block). */
+PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface ifc, PetscInt dblock)
+{
+  PetscFunctionBegin;
+  ifc->dblock = dblock;
+  PetscFunctionReturn(0);
+}
+
+/* Write the multiplier problem of step `step` to FCLIB file `file` (none if file is empty). */
+PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface ifc, const char file[], PetscInt step)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscStrncpy(ifc->fclib_file, file, sizeof(ifc->fclib_file)));
+  ifc->fclib_step = step;
+  PetscFunctionReturn(0);
+}
+
+/* Contact points and multipliers of the last build (0 before the first). */
+PetscErrorCode MBCInterfaceGetSize(MBCInterface ifc, PetscInt *npoints, PetscInt *nmult)
+{
+  PetscFunctionBegin;
+  if (npoints) *npoints = ifc->ncontact;
+  if (nmult) *nmult = ifc->coff ? ifc->coff[ifc->ncontact] : 0;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCInterfaceGetMultiplier(MBCInterface ifc, MBCMultiplier *mult)
+{
+  PetscFunctionBegin;
+  *mult = ifc->mult;
+  PetscFunctionReturn(0);
+}
+
+/* lambda_n+1 of the last step (physical, rows of W); NULL before the first build. */
+PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface ifc, Vec *lambda)
+{
+  PetscFunctionBegin;
+  *lambda = ifc->lamprev;
+  PetscFunctionReturn(0);
+}
+
+/* lambda_n+1 into each body's column layout (MBCInterfaceBodyForce); collective. */
+PetscErrorCode MBCInterfaceMultipliersToBodies(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  if (ifc->csf) PetscCall(MBCInterfaceToBodies(ifc, ifc->lamprev));
+  PetscFunctionReturn(0);
+}
+
+/* f = H_b lambda_b, the contact force on body b (add: f += H_b lambda_b), with lambda_n+1 of the
+   last step after MBCInterfaceMultipliersToBodies; f = 0 (add: f unchanged) where no point
+   touches body b. On the body's ranks. */
+PetscErrorCode MBCInterfaceBodyForce(MBCInterface ifc, PetscInt b, PetscBool add, Vec f)
+{
+  PetscFunctionBegin;
+  if (!ifc->H[b]) {
+    if (!add) PetscCall(VecZeroEntries(f));
+  } else if (add) PetscCall(MatMultAdd(ifc->H[b], ifc->lam[b], f, f));
+  else PetscCall(MatMult(ifc->H[b], ifc->lam[b], f));
+  PetscFunctionReturn(0);
+}
+
+/* The contact pairs of the current search: per point (couple, master node, slave face, hash of
+   the slave nodes of its integrated constraint); *changed when they differ from those H and D
+   were built for. The caller owns pairs (MBCInterfaceSetUp takes them). */
+PetscErrorCode MBCInterfaceGetPairs(MBCInterface ifc, PetscInt *npairs, PetscInt **pairs_out, PetscBool *changed)
+{
+  MBCContact c = ifc->contact;
+  PetscInt   n = 0, k = 0, *pairs;
+  PetscBool  same;
+
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
+  PetscCall(PetscMalloc1(MBC_PAIR_SIZE * n + 1, &pairs));
+  for (PetscInt i = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const MBCCouple *cp = &c->couples[i];
+      uint32_t         h  = 2166136261u; /* FNV-1a of the slave nodes the point's constraint involves */
+      PetscReal        wmax = 0;
+      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) wmax = PetscMax(wmax, PetscAbsReal(cp->sw[l]));
+      /* nodes below 1e-2 of the largest weight do not count: the mortar slivers along a shared edge
+         of nearly matching meshes come and go as the bodies vibrate (Hertz, dynamic), and a rebuild
+         every step is what they would cost; their weights stay those of the last rebuild */
+      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++)
+        if (PetscAbsReal(cp->sw[l]) >= 1e-2 * wmax) h = (h ^ (uint32_t)cp->snode[l]) * 16777619u;
+      pairs[MBC_PAIR_SIZE * k]     = i;
+      pairs[MBC_PAIR_SIZE * k + 1] = cp->points[j].master;
+      pairs[MBC_PAIR_SIZE * k + 2] = cp->points[j].face;
+      pairs[MBC_PAIR_SIZE * k + 3] = (PetscInt)(h & 0x7fffffff);
+    }
+  same = (PetscBool)(ifc->pairs_built && n == ifc->npairs_built);
+  if (same) PetscCall(PetscArraycmp(pairs, ifc->pairs_built, MBC_PAIR_SIZE * n, &same));
+  *npairs    = n;
+  *pairs_out = pairs;
+  *changed   = (PetscBool)!same;
+  PetscFunctionReturn(0);
+}
+
+/* Contact points of all couples in one list: (couple, point). */
+static PetscInt NumContacts(MBCContact c)
+{
+  PetscInt n = 0;
+  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
+  return n;
+}
+
+/* Body of the master node of point j of couple cp: the point's rows live there. */
+static PetscInt PointBody(const MBCCouple *cp, PetscInt j)
+{
+  return cp->master.nbody[cp->points[j].master];
+}
+
+/* Does the constraint of point j of cp involve body b? */
+PetscBool MBCInterfacePointTouches(const MBCCouple *cp, PetscInt j, PetscInt b)
+{
+  for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++)
+    if (cp->master.nbody[cp->mnode[l]] == b) return PETSC_TRUE;
+  for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++)
+    if (cp->slave.nbody[cp->snode[l]] == b) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/* Rank order: each point on a rank of its master body (a body's points split evenly over its
+   ranks, in couple order), points stably sorted by rank; the same on every rank. */
+static PetscErrorCode InterfaceRankOrder(MBCInterface ifc, const PetscInt dims[])
+{
+  MBCContact  c  = ifc->contact;
+  PetscInt    nc = ifc->ncontact, *owner, *count, *seen;
+  PetscMPIInt P, rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(ifc->comm, &P));
+  PetscCallMPI(MPI_Comm_rank(ifc->comm, &rank));
+  PetscCall(PetscMalloc3(nc + 1, &owner, ifc->nbodies, &count, ifc->nbodies, &seen));
+  PetscCall(PetscArrayzero(count, ifc->nbodies));
+  PetscCall(PetscArrayzero(seen, ifc->nbodies));
+  for (PetscInt k = 0; k < nc; k++) count[PointBody(&c->couples[ifc->kcouple[k]], ifc->kpoint[k])]++;
+  for (PetscInt k = 0; k < nc; k++) {
+    const PetscInt b = PointBody(&c->couples[ifc->kcouple[k]], ifc->kpoint[k]);
+    owner[k] = ifc->body_first_rank[b] + (seen[b]++ * ifc->body_nranks[b]) / count[b];
+  }
+  PetscCall(PetscMalloc4(nc + 1, &ifc->perm, nc + 1, &ifc->order, nc + 1, &ifc->coff, nc + 1, &ifc->poff));
+  ifc->coff[0] = 0;
+  for (PetscInt k = 0; k < nc; k++) ifc->coff[k + 1] = ifc->coff[k] + dims[k];
+  {
+    PetscInt p = 0;
+    for (PetscMPIInt r = 0; r < P; r++) {
+      if (r == rank) ifc->pfirst = p;
+      for (PetscInt k = 0; k < nc; k++)
+        if (owner[k] == r) ifc->order[p] = k, ifc->perm[k] = p++;
+      if (r == rank) ifc->plast = p;
+    }
+  }
+  ifc->poff[0] = 0;
+  for (PetscInt p = 0; p < nc; p++) ifc->poff[p + 1] = ifc->poff[p] + dims[ifc->order[p]];
+  PetscCall(PetscFree3(owner, count, seen));
+  PetscFunctionReturn(0);
+}
+
+/* bcols[b]: the W rows (rank order, ascending) of the multipliers of the points touching body b;
+   first[k]: the first H column of point k in body b, or -1. On every rank, for every body. */
+static PetscErrorCode BodyColumns(MBCInterface ifc, PetscInt b, PetscInt first[])
+{
+  MBCContact c = ifc->contact;
+  PetscInt   n = 0;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree(ifc->bcols[b]));
+  for (PetscInt k = 0; k < ifc->ncontact; k++) first[k] = MBCInterfacePointTouches(&c->couples[ifc->kcouple[k]], ifc->kpoint[k], b) ? 0 : -1;
+  for (PetscInt p = 0; p < ifc->ncontact; p++) {
+    const PetscInt k = ifc->order[p];
+    if (first[k] < 0) continue;
+    first[k] = n;
+    n += ifc->coff[k + 1] - ifc->coff[k];
+  }
+  ifc->nbcols[b] = n;
+  PetscCall(PetscMalloc1(n + 1, &ifc->bcols[b]));
+  for (PetscInt p = 0; p < ifc->ncontact; p++) {
+    const PetscInt k = ifc->order[p];
+    if (first[k] < 0) continue;
+    for (PetscInt a = 0; a < ifc->coff[k + 1] - ifc->coff[k]; a++) ifc->bcols[b][first[k] + a] = ifc->poff[p] + a;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* H of one body: the point's frame times its master (+) and slave (-) node weights
+   (MBCCoupleIntegrate) in the columns first[k] + (0, 1, 2); rows of constrained DOFs are
+   zero (a prescribed DOF takes no contact force; the PGS treats a contact with no free DOF as
+   inactive). */
+static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const PetscInt first[], Mat *H)
+{
+  MBCContact  c = ifc->contact;
+  PetscMPIInt brank;
+  PetscInt    ndof, nloc, k = 0;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetSize(body->u, &ndof));
+  PetscCall(VecGetLocalSize(body->u, &nloc));
+  PetscCall(MatCreateAIJ(body->comm, nloc, PETSC_DECIDE, ndof, ifc->nbcols[body->index], 24, NULL, 24, NULL, H));
+  PetscCall(MatSetOption(*H, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+  PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    MBCCouple  *cp = &c->couples[i];
+    MBCSurface *m = &cp->master, *sl = &cp->slave;
+    for (PetscInt j = 0; j < cp->npoints; j++, k++) {
+      const MBCContactPoint *p = &cp->points[j];
+      const PetscReal       *e[3] = {p->n, p->t1, p->t2};
+      if (brank || first[k] < 0) continue; /* rank 0 of the body inserts; assembly sends rows to their owners */
+      for (PetscInt a = 0; a < ifc->coff[k + 1] - ifc->coff[k]; a++) {
+        const PetscInt col = first[k] + a;
+        for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
+          const PetscInt node = cp->mnode[l];
+          if (m->nbody[node] != body->index) continue;
+          for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, m->nrow[node] + d, col, cp->mw[l] * e[a][d], ADD_VALUES));
+        }
+        for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) {
+          const PetscInt node = cp->snode[l];
+          if (sl->nbody[node] != body->index) continue;
+          for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, sl->nrow[node] + d, col, -cp->sw[l] * e[a][d], ADD_VALUES));
+        }
+      }
+    }
+  }
+  PetscCall(MatAssemblyBegin(*H, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*H, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatZeroRows(*H, body->nbc, body->bc_rows, 0.0, NULL, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* Everything built with H: per body H, its vectors and column lists; the star forest; W, q,
+   lambda; the gathered copies. */
+static PetscErrorCode InterfaceReset(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscCall(MatDestroy(&ifc->H[b]));
+    PetscCall(VecDestroy(&ifc->Hu[b]));
+    PetscCall(VecDestroy(&ifc->lam[b]));
+    PetscCall(VecDestroy(&ifc->Hl[b]));
+    PetscCall(VecDestroy(&ifc->Xl[b]));
+    PetscCall(PetscFree(ifc->bcols[b]));
+    ifc->nbcols[b] = 0;
+  }
+  PetscCall(PetscSFDestroy(&ifc->csf));
+  PetscCall(PetscFree(ifc->leaf));
+  PetscCall(VecScatterDestroy(&ifc->gather));
+  PetscCall(VecDestroy(&ifc->gathered));
+  PetscCall(PetscFree2(ifc->rall, ifc->uall));
+  PetscCall(PetscFree4(ifc->perm, ifc->order, ifc->coff, ifc->poff));
+  PetscCall(PetscFree2(ifc->kcouple, ifc->kpoint));
+  PetscCall(MBCFrictionProblemDestroy(&ifc->fp));
+  PetscCall(PetscFree(ifc->goff));
+  PetscCall(PetscFree(ifc->gQ));
+  PetscCall(PetscFree(ifc->grange));
+  PetscCall(PetscFree(ifc->gscale));
+  ifc->ngrigid = 0;
+  PetscCall(MBCMultiplierReset(ifc->mult));
+  PetscCall(VecDestroy(&ifc->lambda));
+  PetscCall(VecDestroy(&ifc->ucontact));
+  PetscCall(VecDestroy(&ifc->lamprev));
+  PetscCall(VecDestroy(&ifc->lamsave));
+  PetscFunctionReturn(0);
+}
+
+/* Carries nf per-point 3-vector fields (components in each point's frame n, t1, t2; 1 component
+   if frictionless) from the points of the last build to the new ones, matched by (couple, master
+   node), through global coordinates. Points without a match get 0. */
+static PetscErrorCode CarryFields(PetscInt nf, PetscInt nold, const PetscInt oldpairs[], const PetscReal oldframes[], const PetscInt oldoff[], const PetscReal *oldv[], PetscInt nnew, const PetscInt newpairs[], const PetscReal newframes[], const PetscInt newoff[], PetscReal *newv[])
+{
+  PetscInt *key, *perm;
+
+  PetscFunctionBegin;
+  for (PetscInt f = 0; f < nf; f++)
+    for (PetscInt k = 0; k < newoff[nnew]; k++) newv[f][k] = 0;
+  if (!nold) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc2(nold, &key, nold, &perm));
+  for (PetscInt lo = 0, hi; lo < nold; lo = hi) { /* points are grouped by couple */
+    for (hi = lo; hi < nold && oldpairs[MBC_PAIR_SIZE * hi] == oldpairs[MBC_PAIR_SIZE * lo]; hi++) {
+      key[hi]  = oldpairs[MBC_PAIR_SIZE * hi + 1];
+      perm[hi] = hi;
+    }
+    PetscCall(PetscSortIntWithArray(hi - lo, key + lo, perm + lo));
+    for (PetscInt k = 0; k < nnew; k++) {
+      PetscInt j, dim = newoff[k + 1] - newoff[k];
+      if (newpairs[MBC_PAIR_SIZE * k] != oldpairs[MBC_PAIR_SIZE * lo]) continue;
+      PetscCall(PetscFindInt(newpairs[MBC_PAIR_SIZE * k + 1], hi - lo, key + lo, &j));
+      if (j < 0) continue;
+      j = perm[lo + j];
+      for (PetscInt fi = 0; fi < nf; fi++) {
+        PetscReal f[3] = {0, 0, 0};
+        for (PetscInt d = 0; d < oldoff[j + 1] - oldoff[j]; d++)
+          for (PetscInt e = 0; e < 3; e++) f[e] += oldv[fi][oldoff[j] + d] * oldframes[9 * j + 3 * d + e];
+        for (PetscInt d = 0; d < dim; d++) newv[fi][newoff[k] + d] = f[0] * newframes[9 * k + 3 * d] + f[1] * newframes[9 * k + 3 * d + 1] + f[2] * newframes[9 * k + 3 * d + 2];
+      }
+    }
+  }
+  PetscCall(PetscFree2(key, perm));
+  PetscFunctionReturn(0);
+}
+
+/* The star forest between the bodies' H columns on this rank (leaves, body after body, in each
+   body's column layout) and the rows of W (roots, this rank's in rank order). */
+static PetscErrorCode InterfaceForest(MBCInterface ifc)
+{
+  PetscInt    nleaf = 0, *remote;
+  PetscLayout layout;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscInt lo, hi;
+    if (!ifc->lam[b]) continue;
+    PetscCall(VecGetOwnershipRange(ifc->lam[b], &lo, &hi));
+    nleaf += hi - lo;
+  }
+  PetscCall(PetscMalloc1(nleaf + 1, &remote));
+  PetscCall(PetscMalloc1(nleaf + 1, &ifc->leaf));
+  nleaf = 0;
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscInt lo, hi;
+    if (!ifc->lam[b]) continue;
+    PetscCall(VecGetOwnershipRange(ifc->lam[b], &lo, &hi));
+    for (PetscInt j = lo; j < hi; j++) remote[nleaf++] = ifc->bcols[b][j];
+  }
+  PetscCall(VecGetLayout(ifc->fp.q, &layout));
+  PetscCall(PetscSFCreate(ifc->comm, &ifc->csf));
+  PetscCall(PetscSFSetGraphLayout(ifc->csf, layout, nleaf, NULL, PETSC_OWN_POINTER, remote));
+  PetscCall(PetscSFSetUp(ifc->csf));
+  PetscCall(PetscFree(remote));
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) into every body's lam[b] on this rank. */
+PetscErrorCode MBCInterfaceToBodies(MBCInterface ifc, Vec v)
+{
+  const PetscScalar *a;
+  PetscInt           l = 0;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetArrayRead(v, &a));
+  PetscCall(PetscSFBcastBegin(ifc->csf, MPIU_SCALAR, a, ifc->leaf, MPI_REPLACE));
+  PetscCall(PetscSFBcastEnd(ifc->csf, MPIU_SCALAR, a, ifc->leaf, MPI_REPLACE));
+  PetscCall(VecRestoreArrayRead(v, &a));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscScalar *la;
+    PetscInt     n;
+    if (!ifc->lam[b]) continue;
+    PetscCall(VecGetLocalSize(ifc->lam[b], &n));
+    PetscCall(VecGetArray(ifc->lam[b], &la));
+    PetscCall(PetscArraycpy(la, ifc->leaf + l, n));
+    PetscCall(VecRestoreArray(ifc->lam[b], &la));
+    l += n;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) = the sum over bodies of Hu[b]. */
+PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
+{
+  PetscScalar *a;
+  PetscInt     l = 0;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    const PetscScalar *ha;
+    PetscInt           n;
+    if (!ifc->Hu[b]) continue;
+    PetscCall(VecGetLocalSize(ifc->Hu[b], &n));
+    PetscCall(VecGetArrayRead(ifc->Hu[b], &ha));
+    PetscCall(PetscArraycpy(ifc->leaf + l, ha, n));
+    PetscCall(VecRestoreArrayRead(ifc->Hu[b], &ha));
+    l += n;
+  }
+  PetscCall(VecZeroEntries(v));
+  PetscCall(VecGetArray(v, &a));
+  PetscCall(PetscSFReduceBegin(ifc->csf, MPIU_SCALAR, ifc->leaf, a, MPIU_SUM));
+  PetscCall(PetscSFReduceEnd(ifc->csf, MPIU_SCALAR, ifc->leaf, a, MPIU_SUM));
+  PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(0);
+}
+
+/* q = sum_i H_i^T du_i + (gap, 0, 0): this rank's rows. */
+PetscErrorCode MBCInterfaceGapRate(MBCInterface ifc, Vec q)
+{
+  MBCContact   c = ifc->contact;
+  PetscScalar *a;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < ifc->nbodies; b++)
+    if (ifc->H[b]) PetscCall(MatMultTranspose(ifc->H[b], ifc->bodies[b]->du, ifc->Hu[b]));
+  PetscCall(MBCInterfaceFromBodies(ifc, q));
+  PetscCall(VecGetOwnershipRange(q, &rstart, NULL));
+  PetscCall(VecGetArray(q, &a));
+  for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) { /* this rank's points */
+    const PetscInt k = ifc->order[p];
+    a[ifc->poff[p] - rstart] += c->couples[ifc->kcouple[k]].igap[ifc->kpoint[k]];
+  }
+  PetscCall(VecRestoreArray(q, &a));
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) on every rank in couple order (out: coff layout). */
+PetscErrorCode MBCInterfaceGather(MBCInterface ifc, Vec v, PetscReal out[])
+{
+  const PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCall(VecScatterBegin(ifc->gather, v, ifc->gathered, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(ifc->gather, v, ifc->gathered, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(ifc->gathered, &a));
+  for (PetscInt k = 0; k < ifc->ncontact; k++)
+    for (PetscInt d = 0; d < ifc->coff[k + 1] - ifc->coff[k]; d++) out[ifc->coff[k] + d] = PetscRealPart(a[ifc->poff[ifc->perm[k]] + d]);
+  PetscCall(VecRestoreArrayRead(ifc->gathered, &a));
+  PetscFunctionReturn(0);
+}
+
+/* Couple-order values (coff layout, every rank) into this rank's rows of v. */
+static PetscErrorCode InterfaceScatterLocal(MBCInterface ifc, const PetscReal in[], Vec v)
+{
+  PetscScalar *a;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(v, &rstart, NULL));
+  PetscCall(VecGetArray(v, &a));
+  for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) {
+    const PetscInt k = ifc->order[p];
+    for (PetscInt d = 0; d < ifc->coff[k + 1] - ifc->coff[k]; d++) a[ifc->poff[p] + d - rstart] = in[ifc->coff[k] + d];
+  }
+  PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(0);
+}
+
+/* W's preallocation: a point's row couples to the multipliers of the bodies its constraint
+   touches (the master body, the slave body). */
+static PetscErrorCode InterfacePreallocation(MBCInterface ifc, PetscInt rstart, PetscInt rend, PetscInt dnz[], PetscInt onz[])
+{
+  MBCContact c = ifc->contact;
+
+  PetscFunctionBegin;
+  for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) {
+    const PetscInt   k = ifc->order[p];
+    const MBCCouple *cp = &c->couples[ifc->kcouple[k]];
+    PetscInt         bs[2], nb = 0, d = 0, o = 0;
+    for (PetscInt b = 0; b < ifc->nbodies && nb < 2; b++) /* at most two: a master node, a slave face */
+      if (MBCInterfacePointTouches(cp, ifc->kpoint[k], b)) bs[nb++] = b;
+    if (nb == 1) {
+      for (PetscInt j = 0; j < ifc->nbcols[bs[0]]; j++) (ifc->bcols[bs[0]][j] >= rstart && ifc->bcols[bs[0]][j] < rend) ? d++ : o++;
+    } else if (nb == 2) { /* the union of two ascending lists */
+      const PetscInt *x = ifc->bcols[bs[0]], *y = ifc->bcols[bs[1]], nx = ifc->nbcols[bs[0]], ny = ifc->nbcols[bs[1]];
+      PetscInt        ix = 0, iy = 0;
+      while (ix < nx || iy < ny) {
+        PetscInt v;
+        if (iy >= ny || (ix < nx && x[ix] < y[iy])) v = x[ix++];
+        else if (ix >= nx || y[iy] < x[ix]) v = y[iy++];
+        else v = x[ix++], iy++;
+        (v >= rstart && v < rend) ? d++ : o++;
+      }
+    }
+    for (PetscInt a = 0; a < ifc->coff[k + 1] - ifc->coff[k]; a++) dnz[ifc->poff[p] + a - rstart] = d, onz[ifc->poff[p] + a - rstart] = o;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* D_i = H_i^T A_i^-1 H_i of the bodies on this rank, by blocks of -mbc_contact_block columns
+   (memory: DOFs x block, not DOFs x multipliers), added into W (rows where they live); then
+   W = D / dscale with dscale the mean diagonal: r = dscale lambda has the units of u, so the
+   FCLIB merit weighs forces and displacements alike. */
+static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mloc)
+{
+  PetscInt *dnz, *onz, rstart;
+  Vec       diag;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Scan(&mloc, &rstart, 1, MPIU_INT, MPI_SUM, ifc->comm));
+  rstart -= mloc;
+  PetscCall(PetscMalloc2(mloc + 1, &dnz, mloc + 1, &onz));
+  PetscCall(InterfacePreallocation(ifc, rstart, rstart + mloc, dnz, onz));
+  PetscCall(MatCreateAIJ(ifc->comm, mloc, mloc, m, m, 0, dnz, 0, onz, &ifc->fp.W));
+  PetscCall(MatSetOption(ifc->fp.W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+  PetscCall(PetscFree2(dnz, onz));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    MBCBody   body = ifc->bodies[b];
+    PetscInt  nb = ifc->nbcols[b], rlo, rhi, clo, chi;
+    if (!body || !nb) continue;
+    PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
+    PetscCall(MatGetOwnershipRangeColumn(ifc->H[b], &clo, &chi));
+    for (PetscInt j0 = 0; j0 < nb; j0 += ifc->dblock) {
+      const PetscInt     j1 = PetscMin(nb, j0 + ifc->dblock), w = j1 - j0;
+      Mat                Hd, X, D;
+      PetscScalar       *h;
+      const PetscScalar *a;
+      PetscInt           lda;
+      PetscCall(MatCreateDense(body->comm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, w, NULL, &Hd));
+      PetscCall(MatDenseGetArrayWrite(Hd, &h));
+      PetscCall(MatDenseGetLDA(Hd, &lda));
+      PetscCall(PetscArrayzero(h, lda * w));
+      for (PetscInt row = rlo; row < rhi; row++) { /* columns j0..j1 of H, dense */
+        PetscInt           ncols;
+        const PetscInt    *cols;
+        const PetscScalar *vals;
+        PetscCall(MatGetRow(ifc->H[b], row, &ncols, &cols, &vals));
+        for (PetscInt k = 0; k < ncols; k++)
+          if (cols[k] >= j0 && cols[k] < j1) h[(row - rlo) + (cols[k] - j0) * lda] = vals[k];
+        PetscCall(MatRestoreRow(ifc->H[b], row, &ncols, &cols, &vals));
+      }
+      PetscCall(MatDenseRestoreArrayWrite(Hd, &h));
+      PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &X));
+      PetscCall(MBCBodyZeroHeldRows(body, NULL, Hd));
+      PetscCall(KSPMatSolve(body->ksp, Hd, X));
+      PetscCall(MatDestroy(&Hd));
+      /* H^T X with H sparse (a dozen entries per column): 2 nnz(H) w flops, not 2 N m w */
+      PetscCall(MatTransposeMatMult(ifc->H[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
+      PetscCall(MatDestroy(&X));
+      PetscCall(MatDenseGetArrayRead(D, &a));
+      PetscCall(MatDenseGetLDA(D, &lda));
+      for (PetscInt i = clo; i < chi; i++) /* this rank's rows of D_i (H's column layout) */
+        for (PetscInt j = 0; j < w; j++)
+          if (a[(i - clo) + j * lda] != 0.0) PetscCall(MatSetValue(ifc->fp.W, ifc->bcols[b][i], ifc->bcols[b][j0 + j], a[(i - clo) + j * lda], ADD_VALUES));
+      PetscCall(MatDenseRestoreArrayRead(D, &a));
+      PetscCall(MatDestroy(&D));
+    }
+  }
+  PetscCall(MatAssemblyBegin(ifc->fp.W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(ifc->fp.W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatCreateVecs(ifc->fp.W, &diag, NULL));
+  PetscCall(MatGetDiagonal(ifc->fp.W, diag));
+  PetscCall(VecSum(diag, &ifc->dscale));
+  PetscCall(VecDestroy(&diag));
+  ifc->dscale /= m;
+  PetscCheck(ifc->dscale > 0, ifc->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
+  PetscCall(MatScale(ifc->fp.W, 1.0 / ifc->dscale));
+  PetscFunctionReturn(0);
+}
+
+/* Builds H and D for the contact points of pairs (couple, master, face per point; takes pairs),
+   and carries the last step's contact forces, the PGS warm start and the slip over to them. */
+PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
+{
+  MBCContact c  = ifc->contact;
+  PetscInt   nc = NumContacts(c), nold = ifc->npairs_built, *oldpairs = ifc->pairs_built, *oldoff = NULL, *dims, m, mloc;
+  PetscReal *oldframes = ifc->frames, *oldlam = NULL, *oldr = NULL, *oldslip = ifc->slip, *oldstepslip = ifc->stepslip;
+
+  PetscFunctionBegin;
+  PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
+  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  if (nold && ifc->lamprev) { /* keep what the new points inherit, in couple order */
+    const PetscInt mold = ifc->coff[nold];
+    PetscCall(PetscMalloc3(nold + 1, &oldoff, mold + 1, &oldlam, mold + 1, &oldr));
+    PetscCall(PetscArraycpy(oldoff, ifc->coff, nold + 1));
+    PetscCall(MBCInterfaceGather(ifc, ifc->lamprev, oldlam));
+    for (PetscInt i = 0; i < mold; i++) oldr[i] = ifc->rall[i] / ifc->dscale;
+  }
+  ifc->frames = NULL;
+  ifc->slip     = NULL;
+  ifc->stepslip = NULL;
+  PetscCall(InterfaceReset(ifc));
+  ifc->pairs_built  = pairs;
+  ifc->npairs_built = n;
+  ifc->ncontact     = nc;
+  PetscCall(PetscMalloc1(nc + 1, &dims));
+  PetscCall(PetscMalloc2(nc + 1, &ifc->kcouple, nc + 1, &ifc->kpoint));
+  PetscCall(PetscMalloc1(9 * nc + 1, &ifc->frames));
+  PetscCall(PetscCalloc1(3 * nc + 1, &ifc->slip));
+  PetscCall(PetscCalloc1(3 * nc + 1, &ifc->stepslip));
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const MBCContactPoint *p = &c->couples[i].points[j];
+      ifc->kcouple[k] = i, ifc->kpoint[k] = j;
+      dims[k] = c->couples[i].mu > 0 ? 3 : 1;
+      for (PetscInt e = 0; e < 3; e++) {
+        ifc->frames[9 * k + e]     = p->n[e];
+        ifc->frames[9 * k + 3 + e] = p->t1[e];
+        ifc->frames[9 * k + 6 + e] = p->t2[e];
+      }
+    }
+  PetscCall(InterfaceRankOrder(ifc, dims));
+  m = ifc->coff[nc];
+  mloc = ifc->poff[ifc->plast] - ifc->poff[ifc->pfirst];
+  { /* this rank's contacts of the multiplier problem */
+    PetscInt *ldims;
+    ifc->fp.nc = ifc->plast - ifc->pfirst;
+    PetscCall(PetscMalloc1(ifc->fp.nc + 1, &ifc->fp.mu));
+    PetscCall(PetscMalloc1(ifc->fp.nc + 1, &ldims));
+    for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) {
+      ifc->fp.mu[p - ifc->pfirst] = c->couples[ifc->kcouple[ifc->order[p]]].mu;
+      ldims[p - ifc->pfirst]    = ifc->poff[p + 1] - ifc->poff[p];
+    }
+    PetscCall(MBCFrictionProblemSetBlocks(&ifc->fp, ldims));
+    PetscCall(PetscFree(ldims));
+  }
+  PetscCall(PetscFree(dims));
+  PetscCall(PetscMalloc2(m + 1, &ifc->rall, m + 1, &ifc->uall));
+  PetscCall(PetscArrayzero(ifc->rall, m + 1));
+  PetscCall(PetscArrayzero(ifc->uall, m + 1));
+  if (nc) {
+    PetscInt  *first;
+    PetscReal *v[2];
+    PetscCall(PetscMalloc1(nc + 1, &first));
+    for (PetscInt b = 0; b < ifc->nbodies; b++) {
+      PetscCall(BodyColumns(ifc, b, first));
+      if (!ifc->bodies[b] || !ifc->nbcols[b]) continue;
+      PetscCall(BodyContactMatrix(ifc, ifc->bodies[b], first, &ifc->H[b]));
+      PetscCall(MatCreateVecs(ifc->H[b], &ifc->Hu[b], &ifc->Hl[b]));
+      PetscCall(VecDuplicate(ifc->Hu[b], &ifc->lam[b]));
+      PetscCall(VecDuplicate(ifc->Hl[b], &ifc->Xl[b]));
+    }
+    PetscCall(PetscFree(first));
+    PetscCall(InterfaceBuildD(ifc, m, mloc));
+    PetscCall(MatCreateVecs(ifc->fp.W, &ifc->fp.q, NULL));
+    PetscCall(InterfaceForest(ifc));
+    PetscCall(MBCInterfaceRigidModes(ifc));
+    PetscCall(VecDuplicate(ifc->fp.q, &ifc->lambda));
+    PetscCall(VecDuplicate(ifc->fp.q, &ifc->ucontact));
+    PetscCall(VecDuplicate(ifc->fp.q, &ifc->lamprev));
+    PetscCall(VecScatterCreateToAll(ifc->lambda, &ifc->gather, &ifc->gathered));
+    /* carry lambda_n and the warm start r (physical, then scaled) over to the new points */
+    PetscCall(PetscMalloc2(m + 1, &v[0], m + 1, &v[1]));
+    {
+      const PetscReal *old[2] = {oldlam, oldr};
+      PetscCall(CarryFields(2, oldoff ? nold : 0, oldpairs, oldframes, oldoff, old, nc, pairs, ifc->frames, ifc->coff, v));
+    }
+    for (PetscInt i = 0; i < m; i++) v[1][i] *= ifc->dscale;
+    PetscCall(PetscArraycpy(ifc->rall, v[1], m));
+    PetscCall(InterfaceScatterLocal(ifc, v[0], ifc->lamprev));
+    PetscCall(InterfaceScatterLocal(ifc, v[1], ifc->lambda));
+    PetscCall(PetscFree2(v[0], v[1]));
+    if (oldslip && nold) { /* the slip so far and in this load step, (0, t1, t2) in each point's frame */
+      PetscInt        *off3;
+      const PetscReal *old[2]     = {oldslip, oldstepslip};
+      PetscReal       *carried[2] = {ifc->slip, ifc->stepslip};
+      PetscCall(PetscMalloc1(PetscMax(nold, nc) + 1, &off3));
+      for (PetscInt i = 0; i <= PetscMax(nold, nc); i++) off3[i] = 3 * i;
+      PetscCall(CarryFields(2, nold, oldpairs, oldframes, off3, old, nc, pairs, ifc->frames, off3, carried));
+      for (PetscInt k = 0; k < nc; k++) ifc->slip[3 * k] = ifc->stepslip[3 * k] = 0;
+      PetscCall(PetscFree(off3));
+    }
+  }
+  PetscCall(PetscFree3(oldoff, oldlam, oldr));
+  PetscCall(PetscFree(oldslip));
+  PetscCall(PetscFree(oldstepslip));
+  PetscCall(PetscFree(oldframes));
+  PetscCall(PetscFree(oldpairs));
+  PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
+{
+  MBCInterface ifc = *iface;
+
+  PetscFunctionBegin;
+  if (!ifc) PetscFunctionReturn(0);
+  PetscCall(InterfaceReset(ifc));
+  PetscCall(PetscFree6(ifc->H, ifc->Hu, ifc->lam, ifc->Hl, ifc->Xl, ifc->nbcols));
+  PetscCall(PetscFree(ifc->bcols));
+  PetscCall(PetscFree(ifc->frames));
+  PetscCall(PetscFree(ifc->slip));
+  PetscCall(PetscFree(ifc->stepslip));
+  PetscCall(PetscFree(ifc->pairs_built));
+  PetscCall(MBCMultiplierDestroy(&ifc->mult));
+  PetscCall(PetscFree(*iface));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,262 @@
+/* The multipliers of a step (the set-up and the distribution: interface.c): q from every body's
+   free increment, the multiplier solve on the rows of each rank, dU += A^-1 H lambda; the
+   points' states and the work of their forces; the FCLIB copy of a step's problem. */
+#include <mbc/private/interfaceimpl.h>
+
+/* -mbc_fclib_write FILE at step -mbc_fclib_write_step: the scaled problem (W = D / dscale,
+   r = dscale lambda) and its solution as an FCLIB local problem in rank order, gathered to and
+   written by rank 0. */
+static PetscErrorCode InterfaceWriteFclib(MBCInterface ifc, PetscInt step)
+{
+  MBCContact         c = ifc->contact;
+  PetscMPIInt        rank;
+  PetscInt           m = ifc->coff[ifc->ncontact];
+  IS                 is;
+  Mat               *W0;
+  Vec                v[3], v0[3];
+  VecScatter         sc;
+  MBCFrictionProblem fp0;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(ifc->comm, &rank));
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, rank ? 0 : m, 0, 1, &is));
+  PetscCall(MatCreateSubMatrices(ifc->fp.W, 1, &is, &is, MAT_INITIAL_MATRIX, &W0));
+  PetscCall(ISDestroy(&is));
+  v[0] = ifc->fp.q, v[1] = ifc->lambda, v[2] = ifc->ucontact;
+  for (PetscInt i = 0; i < 3; i++) {
+    PetscCall(VecScatterCreateToZero(v[i], &sc, &v0[i]));
+    PetscCall(VecScatterBegin(sc, v[i], v0[i], INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(sc, v[i], v0[i], INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterDestroy(&sc));
+  }
+  if (!rank) {
+    PetscInt *dims;
+    PetscCall(PetscMemzero(&fp0, sizeof(fp0)));
+    fp0.nc = ifc->ncontact;
+    fp0.W  = W0[0];
+    fp0.q  = v0[0];
+    PetscCall(PetscMalloc2(fp0.nc + 1, &fp0.mu, fp0.nc + 1, &dims));
+    for (PetscInt p = 0; p < fp0.nc; p++) {
+      fp0.mu[p] = c->couples[ifc->kcouple[ifc->order[p]]].mu;
+      dims[p]   = ifc->poff[p + 1] - ifc->poff[p];
+    }
+    PetscCall(MBCFrictionProblemSetBlocks(&fp0, dims));
+    PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, ifc->scene->filename, step));
+    PetscCall(MBCFclibWriteLocal(ifc->fclib_file, &fp0, v0[1], v0[2]));
+    PetscCall(PetscFree(fp0.off));
+    PetscCall(PetscFree2(fp0.mu, dims));
+  }
+  for (PetscInt i = 0; i < 3; i++) PetscCall(VecDestroy(&v0[i]));
+  PetscCall(MatDestroySubMatrices(1, &W0));
+  PetscCallMPI(MPI_Barrier(ifc->comm));
+  PetscFunctionReturn(0);
+}
+
+/* A static contact solve with free bodies that failed: is the load on some free body beyond
+   what friction can hold? Per body its load's resultant F (this step's), the mean normal n of
+   the contact points that touch it and the largest mu of its couples: a tangential load
+   |F - (F.n) n| above mu |F.n| has no static equilibrium, an input error named here. */
+static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step, PetscReal time)
+{
+  MBCContact c = ifc->contact;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscReal F[4] = {0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N;
+    PetscInt  cnt = 0;
+    if (ifc->bodies[b]) { /* F and whether the body is free, from its first rank */
+      PetscMPIInt brank;
+      PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
+      if (!brank && ifc->bodies[b]->nrigid) {
+        for (PetscInt d = 0; d < 3; d++) F[d] = ifc->bodies[b]->fres[d];
+        F[3] = 1;
+      }
+    }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, F, 4, MPIU_REAL, MPIU_SUM, ifc->comm));
+    if (!F[3]) continue;
+    for (PetscInt k = 0; k < ifc->ncontact; k++) { /* the points touching b (replicated bookkeeping) */
+      const MBCCouple *cp = &c->couples[ifc->kcouple[k]];
+      const PetscInt   j  = ifc->kpoint[k];
+      if (!MBCInterfacePointTouches(cp, j, b)) continue;
+      for (PetscInt d = 0; d < 3; d++) n[d] += ifc->frames[9 * k + d];
+      mu = PetscMax(mu, cp->mu);
+      cnt++;
+    }
+    N = PetscSqrtReal(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!cnt || !(N > 0)) continue;
+    for (PetscInt d = 0; d < 3; d++) n[d] /= N, fn += F[d] * n[d];
+    for (PetscInt d = 0; d < 3; d++) ft[d] = F[d] - fn * n[d], T += ft[d] * ft[d];
+    T = PetscSqrtReal(T);
+    PetscCheck(!(T > mu * PetscAbsReal(fn)), ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: body '%s' carries a tangential load of %g along (%.3f, %.3f, %.3f) against a friction capacity mu N = %g x %g = %g on its contact surfaces (T / mu N = %.4f); a static state needs T <= mu N: lower the load, prescribe a displacement that holds the body, or run a dynamic analysis", step, (double)time, ifc->scene->bodies[b].name, (double)T, (double)(ft[0] / T), (double)(ft[1] / T), (double)(ft[2] / T), (double)mu, (double)PetscAbsReal(fn), (double)(mu * PetscAbsReal(fn)), (double)(T / (mu * PetscAbsReal(fn))));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Coulomb's law in a static load step holds for the slip over the whole step: the equilibrium
+   iterations after the first only correct it, so their tangential rates start from the slip the
+   step's earlier iterations made (else a point that slid in the first iteration and not in the
+   next would be taken to stick, its traction inside the cone while the block slides). */
+static PetscErrorCode InterfaceAddStepSlip(MBCInterface ifc, Vec q)
+{
+  PetscScalar *a;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(q, &rstart, NULL));
+  PetscCall(VecGetArray(q, &a));
+  for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) {
+    const PetscInt k = ifc->order[p];
+    if (ifc->coff[k + 1] - ifc->coff[k] == 3)
+      for (PetscInt d = 1; d < 3; d++) a[ifc->poff[p] + d - rstart] += ifc->stepslip[3 * k + d];
+  }
+  PetscCall(VecRestoreArray(q, &a));
+  PetscFunctionReturn(0);
+}
+
+/* A static load step begins: its slip counts from here. */
+PetscErrorCode MBCInterfaceStepBegin(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  if (ifc->stepslip) PetscCall(PetscArrayzero(ifc->stepslip, 3 * ifc->ncontact));
+  PetscFunctionReturn(0);
+}
+
+/* A static load step is abandoned (to be cut): the slip it made is undone. */
+PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  for (PetscInt i = 0; ifc->stepslip && i < 3 * ifc->ncontact; i++) ifc->slip[i] -= ifc->stepslip[i];
+  PetscCall(MBCInterfaceStepBegin(ifc));
+  PetscFunctionReturn(0);
+}
+
+/* Given every body's free increment in body->du, solves for the multipliers of step `step`
+   (ending at `time`) and adds A^-1 H lambda. A solve that may fail (the caller can cut the step)
+   and does returns *failed with nothing changed; otherwise a failed solve is an error. */
+PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time, PetscBool may_fail, PetscBool *failed)
+{
+  const PetscInt nc = ifc->ncontact;
+
+  PetscFunctionBegin;
+  *failed = PETSC_FALSE;
+  if (!nc) PetscFunctionReturn(0);
+  if (may_fail) { /* the warm start, for a retry with a smaller step */
+    if (!ifc->lamsave) PetscCall(VecDuplicate(ifc->lambda, &ifc->lamsave)); /* freed with the layout it has */
+    PetscCall(VecCopy(ifc->lambda, ifc->lamsave));
+  }
+  PetscCall(MBCInterfaceGapRate(ifc, ifc->fp.q));
+  if (ifc->analysis == MBC_ANALYSIS_STATIC) PetscCall(InterfaceAddStepSlip(ifc, ifc->fp.q));
+  if (ifc->carry != 0) { /* q' = q - c D lambda_n (scaled: W = D / dscale) */
+    Vec t;
+    PetscCall(VecDuplicate(ifc->lamprev, &t));
+    PetscCall(VecAXPBY(t, ifc->dscale, 0.0, ifc->lamprev));
+    PetscCall(MatMult(ifc->fp.W, t, ifc->ucontact));
+    PetscCall(VecAXPY(ifc->fp.q, -ifc->carry, ifc->ucontact));
+    PetscCall(VecDestroy(&t));
+  }
+  { /* solve with q scaled to unit norm: the FCLIB merit |r - proj(..)| / (1 + |q|) then is
+       relative, and -mbc_pgs_rtol means the same in m or mm (absolute in the scene's length
+       unit, 1e-8 would be 10 nm in m and 10 pm in mm) */
+    PetscReal L;
+    PetscCall(VecNorm(ifc->fp.q, NORM_2, &L));
+    if (!(L > 0)) L = 1;
+    PetscCall(MBCInterfaceRigidRHS(ifc, step, time));
+    if (ifc->fp.G) PetscCall(VecZeroEntries(ifc->fp.alpha)); /* the rigid motion of this increment */
+    PetscCall(VecScale(ifc->fp.q, 1 / L));
+    PetscCall(VecScale(ifc->lambda, 1 / L));
+    if (ifc->fp.G) {
+      PetscCall(VecScale(ifc->fp.e, 1 / L));
+      PetscCall(VecScale(ifc->fp.alpha, 1 / L));
+    }
+    PetscCall(MBCMultiplierSetProblem(ifc->mult, &ifc->fp));
+    PetscCall(MBCMultiplierSolve(ifc->mult, ifc->lambda, ifc->ucontact)); /* warm start: r of the last step */
+    PetscCall(VecScale(ifc->fp.q, L));
+    PetscCall(VecScale(ifc->lambda, L));
+    PetscCall(VecScale(ifc->ucontact, L));
+    if (ifc->fp.G) {
+      PetscCall(VecScale(ifc->fp.e, L));
+      PetscCall(VecScale(ifc->fp.alpha, L));
+    }
+  }
+  if (ifc->fclib_step == step && ifc->fclib_file[0]) PetscCall(InterfaceWriteFclib(ifc, step));
+  if (ifc->mult->reason < 0 && ifc->fp.G) PetscCall(InterfaceFrictionCapacity(ifc, step, time));
+  if (ifc->mult->reason < 0 && may_fail) { /* the caller cuts the step: nothing changed */
+    PetscCall(VecCopy(ifc->lamsave, ifc->lambda));
+    *failed = PETSC_TRUE;
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(ifc->mult->reason > 0, ifc->comm, PETSC_ERR_NOT_CONVERGED, "Contact multipliers at step %" PetscInt_FMT " (t = %g): %s solve %s after %" PetscInt_FMT " iterations, FCLIB merit %g > -mbc_multiplier_rtol %g", step, (double)time, ((PetscObject)ifc->mult)->type_name, MBCMultiplierConvergedReasonName(ifc->mult->reason), ifc->mult->its, (double)ifc->mult->merit, (double)ifc->mult->rtol);
+  PetscCall(VecAXPBY(ifc->lamprev, 1.0 / ifc->dscale, -ifc->carry, ifc->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
+  PetscCall(MBCInterfaceGather(ifc, ifc->lambda, ifc->rall));
+  PetscCall(MBCInterfaceGather(ifc, ifc->ucontact, ifc->uall));
+  /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the step's slip
+     (H's master weight is 1, so in length units); in a static step it counts from the step's
+     start (InterfaceAddStepSlip), and this iteration moved the points by u_t - stepslip */
+  for (PetscInt k = 0; k < nc; k++)
+    if (ifc->coff[k + 1] - ifc->coff[k] == 3)
+      for (PetscInt d = 1; d < 3; d++) {
+        ifc->slip[3 * k + d] += ifc->uall[ifc->coff[k] + d] - ifc->stepslip[3 * k + d];
+        if (ifc->analysis == MBC_ANALYSIS_STATIC) ifc->stepslip[3 * k + d] = ifc->uall[ifc->coff[k] + d];
+      }
+  PetscCall(MBCInterfaceToBodies(ifc, ifc->lamprev));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    MBCBody body = ifc->bodies[b];
+    if (!body || !ifc->H[b]) continue;
+    PetscCall(MatMult(ifc->H[b], ifc->lam[b], ifc->Hl[b]));
+    PetscCall(MBCBodyZeroHeldRows(body, ifc->Hl[b], NULL));
+    PetscCall(KSPSolve(body->ksp, ifc->Hl[b], ifc->Xl[b]));
+    PetscCall(VecAXPY(body->du, 1.0, ifc->Xl[b]));
+  }
+  if (ifc->fp.G) PetscCall(MBCInterfaceRigidMotion(ifc));
+  PetscFunctionReturn(0);
+}
+
+/* Per contact point (in couple order): its state and the step's mean contact force z = theta r
+   (in the frame n, t1, t2; tangents 0 where frictionless); counts of each state. state and
+   lambda may be NULL. The same on every rank. */
+PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt state[], PetscReal lambda[])
+{
+  MBCContact c = ifc->contact;
+
+  PetscFunctionBegin;
+  count[0] = count[1] = count[2] = 0;
+  if (!ifc->ncontact) PetscFunctionReturn(0);
+  for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+    for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+      const PetscInt o = ifc->coff[k], dim = ifc->coff[k + 1] - o;
+      PetscReal      lam[3] = {0, 0, 0}, rt;
+      PetscInt       st;
+      for (PetscInt d = 0; d < dim; d++) lam[d] = ifc->theta * ifc->rall[o + d] / ifc->dscale;
+      rt = PetscSqrtReal(lam[1] * lam[1] + lam[2] * lam[2]);
+      if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
+      else if (dim == 3 && rt < c->couples[i].mu * lam[0] * (1 - 1e-6)) st = MBC_CONTACT_STICK;
+      else st = MBC_CONTACT_SLIP;
+      count[st]++;
+      if (state) state[k] = st;
+      if (lambda)
+        for (PetscInt d = 0; d < 3; d++) lambda[3 * k + d] = lam[d];
+    }
+  PetscFunctionReturn(0);
+}
+
+/* Work of the step's mean contact force z on the bodies, z . H^T du per point, added to
+   *wfriction (tangential) and *wcontact (normal): u = D lambda_n+1 + q is (g_n, 0, 0) + H^T du
+   (g_n the gap the step started from, still in igap: the search comes after the step), in the
+   frames the multipliers live in; friction dissipates -z_t . du_t >= 0, the normal contact takes
+   -z_n (g_n+1 - g_n) = z_n g_n >= 0 where complementarity holds. The trapezoidal rule's energy
+   balance holds with the step's mean force, so with these the total is conserved to the
+   multiplier tolerance. Replicated data (couple order): the same on every rank. */
+void MBCInterfaceContactWork(MBCInterface ifc, PetscReal *wfriction, PetscReal *wcontact)
+{
+  MBCContact c = ifc->contact;
+
+  for (PetscInt k = 0; k < ifc->ncontact; k++) {
+    const PetscInt o = ifc->coff[k], dim = ifc->coff[k + 1] - o;
+    const PetscReal g = c->couples[ifc->kcouple[k]].igap[ifc->kpoint[k]];
+    for (PetscInt d = 0; d < dim; d++) {
+      const PetscReal z = ifc->theta * ifc->rall[o + d] / ifc->dscale, du = ifc->uall[o + d] - (d ? 0 : g);
+      if (d) *wfriction -= z * du;
+      else *wcontact -= z * du;
+    }
+  }
+}
