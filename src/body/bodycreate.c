@@ -214,9 +214,6 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
     PetscCall(KSPDestroy(&b->kspcut[l]));
     PetscCall(MatDestroy(&b->Acut[l]));
   }
-  PetscCall(MatDestroy(&b->Mc));
-  PetscCall(KSPDestroy(&b->kspM));
-  PetscCall(VecDestroy(&b->fcontact));
   PetscCall(VecDestroy(&b->ustart));
   PetscCall(VecDestroy(&b->u));
   PetscCall(VecDestroy(&b->v));

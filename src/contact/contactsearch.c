@@ -317,15 +317,12 @@ static void Frame(MBCContactPoint *cp)
 PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
 {
   MBCSurface *s = &c->slave;
-  PetscInt   *mark, *queue, *prev;
+  PetscInt   *mark, *queue;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_LocalSearch, 0, 0, 0, 0));
-  PetscCall(PetscMalloc3(s->nfaces + 1, &mark, s->nfaces + 1, &queue, c->master.nnodes + 1, &prev));
+  PetscCall(PetscMalloc2(s->nfaces + 1, &mark, s->nfaces + 1, &queue));
   for (PetscInt f = 0; f < s->nfaces; f++) mark[f] = -1;
-  for (PetscInt v = 0; v < c->master.nnodes; v++) prev[v] = -1;
-  for (PetscInt k = 0; k < c->npoints; k++) /* faces are numbered canonically: the same from one search to the next */
-    if (c->points[k].master < c->master.nnodes && c->points[k].face < s->nfaces) prev[c->points[k].master] = c->points[k].face;
   PetscCall(PetscFree(c->points));
   PetscCall(PetscMalloc1(c->npairs, &c->points));
   c->npoints = 0;
@@ -387,16 +384,12 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
         }
     }
 #undef TRY
-    /* hysteresis: a node that crosses a shared edge by less than MBC_FACE_HYSTERESIS of its length
-       keeps its previous face, so a node vibrating about an edge does not flip the point's face
-       (and rebuild D) every step */
-    if (found && prev[pair->master] >= 0 && best.face != prev[pair->master] && MBCCoupleProjectOnFace(c, xm, nm, prev[pair->master], PETSC_TRUE, &cp, &q) && q >= -MBC_FACE_HYSTERESIS) best = cp;
     if (!found || best.gap < -c->h) continue;
     best.master = pair->master;
     Frame(&best);
     c->points[c->npoints++] = best;
   }
-  PetscCall(PetscFree3(mark, queue, prev));
+  PetscCall(PetscFree2(mark, queue));
   PetscCall(PetscLogEventEnd(MBC_LocalSearch, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -428,7 +421,7 @@ PetscErrorCode MBCCoupleCheckSearch(MBCCouple *c, PetscInt *missed, PetscInt *fa
       }
     if (!found) continue;
     if (pointOf[v] >= 0) (void)MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], c->points[pointOf[v]].face, PETSC_FALSE, &cp, &qs);
-    if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9 && qs < -MBC_FACE_HYSTERESIS)) {
+    if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9)) {
       *missed = v;
       *face   = best.face;
       *gap    = best.gap;

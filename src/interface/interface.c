@@ -114,16 +114,13 @@ PetscErrorCode MBCInterfaceMultipliersToBodies(MBCInterface ifc)
   PetscFunctionReturn(0);
 }
 
-/* f = H_b lambda_b, the contact force on body b (add: f += H_b lambda_b), with lambda_n+1 of the
-   last step after MBCInterfaceMultipliersToBodies; f = 0 (add: f unchanged) where no point
-   touches body b. On the body's ranks. */
-PetscErrorCode MBCInterfaceBodyForce(MBCInterface ifc, PetscInt b, PetscBool add, Vec f)
+/* f = H_b lambda_b, the contact force on body b, with lambda_n+1 of the last step after
+   MBCInterfaceMultipliersToBodies; f = 0 where no point touches body b. On the body's ranks. */
+PetscErrorCode MBCInterfaceBodyForce(MBCInterface ifc, PetscInt b, Vec f)
 {
   PetscFunctionBegin;
-  if (!ifc->H[b]) {
-    if (!add) PetscCall(VecZeroEntries(f));
-  } else if (add) PetscCall(MatMultAdd(ifc->H[b], ifc->lam[b], f, f));
-  else PetscCall(MatMult(ifc->H[b], ifc->lam[b], f));
+  if (ifc->H[b]) PetscCall(MatMult(ifc->H[b], ifc->lam[b], f));
+  else PetscCall(VecZeroEntries(f));
   PetscFunctionReturn(0);
 }
 

@@ -60,7 +60,7 @@ static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, Vec r)
   PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->work));
   PetscCall(VecAXPY(r, -1.0, body->work));
   if (s->iface) { /* H lambda_n+1 of the step (MBCInterfaceMultipliersToBodies) */
-    PetscCall(MBCInterfaceBodyForce(s->iface, b, PETSC_FALSE, body->work));
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, body->work));
     PetscCall(VecAXPY(r, -1.0, body->work));
   }
   PetscFunctionReturn(0);

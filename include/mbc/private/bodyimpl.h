@@ -31,8 +31,6 @@ struct _n_MBCBody {
   KSP ksp;
   KSP kspcut[MBC_MAX_CUTS]; /* dynamic: the factor of each step size dt / 2^level used (solver.c) */
   Mat Acut[MBC_MAX_CUTS];
-  Mat Mc;                 /* mass operator of kspM (constrained rows/cols zeroed), made when contact needs it */
-  KSP kspM;
   PetscReal a0, a1;       /* coefficients of A = aK K + aM M */
   PetscReal aK, aM;
   PetscReal stab;         /* static: A = K + stab diag(K), a spring to the last iterate */
@@ -56,7 +54,6 @@ struct _n_MBCBody {
 
   Vec u, v, a;            /* displacement, velocity, acceleration */
   Vec du, rhs, f, fold, g, work, work2;
-  Vec fcontact;           /* dynamic: H lambda_n of the last contact build */
   Vec ustart;             /* static: u where a load step that may be cut began */
 };
 

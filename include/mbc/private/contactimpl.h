@@ -4,7 +4,6 @@
 #include <mbc/private/bodyimpl.h>
 
 #define MBC_MAX_FACE_NODES 4
-#define MBC_FACE_HYSTERESIS 1e-2 /* a point keeps its face while outside it by less than this fraction of an edge */
 #define MBC_SEARCH_CANDIDATES 8 /* slave nodes tried per master node, nearest first */
 
 /* One side of a couple: nodes and faces gathered from all bodies and ranks, in canonical

@@ -77,7 +77,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceGetSize(MBCInterface, PetscInt *, PetscI
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultiplier(MBCInterface, MBCMultiplier *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface, Vec *);
 PETSC_INTERN PetscErrorCode MBCInterfaceMultipliersToBodies(MBCInterface);
-PETSC_INTERN PetscErrorCode MBCInterfaceBodyForce(MBCInterface, PetscInt, PetscBool, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceBodyForce(MBCInterface, PetscInt, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceDestroy(MBCInterface *);
 PETSC_INTERN PetscBool      MBCInterfacePointTouches(const MBCCouple *, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceToBodies(MBCInterface, Vec);
