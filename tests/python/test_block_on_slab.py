@@ -61,6 +61,17 @@ def test_static_push_below_capacity(case, fraction):
         assert c["slip"][-1] > 0 and c["stick"][-1] > 0  # partial slip
 
 
+@pytest.mark.parametrize("nproc", [2, 4])
+def test_static_push_on_ranks(case, nproc):
+    """The 0.42 mu W push on 2 and 4 ranks: the same exact resultant (the block's equilibrium,
+    imposed as constraints of the multiplier problem, holds on any partition)."""
+    h5 = static_scene(case, 0.4247)
+    solve(h5, nproc=nproc)
+    c = read_csv(result(h5, "_contact.csv"))
+    T = 0.4247 * MU * W
+    assert abs(c["fz"][-1] - W) < 1e-8 * W and abs(c["fx"][-1] + T) < 1e-8 * W and abs(c["fy"][-1]) < 1e-8 * W
+
+
 def test_static_push_above_capacity_is_refused(case):
     h5 = static_scene(case, 1.05)
     r = solve(h5, check=False, timeout=120)
