@@ -4,6 +4,7 @@ to rounding), and an XDMF index whose every reference is a dataset of that file 
 type. This process reads with h5py; the solver (PETSc, MPI HDF5) runs in its own processes."""
 import os
 import re
+import subprocess
 import xml.etree.ElementTree as ET
 
 import h5py
@@ -195,9 +196,10 @@ TENSOR6_TO_3X3 = [0, 1, 2, 1, 3, 4, 2, 4, 5]
 def xdmf_cell_tensors(xmf, grid_name, attribute):
     """The cellwise Tensor6 attribute of a grid of the .xmf's last step, read as an XDMF reader
     does: the DataItem's HDF reference resolved relative to the .xmf, expanded to (nc, 3, 3) the
-    way vtkXdmfReader does. Not vtkXdmfReader itself: Debian 12's python3-vtk9 (9.1) is built
-    without vtkIOXdmf2/3, python3-paraview (which has it) replaces python3-vtk9, and
-    python3-xdmf fails to import (undefined symbol XdmfUnstructuredGridCast)."""
+    way vtkXdmfReader does. vtkXdmfReader itself reads it in test_xdmf_read_by_vtkxdmfreader,
+    from PyPI's vtk in a venv: Debian 12's python3-vtk9 (9.1) is built without vtkIOXdmf2/3,
+    python3-paraview (which has it) replaces python3-vtk9, and python3-xdmf fails to import
+    (undefined symbol XdmfUnstructuredGridCast)."""
     root = ET.parse(xmf).getroot()
     grid = [g for g in root.find("Domain/Grid").findall("Grid")][-1]
     grid = [g for g in grid.findall("Grid") if g.get("Name") == grid_name][0]
@@ -233,3 +235,45 @@ def test_xdmf_stress_is_tensor6_in_xdmf_order(tmp_path):
     assert len(sigma) == 8
     assert np.abs(sigma - exact).max() < 1e-8 * rho * g * L, sigma[0]
     assert np.abs(r["stress"][:, TENSOR6_TO_3X3].reshape(-1, 3, 3) - exact).max() < 1e-8 * rho * g * L
+
+
+def vtk_python():
+    """A Python with PyPI's vtk (vtkXdmfReader): $MBC_VTK_PYTHON, else the venv `make test`
+    makes in the build directory (<build>/venv-vtk)."""
+    from conftest import BUILD
+    py = os.environ.get("MBC_VTK_PYTHON", os.path.join(BUILD, "venv-vtk", "bin", "python"))
+    return py if os.path.exists(py) else None
+
+
+@pytest.mark.skipif(vtk_python() is None, reason="no Python with vtk's vtkXdmfReader (make test makes <build>/venv-vtk)")
+def test_xdmf_read_by_vtkxdmfreader(tmp_path):
+    """The column under self-weight read through its .xmf by VTK's own vtkXdmfReader (what ParaView
+    opens .xmf with), not by our reading of the format: the last time step is t = 1, the body's
+    block has 8 cells and 36 points, the stress is the 9-component tensor VTK makes of Tensor6 with
+    ZZ = -rho g (h - z) at every cell centre and every other component 0 (to 1e-8 rho g h), and
+    the displacement of the top points is the exact -rho g h^2 / (2 E)."""
+    import json
+    L, rho, g, E = 10.0, 2500.0, 9.81, 30e9
+    meshgen.box(str(tmp_path / "column.msh"), (0, 0, 0), (1, 1, L), n=(1, 1, 8), cell="hex8", volume_name="column")
+    scene = {"meshes": {"m": "column.msh"},
+             "bodies": {"column": {"mesh": "m", "regions": "column", "material": {"E": E, "nu": 0.0, "density": rho}}},
+             "dirichlet": [{"surface": "zmin"}], "loads": [{"kind": "gravity", "vector": [0, 0, -g]}],
+             "output": {"fields": ["displacement", "stress"]}}
+    h5 = prep(tmp_path, scene, name="column")
+    solve(h5)
+    e = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    r = subprocess.run([vtk_python(), os.path.join(os.path.dirname(__file__), "vtk_read_xdmf.py"), str(h5)[:-3] + "_result.xmf"],
+                       capture_output=True, text=True, env=e, timeout=120)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["times"][-1] == 1.0
+    b = d["blocks"]["column"]
+    assert b["cells"] == 8 and b["points"] == 36
+    sigma = np.array(b["arrays"]["cell:stress"]).reshape(-1, 3, 3)
+    zc = np.array(b["centres"])[:, 2]
+    exact = np.zeros_like(sigma)
+    exact[:, 2, 2] = -rho * g * (L - zc)
+    assert np.abs(sigma - exact).max() < 1e-8 * rho * g * L, sigma[0]
+    u = np.array(b["arrays"]["point:displacement"])
+    # the points' coordinates are not in the JSON: the top (z = L) has the largest settlement
+    assert abs(u[:, 2].min() / (-rho * g * L**2 / (2 * E)) - 1) < 1e-8
