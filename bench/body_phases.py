@@ -42,7 +42,7 @@ def run(n, cell, steps, solver, work):
         yaml.safe_dump(scene, f)
     h5 = os.path.join(work, f"cube{n}.h5")
     subprocess.run([os.path.join(ROOT, "python", "mbcontact-prep"), yml, "-o", h5], check=True, capture_output=True)
-    cmd = [os.path.join(ROOT, "build", "mbcontact"), "-scene", h5, "-log_view", "-body_pc_factor_mat_solver_type", solver]
+    cmd = [os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact"), "-scene", h5, "-log_view", "-body_pc_factor_mat_solver_type", solver]
     t0 = time.perf_counter()
     r = subprocess.run(cmd, check=True, capture_output=True, text=True)
     wall = time.perf_counter() - t0

@@ -42,7 +42,7 @@ def main():
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as work:
         prefix = os.path.join(work, "s")
-        out = subprocess.run([os.path.join(ROOT, "build", "bench_search"), "-sizes", ",".join(map(str, a.sizes)), "-prefix", prefix],
+        out = subprocess.run([os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "bench_search"), "-sizes", ",".join(map(str, a.sizes)), "-prefix", prefix],
                              check=True, capture_output=True, text=True).stdout.splitlines()
         rows = []
         for line in out[1:]:
