@@ -143,7 +143,7 @@ const char *const MBCElementTypes[] = {"tet4", "hex8", "hex8i", "MBCElementType"
 
 /* The element of the body's cells: tet4 for a tet mesh (the choice below is ignored); for hexes
    -body_<name>_element (or -body_element, copied to every body by the solver), else the scene's
-   body key `element`, else hex8i (issue 12: as accurate on the Hertz cylinders as hex8 for ~4 %
+   body key `element`, else hex8i (issue 12: as accurate on the Hertz cylinders as hex8 for ~2 %
    more time, free of hex8's shear locking in bending; docs/performance.md). */
 static PetscErrorCode BodyChooseElement(MBCBody body, const char prefix[])
 {
