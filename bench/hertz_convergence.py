@@ -5,9 +5,11 @@ R = 5 mm, E = 210 GPa, nu = 0.3, frictionless, -0.03 mm imposed, static, a quart
 For each mesh level (element edge hc at the contact; uniform over 0.75 mm, then growing by 1.15
 up to 0.5 mm): DOFs, contact points, run time split by phase (-log_view events: assembly,
 factorization, D = H^T A^-1 H, PGS, solves, search, output), peak RSS of the solver, and the
-errors of b and p_max against Hertz for the computed load P and of the surface displacements
-against the paper's ANSYS column. Then the PGS tolerance on one level (only Q1 elements exist,
-so the element order is not a parameter yet), the same finest-but-one level at a quarter of the
+errors of b (edge extrapolated from the last two loaded nodes, and "b fit": the least-squares
+line of p^2 against x^2) and p_max against Hertz for the computed load P and of the surface
+displacements against the paper's ANSYS column; for each of --elements (hex8, hex8i). Then the
+PGS tolerance on one level (only Q1 elements exist, so the element order is not a parameter yet;
+these and the rest run with the solver's default element), the same finest-but-one level at a quarter of the
 approach (b / R halves: the departure from Hertz's half-spaces), the paper's dynamic route on
 one level, and the sphere on a half-space (Hertz point contact) at two levels. Prints tables
 and writes docs/hertz_convergence.png (error against run time).
@@ -55,15 +57,15 @@ def solve(h5, *options):
     return wall, usage.ru_maxrss / 1024.0, phases, dofs, out
 
 
-def cylinder_level(work, hc, analysis="static", delta=None):
+def cylinder_level(work, hc, analysis="static", delta=None, element=None):
     h5 = build.build(work, hc, analysis=analysis)
     if delta is not None:  # another approach
         scene = build.cylinders_scene(analysis)
         scene["dirichlet"][-1]["value"] = -delta
         h5 = prepare(work, "hertz", scene)
-    wall, rss, ph, dofs, _ = solve(h5)
+    wall, rss, ph, dofs, _ = solve(h5, *(("-body_element", element) if element else ()))
     res = report.cylinder_results(os.path.join(work, "hertz_result"))
-    return dict(hc=hc, wall=wall, rss=rss, dofs=dofs, res=res, err=report.errors(res), **ph)
+    return dict(hc=hc, element=element, wall=wall, rss=rss, dofs=dofs, res=res, err=report.errors(res), **ph)
 
 
 def main():
@@ -71,22 +73,25 @@ def main():
     ap.add_argument("--quick", action="store_true", help="two coarse levels, no dynamic route, one sphere level")
     ap.add_argument("--smoke", action="store_true", help="one coarse cylinder level and a 13k-DOF sphere (25 s at load 10: does the bench still run)")
     ap.add_argument("--levels", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.0075, 0.005])
+    ap.add_argument("--elements", nargs="+", default=["hex8", "hex8i"], help="hex elements of the cylinder table (-body_element)")
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "hertz_convergence.png"))
     a = ap.parse_args()
     levels = [0.04] if a.smoke else [0.04, 0.02] if a.quick else a.levels
     work = tempfile.mkdtemp(prefix="mbc_hertz_")
 
     print("Hertz cylinders, static: errors against Hertz for the computed P (b, p_max) and against the paper's ANSYS column (surface u_y)")
-    head = (f"{'hc [mm]':>8} {'DOFs':>7} {'points':>6} {'P [N/mm]':>9} {'b err':>8} {'p_max err':>9} {'u_y err':>8} "
+    head = (f"{'element':>7} {'hc [mm]':>8} {'DOFs':>7} {'points':>6} {'P [N/mm]':>9} {'b err':>8} {'b fit':>8} {'p_max err':>9} {'u_y err':>8} "
             f"{'assemble':>8} {'factor':>7} {'D':>7} {'PGS':>6} {'solves':>6} {'search':>6} {'output':>6} {'wall':>7} {'RSS MiB':>8}")
     print(head, flush=True)
-    rows = []
-    for hc in levels:
-        r = cylinder_level(os.path.join(work, f"c{hc}"), hc)
-        rows.append(r)
-        e = r["err"]
-        print(f"{hc:8.4f} {r['dofs']:7d} {r['res']['points']:6d} {r['res']['P']:9.2f} {e['b']:8.2%} {e['p_max']:9.2%} {max(e['upper'], e['lower']):8.2%} "
-              f"{r['assemble']:8.2f} {r['factor']:7.2f} {r['D']:7.2f} {r['PGS']:6.3f} {r['solves']:6.2f} {r['search']:6.3f} {r['output']:6.2f} {r['wall']:7.2f} {r['rss']:8.0f}", flush=True)
+    rows, by_element = [], {}
+    for element in a.elements:
+        for hc in levels:
+            r = cylinder_level(os.path.join(work, f"c{element}{hc}"), hc, element=element)
+            by_element.setdefault(element, []).append(r)
+            e = r["err"]
+            print(f"{element:>7} {hc:8.4f} {r['dofs']:7d} {r['res']['points']:6d} {r['res']['P']:9.2f} {e['b']:8.2%} {e['b_fit']:8.2%} {e['p_max']:9.2%} {max(e['upper'], e['lower']):8.2%} "
+                  f"{r['assemble']:8.2f} {r['factor']:7.2f} {r['D']:7.2f} {r['PGS']:6.3f} {r['solves']:6.2f} {r['search']:6.3f} {r['output']:6.2f} {r['wall']:7.2f} {r['rss']:8.0f}", flush=True)
+    rows = by_element[a.elements[0]]  # the rest of the bench: the first element only
     print(f"(the paper, 0.1 mm elements: b {report.PAPER['b'] / report.HERTZ_PAPER['b'] - 1:+.2%}, p_max {report.PAPER['p_max'] / report.HERTZ_PAPER['p_max'] - 1:+.2%})")
 
     sphere_rows, quarter = [], None
@@ -124,10 +129,12 @@ def main():
         sphere_rows.append(dict(hc=hc, wall=wall, a=res["a"] / ah - 1, p0=res["p0"] / ph0 - 1))
         print(f"{hc:8.3f} {dofs:7d} {res['P']:8.1f} {res['a'] / ah - 1:8.2%} {res['p0'] / ph0 - 1:8.2%} {ph['factor']:7.2f} {ph['D']:7.2f} {wall:7.2f} {rss:8.0f}", flush=True)
 
-    walls = np.array([r["wall"] for r in rows])
-    series = [(walls, np.abs([r["err"]["b"] for r in rows]), "o-", "cylinders: |error of b|"),
-              (walls, np.abs([r["err"]["p_max"] for r in rows]), "s-", "cylinders: |error of p_max|"),
-              (walls, np.array([max(r["err"]["upper"], r["err"]["lower"]) for r in rows]), "^-", "cylinders: surface u_y vs ANSYS")]
+    series = []
+    for element, erows in by_element.items():
+        walls, dash = np.array([r["wall"] for r in erows]), "-" if element == a.elements[0] else ":"
+        series += [(walls, np.abs([r["err"]["b"] for r in erows]), "o" + dash, f"cylinders {element}: |error of b|"),
+                   (walls, np.abs([r["err"]["p_max"] for r in erows]), "s" + dash, f"cylinders {element}: |error of p_max|"),
+                   (walls, np.array([max(r["err"]["upper"], r["err"]["lower"]) for r in erows]), "^" + dash, f"cylinders {element}: surface u_y vs ANSYS")]
     if sphere_rows:
         series.append((np.array([s["wall"] for s in sphere_rows]), np.abs([s["p0"] for s in sphere_rows]), "d--", "sphere: |error of p0|"))
     plot.loglog(a.plot, "Hertz: error against run time (2 cores, one rank)", "run time [s]", series, ylabel="relative error")

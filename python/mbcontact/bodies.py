@@ -110,7 +110,12 @@ def build_bodies(scene, meshes):
             if other != body.name:
                 raise InputError(f"bodies.{body.name}.regions: region '{region}' of mesh "
                                  f"'{body.mesh}' is already used by body '{other}'")
-    return [build_body(body, meshes[body.mesh]) for body in scene.bodies]
+    built = [build_body(body, meshes[body.mesh]) for body in scene.bodies]
+    for body, mesh in zip(scene.bodies, built):
+        if body.element and mesh.cell_type != "hex8":
+            raise InputError(f"bodies.{body.name}.element: {body.element!r} is an element of hex bodies; "
+                             f"body '{body.name}' has {mesh.cell_type} cells (leave element out)")
+    return built
 
 
 @dataclass

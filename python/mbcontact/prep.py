@@ -161,7 +161,8 @@ def write_metadata(path, scene, bodies, face_counts, labels=None):
             g, name=item[0], id=surface_ids[item[0]], num_faces=item[1]))
         _list(root, "bodies", zip(scene.bodies, bodies), lambda g, item: _attrs(
             g, name=item[0].name, cell_type=item[1].cell_type, num_cells=len(item[1].cells),
-            num_vertices=len(item[1].coords), **item[0].material))
+            num_vertices=len(item[1].coords), **item[0].material,
+            **({"element": item[0].element} if item[0].element else {})))
         def side_faces(c, column):  # faces of each body on one side of couple c: the edge weights of the decomposition
             if labels is None:
                 return np.zeros(len(bodies), dtype=np.int32)

@@ -261,6 +261,7 @@ MATERIAL_DEFAULTS = dict(nu=0.0, density=0.0, damping=0.0, rayleigh_alpha=0.0, r
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
 LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic")
 FIELDS = ("displacement", "stress")
+ELEMENTS = ("hex8", "hex8i")  # the element of a hex body (a tet4 body has tet4)
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
@@ -270,6 +271,7 @@ class Body:
     mesh: str
     regions: list
     material: dict
+    element: str = ""  # hex bodies: "hex8" | "hex8i"; "" = the solver's default
 
 
 @dataclass
@@ -384,12 +386,13 @@ def _body(name, spec, meshes):
     if not IDENTIFIER.match(name):
         raise InputError(f"{where}: body names must be identifiers ([A-Za-z_][A-Za-z0-9_]*), "
                          f"got {name!r}")
-    spec = mapping(spec, where, ("mesh", "regions", "material"), required=("mesh", "regions", "material"))
+    spec = mapping(spec, where, ("mesh", "regions", "material", "element"), required=("mesh", "regions", "material"))
     mesh = string(spec["mesh"], f"{where}.mesh")
     if mesh not in meshes:
         raise InputError(f"{where}.mesh: unknown mesh {mesh!r} (meshes: {', '.join(meshes)})")
     regions = name_list(spec["regions"], f"{where}.regions")
-    return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"))
+    element = string(spec["element"], f"{where}.element", choices=ELEMENTS) if "element" in spec else ""
+    return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"), element)
 
 
 def _material(value, where):

@@ -17,7 +17,8 @@ static const PetscReal HexCorner[8][3] = {
   {-1, 1,  1 }
 };
 
-/* Adds w * (elasticity + rho * mass) terms of one integration point with gradients G (nb x 3) and values N. */
+/* Adds w * (elasticity + rho * mass) terms of one integration point with gradients G (nb x 3) and
+   values N; Ke or Me may be NULL. */
 static void AddPoint(PetscInt nb, const PetscReal G[][3], const PetscReal N[], PetscReal w, PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
 {
   const PetscInt n = 3 * nb;
@@ -26,7 +27,8 @@ static void AddPoint(PetscInt nb, const PetscReal G[][3], const PetscReal N[], P
     for (PetscInt b = 0; b < nb; b++) {
       const PetscReal dot = G[a][0] * G[b][0] + G[a][1] * G[b][1] + G[a][2] * G[b][2];
       for (PetscInt i = 0; i < 3; i++) {
-        for (PetscInt j = 0; j < 3; j++) Ke[(3 * a + i) * n + 3 * b + j] += w * (lambda * G[a][i] * G[b][j] + mu * G[a][j] * G[b][i] + (i == j ? mu * dot : 0.0));
+        if (Ke)
+          for (PetscInt j = 0; j < 3; j++) Ke[(3 * a + i) * n + 3 * b + j] += w * (lambda * G[a][i] * G[b][j] + mu * G[a][j] * G[b][i] + (i == j ? mu * dot : 0.0));
         if (Me) Me[(3 * a + i) * n + 3 * b + i] += w * rho * N[a] * N[b];
       }
     }
@@ -71,9 +73,36 @@ void MBCElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscRe
     for (PetscInt q = 0; q < 4; q++) {
       PetscReal N[4] = {b, b, b, b};
       N[q]           = a;
-      AddPoint(4, G, N, 0.25 * vol, 0, 0, rho, Ke, Me);
+      AddPoint(4, G, N, 0.25 * vol, 0, 0, rho, NULL, Me);
     }
   }
+}
+
+/* Trilinear shape functions N, their reference derivatives dN, the Jacobian J_ik = d x_i / d xi_k
+   and its inverse Ji (Ji_kl = d xi_k / d x_l) of the hex with vertices X at the point xi;
+   returns det J. */
+static PetscReal HexMap(const PetscReal X[], const PetscReal xi[3], PetscReal N[8], PetscReal dN[8][3], PetscReal Ji[9])
+{
+  PetscReal J[9] = {0};
+
+  for (PetscInt a = 0; a < 8; a++) {
+    const PetscReal *c    = HexCorner[a];
+    const PetscReal  f[3] = {1 + c[0] * xi[0], 1 + c[1] * xi[1], 1 + c[2] * xi[2]};
+    N[a]                  = f[0] * f[1] * f[2] / 8;
+    dN[a][0]              = c[0] * f[1] * f[2] / 8;
+    dN[a][1]              = f[0] * c[1] * f[2] / 8;
+    dN[a][2]              = f[0] * f[1] * c[2] / 8;
+    for (PetscInt i = 0; i < 3; i++)
+      for (PetscInt k = 0; k < 3; k++) J[i * 3 + k] += X[3 * a + i] * dN[a][k];
+  }
+  return Invert3(J, Ji);
+}
+
+/* G[a] = dN[a] Ji: physical gradients of n functions from their reference derivatives, scaled by s. */
+static void PhysicalGradients(PetscInt n, const PetscReal dN[][3], const PetscReal Ji[9], PetscReal s, PetscReal G[][3])
+{
+  for (PetscInt a = 0; a < n; a++)
+    for (PetscInt k = 0; k < 3; k++) G[a][k] = s * (dN[a][0] * Ji[0 * 3 + k] + dN[a][1] * Ji[1 * 3 + k] + dN[a][2] * Ji[2 * 3 + k]);
 }
 
 /* hex8: trilinear map, 2x2x2 Gauss points. */
@@ -83,23 +112,76 @@ void MBCElementHex8(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscRe
 
   for (PetscInt q = 0; q < 8; q++) {
     const PetscReal xi[3] = {HexCorner[q][0] * g, HexCorner[q][1] * g, HexCorner[q][2] * g};
-    PetscReal       dN[8][3], N[8], G[8][3], J[9] = {0}, Ji[9], det;
+    PetscReal       dN[8][3], N[8], G[8][3], Ji[9], det;
 
-    for (PetscInt a = 0; a < 8; a++) {
-      const PetscReal *c = HexCorner[a];
-      const PetscReal  f[3] = {1 + c[0] * xi[0], 1 + c[1] * xi[1], 1 + c[2] * xi[2]};
-      N[a]     = f[0] * f[1] * f[2] / 8;
-      dN[a][0] = c[0] * f[1] * f[2] / 8;
-      dN[a][1] = f[0] * c[1] * f[2] / 8;
-      dN[a][2] = f[0] * f[1] * c[2] / 8;
-      for (PetscInt i = 0; i < 3; i++)
-        for (PetscInt k = 0; k < 3; k++) J[i * 3 + k] += X[3 * a + i] * dN[a][k];
-    }
-    det = Invert3(J, Ji);
-    for (PetscInt a = 0; a < 8; a++)
-      for (PetscInt k = 0; k < 3; k++) G[a][k] = dN[a][0] * Ji[0 * 3 + k] + dN[a][1] * Ji[1 * 3 + k] + dN[a][2] * Ji[2 * 3 + k];
+    det = HexMap(X, xi, N, dN, Ji);
+    PhysicalGradients(8, dN, Ji, 1.0, G);
     AddPoint(8, G, N, PetscAbsReal(det), lambda, mu, rho, Ke, Me);
   }
+}
+
+/* In place Cholesky factor L (lower, row-major) of the SPD n x n matrix A; returns 0 if A is not
+   positive definite. */
+static PetscBool Cholesky(PetscInt n, PetscReal A[])
+{
+  for (PetscInt j = 0; j < n; j++) {
+    for (PetscInt k = 0; k < j; k++) A[j * n + j] -= A[j * n + k] * A[j * n + k];
+    if (!(A[j * n + j] > 0)) return PETSC_FALSE;
+    A[j * n + j] = PetscSqrtReal(A[j * n + j]);
+    for (PetscInt i = j + 1; i < n; i++) {
+      for (PetscInt k = 0; k < j; k++) A[i * n + j] -= A[i * n + k] * A[j * n + k];
+      A[i * n + j] /= A[j * n + j];
+    }
+  }
+  return PETSC_TRUE;
+}
+
+/* hex8i: hex8 with Wilson's incompatible modes 1 - xi^2, 1 - eta^2, 1 - zeta^2 per component
+   (9 internal DOFs, CalculiX's C3D8I) with Taylor's modification: their gradients use the
+   Jacobian J0 of the centre, scaled by det J0 / det J, so that they integrate to zero over any
+   cell and the element passes the constant-stress patch test on distorted meshes. The internal
+   DOFs are condensed out at the element: Ke = Kcc - Kci Kii^-1 Kic. The mass is the plain hex8
+   one (the internal modes carry none). The same 2x2x2 Gauss rule. The incompatible gradients vanish
+   at the centre (d(1 - xi^2)/d xi = -2 xi), where the cellwise stress is evaluated, so the
+   stress of the compatible part there is the element's (MBCBodyComputeStress).
+   Returns PETSC_FALSE if Kii is not positive definite (a degenerate cell). */
+PetscBool MBCElementHex8I(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
+{
+  const PetscReal g = 1.0 / PetscSqrtReal(3.0), centre[3] = {0, 0, 0};
+  PetscReal       K[33 * 33] = {0}, N[8], dN[8][3], J0i[9], det0;
+
+  det0 = HexMap(X, centre, N, dN, J0i);
+  for (PetscInt q = 0; q < 8; q++) {
+    const PetscReal xi[3] = {HexCorner[q][0] * g, HexCorner[q][1] * g, HexCorner[q][2] * g};
+    PetscReal       G[11][3], Ji[9], det, dP[3][3] = {{0}};
+
+    det = HexMap(X, xi, N, dN, Ji);
+    PhysicalGradients(8, dN, Ji, 1.0, G);
+    for (PetscInt m = 0; m < 3; m++) dP[m][m] = -2 * xi[m]; /* d(1 - xi_m^2) / d xi */
+    PhysicalGradients(3, dP, J0i, det0 / det, G + 8);
+    AddPoint(11, G, NULL, PetscAbsReal(det), lambda, mu, 0, K, NULL);
+    if (Me) AddPoint(8, G, N, PetscAbsReal(det), 0, 0, rho, NULL, Me);
+  }
+  /* Kii = L L^T; X = L^-1 Kic (9 x 24); Ke += Kcc - X^T X */
+  {
+    PetscReal Kii[81], Xm[9][24];
+    for (PetscInt i = 0; i < 9; i++)
+      for (PetscInt j = 0; j < 9; j++) Kii[i * 9 + j] = K[(24 + i) * 33 + 24 + j];
+    if (!Cholesky(9, Kii)) return PETSC_FALSE;
+    for (PetscInt c = 0; c < 24; c++)
+      for (PetscInt i = 0; i < 9; i++) {
+        PetscReal v = K[(24 + i) * 33 + c];
+        for (PetscInt k = 0; k < i; k++) v -= Kii[i * 9 + k] * Xm[k][c];
+        Xm[i][c] = v / Kii[i * 9 + i];
+      }
+    for (PetscInt r = 0; r < 24; r++)
+      for (PetscInt c = 0; c < 24; c++) {
+        PetscReal v = K[r * 33 + c];
+        for (PetscInt k = 0; k < 9; k++) v -= Xm[k][r] * Xm[k][c];
+        Ke[r * 24 + c] += v;
+      }
+  }
+  return PETSC_TRUE;
 }
 
 /* Assembles K (and M, unit factors times density, when M != NULL) over the body's cells, with
@@ -143,6 +225,7 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
     PetscCall(PetscArrayzero(Ke, 9 * nv * nv));
     if (M) PetscCall(PetscArrayzero(Me, 9 * nv * nv));
     if (nv == 4) MBCElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
+    else if (body->element == MBC_ELEMENT_HEX8I) PetscCheck(MBCElementHex8I(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': cell %" PetscInt_FMT " is degenerate (hex8i: its incompatible-mode stiffness is not positive definite)", body->name, c);
     else MBCElementHex8(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     PetscCall(MatSetValuesLocal(K, 3 * nv, idx, 3 * nv, idx, Ke, ADD_VALUES));
     if (M) PetscCall(MatSetValuesLocal(M, 3 * nv, idx, 3 * nv, idx, Me, ADD_VALUES));

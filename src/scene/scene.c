@@ -249,6 +249,7 @@ static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
   PetscFunctionBegin;
   PetscCall(H5ReadString(e, "name", b->name, sizeof(b->name), NULL, PETSC_FALSE));
   PetscCall(H5ReadString(e, "cell_type", b->cell_type, sizeof(b->cell_type), NULL, PETSC_FALSE));
+  PetscCall(H5ReadString(e, "element", b->element, sizeof(b->element), NULL, PETSC_TRUE));
   PetscCall(H5ReadInt(e, "num_cells", &b->num_cells, PETSC_FALSE));
   PetscCall(H5ReadInt(e, "num_vertices", &b->num_vertices, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "E", &b->E, PETSC_FALSE));
@@ -393,6 +394,12 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
     PetscCall(PetscStrcmp(b->cell_type, "tet4", &tet));
     PetscCall(PetscStrcmp(b->cell_type, "hex8", &hex));
     PetscCheck(tet || hex, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has cell_type '%s', not tet4 or hex8", s->filename, b->name, b->cell_type);
+    if (b->element[0]) {
+      PetscBool h8, h8i;
+      PetscCall(PetscStrcmp(b->element, "hex8", &h8));
+      PetscCall(PetscStrcmp(b->element, "hex8i", &h8i));
+      PetscCheck(hex && (h8 || h8i), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' of %s cells has element '%s' (hex bodies: hex8 or hex8i; tet4 bodies: none)", s->filename, b->name, b->cell_type, b->element);
+    }
     PetscCheck(b->num_cells >= 1 && b->num_vertices >= 4, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " cells and %" PetscInt_FMT " vertices", s->filename, b->name, b->num_cells, b->num_vertices);
   }
   for (PetscInt i = 0; i < s->nsurfaces; i++) {

@@ -912,13 +912,15 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
   }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     const PetscInt ndof = 3 * s->scene->bodies[b].num_vertices; /* P1/Q1 displacement */
-    PetscInt       nbc  = 0;
+    PetscInt       nbc  = 0, element = 0;
     if (s->bodies[b]) {
-      nbc = s->bodies[b]->nbc;
+      nbc     = s->bodies[b]->nbc;
+      element = s->bodies[b]->element;
       PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_SUM, s->bodies[b]->comm));
     }
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_MAX, s->comm));
-    PetscCall(PetscViewerASCIIPrintf(viewer, "  body %s: ranks %d-%d, %" PetscInt_FMT " DOFs, %" PetscInt_FMT " prescribed\n", s->scene->bodies[b].name, s->body_first_rank[b], s->body_first_rank[b] + s->body_nranks[b] - 1, ndof, nbc));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &element, 1, MPIU_INT, MPI_MAX, s->comm));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  body %s: ranks %d-%d, %" PetscInt_FMT " DOFs, %" PetscInt_FMT " prescribed (element %s)\n", s->scene->bodies[b].name, s->body_first_rank[b], s->body_first_rank[b] + s->body_nranks[b] - 1, ndof, nbc, MBCElementTypes[element]));
     for (PetscInt l = 0; l < s->scene->nloads; l++) { /* what each load amounts to, to check a scene against hand values */
       PetscReal r[7] = {0, 0, 0, 0, 0, 0, 0};
       for (PetscInt i = 0; s->bodies[b] && i < s->bodies[b]->nloads; i++)

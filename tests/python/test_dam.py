@@ -108,7 +108,10 @@ def test_static_sliding_fails(tmp_path):
 def test_dynamic_record_no_sliding(tmp_path):
     """Dynamic, with the joints: self-weight and water ramped over 0.5 s, held, then 0.5 s of the
     record's strong phase (from its 3rd second; PGA 0.3 g). Before the record the base carries W
-    and T up to the ringing the ramp left (within 0.5 %); with mu W / T = 2.96, more than the
+    and T on average over the hold 0.5-1 s (measured +0.08 % and -0.05 %, hex8 and hex8i alike;
+    asserted 0.5 %) under the ringing the ramp left (+-2.4 % in fz, +-2.2 % in fx; asserted 3 %):
+    the value at t = 1 s alone, which this test used to assert within 0.5 %, is a sample of that
+    ringing (hex8 -0.21 %, hex8i -0.63 % in fx); with mu W / T = 2.96, more than the
     record's 0.3 g adds (T / W + 0.3 < mu), the base does not slide: the computed mu N / |F_t|
     stays above 2 and a few heel points slip for a step or two in the strongest cycles (0.2 mm,
     asserted < 1 mm, against half a metre in the sliding case below); the joints open by 0.5 mm
@@ -120,8 +123,10 @@ def test_dynamic_record_no_sliding(tmp_path):
     prefix = str(h5)[:-3] + "_result"
     s = report.summarize(prefix)
     b = base_history(prefix)
-    held = np.argmin(np.abs(b["t"] - 1.0))
-    assert abs(b["fz"][held] / s["weight"] - 1) < 5e-3 and abs(-b["fx"][held] / s["thrust"] - 1) < 5e-3
+    hold = (b["t"] >= 0.5 - 1e-9) & (b["t"] <= 1.0 + 1e-9)
+    fz, fx = b["fz"][hold] / s["weight"] - 1, -b["fx"][hold] / s["thrust"] - 1
+    assert abs(fz.mean()) < 5e-3 and abs(fx.mean()) < 5e-3, (fz.mean(), fx.mean())
+    assert np.abs(fz).max() < 3e-2 and np.abs(fx).max() < 3e-2, (np.abs(fz).max(), np.abs(fx).max())
     assert s["couples"][1]["max_sliding"] < 1e-3 and s["couples"][1]["safety_min"] > 1.5
     joints = [c for k, c in s["couples"].items() if k > 1]
     assert len(joints) == 2 and all(c["max_opening"] < 1e-3 and c["max_sliding"] < 2e-3 for c in joints)

@@ -60,12 +60,16 @@ def test_cylinders_error_decreases_with_refinement(levels):
 
 def test_cylinders_at_a_quarter_of_the_approach(tmp_path):
     """A quarter of the approach (0.0075 mm, P = 275 N/mm) halves b / R to 0.017: hc 0.01 mm is
-    then b / 9, and b and p_max are still within 0.5 % of Hertz for the computed P (measured
-    -0.22 % and +0.09 %). Per deformed area p_max read +0.48 % here and +1.0 % at the full
-    approach, which had been taken for the finite cylinders' departure from Hertz."""
+    then b / 9, and b and p_max are still within 0.5 % of Hertz for the computed P. b here is the
+    least-squares fit of p^2 against x^2 (report.half_width_fit): hex8i (the default) puts 1 % of
+    p_max on the first node beyond the edge (x = 0.09, b = 0.0871), whose dual shape function
+    reaches into the zone, and the two-node extrapolation of the last loaded nodes then reads
+    +3.29 % (hex8: no pressure there, -0.23 %). Measured with the fit: hex8i b -0.03 %, p_max
+    +0.07 % (hex8 +0.15 %, +0.10 %). Per deformed area p_max read +0.48 % here and +1.0 % at the
+    full approach, which had been taken for the finite cylinders' departure from Hertz."""
     res, err = cylinders(tmp_path, 0.01, delta=build.DELTA / 4)
-    print(f"\nquarter approach: P {res['P']:.2f}, b/R {res['b'] / build.R:.4f}, b {err['b']:+.2%}, p_max {err['p_max']:+.2%}")
-    assert abs(err["p_max"]) < 0.005 and abs(err["b"]) < 0.005
+    print(f"\nquarter approach: P {res['P']:.2f}, b/R {res['b'] / build.R:.4f}, b {err['b']:+.2%} (fit {err['b_fit']:+.2%}), p_max {err['p_max']:+.2%}")
+    assert abs(err["p_max"]) < 0.005 and abs(err["b_fit"]) < 0.005
 
 
 def test_sphere_on_half_space(tmp_path):

@@ -8,6 +8,15 @@ struct _MBCBodyOps {
   PetscErrorCode (*view)(MBCBody, PetscViewer);
 };
 
+/* The element of a body's cells: tet4 bodies have tet4; hex bodies hex8 or hex8i (incompatible
+   modes), chosen by the scene's body key `element` or -body_[<name>_]element. */
+typedef enum {
+  MBC_ELEMENT_TET4,
+  MBC_ELEMENT_HEX8,
+  MBC_ELEMENT_HEX8I
+} MBCElementType;
+PETSC_EXTERN const char *const MBCElementTypes[];
+
 #define MBC_MAX_CUTS 11 /* dt / 1024 */
 
 struct _n_MBCBody {
@@ -18,6 +27,7 @@ struct _n_MBCBody {
   MBCScene    scene;      /* a reference */
   MBCBodyDesc desc;
   PetscBool   simplex;
+  MBCElementType element;
 
   DM      dm;             /* displacement field, Lagrange P1/Q1 */
   DM      dmStress;       /* cellwise stress, 6 components (xx yy zz xy yz xz) */

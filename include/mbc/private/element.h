@@ -6,4 +6,7 @@
 #include <petscsys.h>
 
 PETSC_EXTERN void MBCElementTet4(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
+/* MBCElementHex8I: hex8 with incompatible modes, condensed (bodyelement.c); PETSC_FALSE if the
+   cell is degenerate. */
 PETSC_EXTERN void MBCElementHex8(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
+PETSC_EXTERN PetscBool MBCElementHex8I(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
