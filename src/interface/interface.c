@@ -597,6 +597,31 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
   PetscFunctionReturn(0);
 }
 
+/* D again for the bodies' new operators (the next analysis stage: Newmark's K~ instead of K, or
+   back), H as built: the multipliers go on acting on the geometry they balance. After
+   MBCInterfaceSetTimeStepping; the warm start becomes that of a step at rest (lambda_n+1 =
+   lambda_n, r = dscale (1 + c) lambda_n). Collective. */
+PetscErrorCode MBCInterfaceRebuildD(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  if (!ifc->ncontact || !ifc->fp.W) PetscFunctionReturn(0);
+  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  PetscCall(MatDestroy(&ifc->fp.W));
+  PetscCall(MatDestroy(&ifc->fp.G));
+  PetscCall(VecDestroy(&ifc->fp.e));
+  PetscCall(VecDestroy(&ifc->fp.alpha));
+  PetscCall(PetscFree(ifc->gQ));
+  PetscCall(PetscFree(ifc->grange));
+  PetscCall(PetscFree(ifc->gscale));
+  PetscCall(MBCMultiplierReset(ifc->mult));
+  PetscCall(InterfaceBuildD(ifc, ifc->coff[ifc->ncontact], ifc->poff[ifc->plast] - ifc->poff[ifc->pfirst]));
+  PetscCall(MBCInterfaceRigidModes(ifc));
+  PetscCall(VecAXPBY(ifc->lambda, ifc->dscale * (1 + ifc->carry), 0.0, ifc->lamprev));
+  PetscCall(MBCInterfaceGather(ifc, ifc->lambda, ifc->rall));
+  PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
 /* Builds H and D for the contact points of pairs (couple, master, face per point; takes pairs),
    and carries the last step's contact forces, the PGS warm start and the slip over to them. */
 PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])

@@ -73,6 +73,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceRebuildD(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetSize(MBCInterface, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultiplier(MBCInterface, MBCMultiplier *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface, Vec *);
