@@ -495,6 +495,35 @@ static PetscErrorCode InterfaceScatterLocal(MBCInterface ifc, const PetscReal in
   PetscFunctionReturn(0);
 }
 
+/* The state a restart needs (solvercheckpoint.c), couple order, every rank: nc points, m
+   multipliers; lambda_n+1 (physical, into lamprev[m], the caller's), the warm start r (scaled, m),
+   the slip (3 nc) and the pairs H and D were built for (MBC_PAIR_SIZE nc). Collective. */
+PetscErrorCode MBCInterfaceGetState(MBCInterface ifc, PetscInt *nc, PetscInt *m, PetscReal lamprev[], const PetscReal **r, const PetscReal **slip, const PetscInt **pairs)
+{
+  PetscFunctionBegin;
+  *nc = ifc->lamprev ? ifc->ncontact : 0;
+  *m  = *nc ? ifc->coff[*nc] : 0;
+  if (lamprev && *nc) PetscCall(MBCInterfaceGather(ifc, ifc->lamprev, lamprev));
+  if (r) *r = ifc->rall;
+  if (slip) *slip = ifc->slip;
+  if (pairs) *pairs = ifc->pairs_built;
+  PetscFunctionReturn(0);
+}
+
+/* The multipliers, warm start and slip of MBCInterfaceGetState back, after MBCInterfaceSetUp
+   with the same pairs. */
+PetscErrorCode MBCInterfaceSetState(MBCInterface ifc, const PetscReal lamprev[], const PetscReal r[], const PetscReal slip[])
+{
+  PetscFunctionBegin;
+  if (!ifc->ncontact || !ifc->lamprev) PetscFunctionReturn(0);
+  PetscCall(InterfaceScatterLocal(ifc, lamprev, ifc->lamprev));
+  PetscCall(InterfaceScatterLocal(ifc, r, ifc->lambda));
+  PetscCall(PetscArraycpy(ifc->rall, r, ifc->coff[ifc->ncontact]));
+  PetscCall(PetscArraycpy(ifc->slip, slip, 3 * ifc->ncontact));
+  PetscCall(PetscArrayzero(ifc->stepslip, 3 * ifc->ncontact));
+  PetscFunctionReturn(0);
+}
+
 /* W's preallocation: a point's row couples to the multipliers of the bodies its constraint
    touches (the master body, the slave body). */
 static PetscErrorCode InterfacePreallocation(MBCInterface ifc, PetscInt rstart, PetscInt rend, PetscInt dnz[], PetscInt onz[])

@@ -76,6 +76,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
   PetscCall(PetscOptionsReal("-mbc_dt_min", "The smallest step (or load step) a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
+  PetscCall(PetscOptionsInt("-mbc_checkpoint_every", "Write the whole state to <output>_checkpoint.h5 every this many steps (0: only at SIGINT/SIGTERM)", "MBCSolverSetFromOptions", s->checkpoint_every, &s->checkpoint_every, NULL));
+  PetscCall(PetscOptionsString("-mbc_restart", "Go on from this checkpoint (the outputs after it go to <output>_restart.h5)", "MBCSolverSetFromOptions", s->restart, s->restart, sizeof(s->restart), NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
@@ -100,6 +102,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCheck(!s->fclib_file[0] || (s->fclib_step >= 1 && s->fclib_step <= s->nsteps), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT " is not a step of this run (1 to %" PetscInt_FMT ")", s->fclib_step, s->nsteps);
   PetscCheck(s->static_rtol > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_rtol %g must be positive", (double)s->static_rtol);
   PetscCheck(s->dblock >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_block %" PetscInt_FMT " must be at least 1", s->dblock);
+  PetscCheck(s->checkpoint_every >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_checkpoint_every %" PetscInt_FMT " must not be negative", s->checkpoint_every);
+  if (s->restart[0] && !strstr(s->output, "_restart")) PetscCall(PetscStrlcat(s->output, "_restart", sizeof(s->output))); /* the run before keeps its results */
   PetscCheck(s->static_max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_max_it %" PetscInt_FMT " must be at least 1", s->static_max_it);
   PetscFunctionReturn(0);
 }
@@ -265,6 +269,7 @@ static PetscErrorCode SolverContact(MBCSolver s)
   }
   s->force_build = PETSC_FALSE;
   PetscCall(MBCInterfaceSetUp(s->iface, n, pairs)); /* takes pairs */
+  PetscCall(MBCSolverCheckpointTrack(s)); /* where the search ran for this H, for a restart */
   PetscCall(MBCInterfaceGetSize(s->iface, NULL, &nmult));
   if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, nmult));
   PetscFunctionReturn(0);
@@ -411,7 +416,8 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   }
   s->static_stabilized = stabilized;
   s->static_floating   = floating;
-  if (s->istage == 0) PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  if (s->restarting) { } /* H and D come with the checkpoint's state */
+  else if (s->istage == 0) PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   else if (s->iface) PetscCall(MBCInterfaceRebuildD(s->iface)); /* D of K, H as the stage before left it */
   PetscFunctionReturn(0);
 }
@@ -726,8 +732,8 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Stage i > 0 begins where stage i - 1 ended (docs/scene.md, stages). */
-static PetscErrorCode SolverStageBegin(MBCSolver s, PetscInt i)
+/* The settings of stage i become the current ones. */
+static PetscErrorCode SolverStageSet(MBCSolver s, PetscInt i)
 {
   const MBCSolverStage *st = &s->stages[i];
 
@@ -740,6 +746,33 @@ static PetscErrorCode SolverStageBegin(MBCSolver s, PetscInt i)
   PetscCall(MBCSolverStageLog(s, i));
   for (PetscInt b = 0; b < s->nbodies; b++)
     if (s->bodies[b]) s->bodies[b]->stage = i;
+  PetscFunctionReturn(0);
+}
+
+/* A restart in stage i (solvercheckpoint.c): its settings and operators, the factor of the step
+   size s->level the checkpoint was at; no state and no D (they come from the checkpoint). */
+PetscErrorCode MBCSolverStageResume(MBCSolver s, PetscInt i)
+{
+  PetscFunctionBegin;
+  PetscCall(SolverStageSet(s, i));
+  s->restarting = PETSC_TRUE;
+  if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
+  else {
+    if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, s->gamma));
+    for (PetscInt b = 0; b < s->nbodies; b++)
+      if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], s->level, Newmark(s->dt / PetscPowInt(2, s->level), s->beta, s->gamma)));
+  }
+  s->restarting = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+/* Stage i > 0 begins where stage i - 1 ended (docs/scene.md, stages). */
+static PetscErrorCode SolverStageBegin(MBCSolver s, PetscInt i)
+{
+  const MBCSolverStage *st = &s->stages[i];
+
+  PetscFunctionBegin;
+  PetscCall(SolverStageSet(s, i));
   if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g stage %" PetscInt_FMT " %s: %s, dt %g, to t = %g\n", s->step, (double)s->time, i, s->scene->nstages ? s->scene->stages[i].name : "", MBCAnalysisTypes[st->analysis], (double)st->dt, (double)st->t1));
   if (st->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
   else PetscCall(SolverDynamicStageBegin(s));
@@ -880,11 +913,22 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       PetscFunctionReturn(0);
     }
     PetscCall(MBCSolverOutputOpen(s));
-    PetscCall(MBCSolverStageLog(s, 0));
-    if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
-    else PetscCall(SolverDynamicBegin(s));
     s->stage = 1;
-  } else if (s->step == s->stages[s->istage].step0 + s->stages[s->istage].nsteps) PetscCall(SolverStageBegin(s, s->istage + 1));
+    if (s->restart[0]) {
+      PetscCall(MBCSolverRestart(s));
+      if (s->step == s->nsteps) { /* the checkpoint of the last step: nothing left */
+        PetscCall(MBCSolverOutputClose(s));
+        PetscCall(MBCSolverStageLog(s, -1));
+        s->stage = 2;
+        PetscFunctionReturn(0);
+      }
+    } else {
+      PetscCall(MBCSolverStageLog(s, 0));
+      if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
+      else PetscCall(SolverDynamicBegin(s));
+    }
+  }
+  if (s->step == s->stages[s->istage].step0 + s->stages[s->istage].nsteps) PetscCall(SolverStageBegin(s, s->istage + 1));
   s->step++;
   if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticStep(s));
   else PetscCall(SolverDynamicStep(s));
@@ -1074,6 +1118,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));
   PetscCall(MBCSolverOutputBodiesClose(s));
+  PetscCall(MBCSolverCheckpointFree(s));
   PetscCall(PetscFree4(s->output_times, s->output_npoints, s->output_cuts, s->output_stage));
   PetscCall(MBCSolverStageLog(s, -1));
   PetscCall(PetscFree(s->stages));

@@ -269,7 +269,8 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   }
   PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
-  PetscCheck(!sig, s->comm, PETSC_ERR_SIG, "Stopped by signal %d (%s) after step %" PetscInt_FMT " of %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " output steps (the last at t = %g) are in %s.h5, indexed by %s.xmf, and the CSV histories are complete to t = %g", sig, sig == SIGINT ? "SIGINT" : (sig == SIGTERM ? "SIGTERM" : "?"), s->step, s->nsteps, (double)s->time, s->noutputs, s->noutputs ? (double)s->output_times[s->noutputs - 1] : 0.0, s->output, s->output, (double)s->time);
+  if (s->step > 0 && (sig || (s->checkpoint_every && s->step % s->checkpoint_every == 0))) PetscCall(MBCSolverCheckpointWrite(s));
+  PetscCheck(!sig, s->comm, PETSC_ERR_SIG, "Stopped by signal %d (%s) after step %" PetscInt_FMT " of %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " output steps (the last at t = %g) are in %s.h5, indexed by %s.xmf, and the CSV histories are complete to t = %g; -mbc_restart %s_checkpoint.h5 goes on from there", sig, sig == SIGINT ? "SIGINT" : (sig == SIGTERM ? "SIGTERM" : "?"), s->step, s->nsteps, (double)s->time, s->noutputs, s->noutputs ? (double)s->output_times[s->noutputs - 1] : 0.0, s->output, s->output, (double)s->time, s->output);
   PetscFunctionReturn(0);
 }
 

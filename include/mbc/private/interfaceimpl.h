@@ -74,6 +74,8 @@ PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[]
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceRebuildD(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetState(MBCInterface, PetscInt *, PetscInt *, PetscReal[], const PetscReal **, const PetscReal **, const PetscInt **);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetState(MBCInterface, const PetscReal[], const PetscReal[], const PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetSize(MBCInterface, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultiplier(MBCInterface, MBCMultiplier *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface, Vec *);

@@ -117,6 +117,13 @@ struct _n_MBCSolver {
   PetscInt64     h5_size; /* bytes of the result file at its last commit */
   PetscInt       xmf_outputs; /* outputs in the XDMF index on disk */
   FILE          *reactions_csv; /* solveroutputreaction.c */
+
+  /* checkpoint and restart (solvercheckpoint.c) */
+  PetscInt       checkpoint_every; /* -mbc_checkpoint_every: steps (0: at a signal only) */
+  char           restart[PETSC_MAX_PATH_LEN]; /* -mbc_restart: the checkpoint to go on from */
+  PetscBool      restarting;  /* set-up for a restart: the state comes from the file */
+  MBCBodyOutput *ckpt;        /* per body: its vertex map (scene order rows) */
+  Vec           *ubuild, *ugsbuild; /* per body: u when H was built, and at the global search it used (the search replayed at a restart) */
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
@@ -137,5 +144,11 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscIn
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[MBC_NENERGY]);
 PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
 PETSC_INTERN PetscErrorCode MBCSolverStagesSetUp(MBCSolver, PetscBool);
+PETSC_INTERN PetscErrorCode MBCBodyVertexMapCreate(MBCBody, MBCBodyOutput *, PetscInt **, PetscInt **);
+PETSC_INTERN PetscErrorCode MBCSolverCheckpointWrite(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverRestart(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverCheckpointTrack(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverCheckpointFree(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverStageResume(MBCSolver, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverStageLog(MBCSolver, PetscInt);
 PETSC_INTERN PetscReal      MBCSolverStageTime(MBCSolver, PetscInt);
