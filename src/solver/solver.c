@@ -284,6 +284,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 
   PetscFunctionBegin;
   PetscCall(MBCInterfaceSolve(s->iface, s->step, s->time, s->contact_may_fail, &failed));
+  s->step_its += s->iface->mult->its; /* every solve of the step, the failed ones too: the work done */
   if (failed) s->contact_failed = PETSC_TRUE;
   if (s->contact_failed) PetscFunctionReturn(0); /* the step is cut: nothing to count or print */
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) MBCInterfaceContactWork(s->iface, &s->wfriction, &s->wcontact);
@@ -302,7 +303,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 static PetscErrorCode SolverMonitor(MBCSolver s)
 {
   PetscReal umax = 0, e[MBC_NENERGY];
-  char      timing[128];
+  char      timing[192];
 
   PetscFunctionBegin;
   if (s->usermonitor) PetscCall((*s->usermonitor)(s, s->step, s->time, s->monitorctx));
@@ -315,6 +316,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, s->comm));
   PetscCall(MBCSolverMonitorTiming(s, timing, sizeof(timing)));
+  s->step_its = 0; /* counted again from the next step's first solve */
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscCall(MBCSolverEnergy(s, e));
     PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e friction %.6e contact %.6e total %.6e %s\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)e[4], (double)e[5], (double)(e[0] + e[1] - e[2] + e[3] + e[4] + e[5]), timing));
