@@ -103,7 +103,10 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCheck(s->static_rtol > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_rtol %g must be positive", (double)s->static_rtol);
   PetscCheck(s->dblock >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_block %" PetscInt_FMT " must be at least 1", s->dblock);
   PetscCheck(s->checkpoint_every >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_checkpoint_every %" PetscInt_FMT " must not be negative", s->checkpoint_every);
-  if (s->restart[0] && !strstr(s->output, "_restart")) PetscCall(PetscStrlcat(s->output, "_restart", sizeof(s->output))); /* the run before keeps its results */
+  if (s->restart[0]) { /* the run before keeps its results */
+    size_t len = strlen(s->output);
+    if (len < 8 || strcmp(s->output + len - 8, "_restart")) PetscCall(PetscStrlcat(s->output, "_restart", sizeof(s->output)));
+  }
   PetscCheck(s->static_max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_max_it %" PetscInt_FMT " must be at least 1", s->static_max_it);
   PetscFunctionReturn(0);
 }
