@@ -921,6 +921,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
     s->stage = 1;
     if (s->restart[0]) {
       PetscCall(MBCSolverRestart(s));
+      s->step_begin = s->step;
       if (s->step == s->nsteps) { /* the checkpoint of the last step: nothing left */
         PetscCall(MBCSolverOutputClose(s));
         PetscCall(MBCSolverStageLog(s, -1));

@@ -12,7 +12,7 @@ PetscErrorCode MBCSolverMonitorTiming(MBCSolver s, char buf[], size_t len)
   PetscFunctionBegin;
   PetscCall(PetscTime(&now));
   elapsed = now - s->t_start;
-  eta     = s->step > 0 ? elapsed / s->step * (s->nsteps - s->step) : 0;
+  eta     = s->step > s->step_begin ? elapsed / (s->step - s->step_begin) * (s->nsteps - s->step) : 0; /* a restart's steps only */
   if (s->iface) PetscCall(PetscSNPrintf(its, sizeof(its), "contact its %" PetscInt_FMT " ", s->step_its));
   if (s->ncuts) PetscCall(PetscSNPrintf(buf, len, "%stime: step %.3g s elapsed %.4g s ETA %.4g s, steps cut %" PetscInt_FMT, its, (double)(now - s->t_last), (double)elapsed, (double)eta, s->ncuts));
   else PetscCall(PetscSNPrintf(buf, len, "%stime: step %.3g s elapsed %.4g s ETA %.4g s", its, (double)(now - s->t_last), (double)elapsed, (double)eta));

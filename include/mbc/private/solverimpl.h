@@ -115,6 +115,7 @@ struct _n_MBCSolver {
      of the last monitored step */
   PetscLogDouble t_start, t_last;
   PetscInt       step_its; /* contact solve iterations of the step so far (all its solves) */
+  PetscInt       step_begin; /* the step the stepping started from (a restart's) */
   PetscInt64     h5_size; /* bytes of the result file at its last commit */
   PetscInt       xmf_outputs; /* outputs in the XDMF index on disk */
   FILE          *reactions_csv; /* solveroutputreaction.c */
