@@ -276,12 +276,15 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
           every=10):
     """The scene dict. Static: self-weight and water at once, one step, the monoliths held by
     contact (static stabilisation). Dynamic: self-weight and water ramped over `ramp` s (bodies
-    held only by contact cannot take `constant` loads: docs/scene.md), the record from eq_start."""
+    held only by contact cannot take `constant` loads: docs/scene.md), the record from eq_start.
+    Staged: a static stage (self-weight and water, one step to t = 1), then a dynamic stage from
+    that state with the record from its start (t = 1) for eq_duration s."""
+    staged = analysis == "staged"
     n = p.monoliths
     dams = [f"m{k}" for k in range(1, n + 1)]
     concrete = {"E": p.E, "nu": p.nu, "density": p.density}
     rock = {"E": p.rock_E, "nu": p.rock_nu}
-    if analysis == "dynamic":
+    if analysis in ("dynamic", "staged"):
         alpha, beta = rayleigh(p)
         concrete.update(rayleigh_alpha=alpha, rayleigh_beta=beta)
         rock.update(density=p.rock_density, rayleigh_alpha=alpha, rayleigh_beta=beta)
@@ -317,6 +320,13 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         out["analysis"] = {"type": "dynamic", "dt": dt, "final_time": eq_start + eq_duration,
                            "newmark": {"beta": 0.3025, "gamma": 0.6}}
         out["output"]["every"] = every
+    elif staged:
+        quake = {"kind": "gravity", "vector": [-1.0, 0, 0], "time": {"csv": record, "shift": 1.0}}
+        out["stages"] = [{"name": "static", "analysis": {"type": "static"}},
+                         {"name": "earthquake", "analysis": {"type": "dynamic", "dt": dt, "final_time": 1.0 + eq_duration,
+                                                             "newmark": {"beta": 0.3025, "gamma": 0.6}},
+                          "loads": [quake]}]
+        out["output"]["every"] = every
     else:
         out["analysis"] = {"type": "static"}
     return out
@@ -343,7 +353,9 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     vertices = write_mesh(os.path.join(outdir, "dam.msh"), p, a, binary)
     t1 = time.perf_counter()
     record = "ground_motion.csv"
-    if analysis == "dynamic" and record_from > 0:
+    if analysis == "staged" and record_from <= 0:
+        shutil.copy(RECORD, os.path.join(outdir, record))
+    if analysis in ("dynamic", "staged") and record_from > 0:
         with open(RECORD) as f:
             rows = [line for line in f if line[:1] not in ("#", "t")]
         data = np.array([r.split(",") for r in rows], dtype=float)
@@ -359,7 +371,7 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     t2 = time.perf_counter()
     build.info = dict(params=asdict(p), analysis=analysis, dofs=dofs, vertices=vertices, h=p.h, nx=a["nx"], ny=a["ny"],
                       nz=a["nz"], mesh_seconds=t1 - t0, prep_seconds=t2 - t1, weight=p.weight(), thrust=p.thrust(),
-                      couples=couple_names(p), eq_start=eq_start if analysis == "dynamic" else None)
+                      couples=couple_names(p), eq_start={"dynamic": eq_start, "staged": 1.0}.get(analysis))
     with open(os.path.join(outdir, "dam.json"), "w") as f:  # for meshes/dam/report.py
         json.dump(build.info, f, indent=1)
     if not quiet:
@@ -388,6 +400,8 @@ if __name__ == "__main__":
     ap.add_argument("--quasi-static", action="store_true",
                     help="dynamic, the static loads ramped over 1 s and held to 2 s, no record: the static state "
                          "with joints and partial slip (docs/dam.md)")
+    ap.add_argument("--staged", action="store_true",
+                    help="a static stage (self-weight and water), then the ground motion record from that state")
     ap.add_argument("--eq-duration", type=float, default=20.0, help="s of the record to run")
     ap.add_argument("--joints", action=argparse.BooleanOptionalAction, default=None,
                     help="contraction joints as contact couples (default: in dynamic analyses only)")
@@ -398,6 +412,7 @@ if __name__ == "__main__":
     if a.h:
         params["h"] = a.h
     extra = dict(dt=0.02, eq_duration=0.0) if a.quasi_static else dict(eq_duration=a.eq_duration)
-    h5 = build(a.outdir, "dynamic" if a.dynamic or a.quasi_static else "static", target_dofs=a.dofs, binary=a.binary,
+    analysis = "staged" if a.staged else ("dynamic" if a.dynamic or a.quasi_static else "static")
+    h5 = build(a.outdir, analysis, target_dofs=a.dofs, binary=a.binary,
                quiet=False, **extra, **params)
     print(h5)

@@ -78,7 +78,12 @@ def _run(args):
 
 
 def _print_summary(output, check_only, scene, bodies, face_counts):
-    print(f"{'checked' if check_only else 'wrote ' + output}: {scene.analysis.type} analysis")
+    if scene.stages:
+        print(f"{'checked' if check_only else 'wrote ' + output}: {len(scene.stages)} stages: "
+              + ", ".join(f"{st.name} ({st.analysis.type}, t {st.start_time:g} to {st.analysis.final_time:g})"
+                          for st in scene.stages))
+    else:
+        print(f"{'checked' if check_only else 'wrote ' + output}: {scene.analysis.type} analysis")
     for b in bodies:
         print(f"  body {b.name}: {len(b.cells)} {b.cell_type} cells, {len(b.coords)} vertices")
     for sid, (name, count) in enumerate(face_counts.items(), start=1):
@@ -182,9 +187,13 @@ def write_metadata(path, scene, bodies, face_counts, labels=None):
         _list(root, "loads", scene.loads, lambda g, load: _attrs(
             g, kind=load.kind, vector=load.vector, value=load.value, surface=load.surface,
             surface_id=surface_ids.get(load.surface, -1), bodies=",".join(load.bodies),
-            time=load.time.kind, time_function=time_function(load.time),
+            time=load.time.kind, time_function=time_function(load.time), stage=load.stage,
             **(dict(level=load.level, unit_weight=load.unit_weight, axis=load.axis)
                if load.kind == "hydrostatic" else {})))
+        _list(root, "stages", scene.stages, lambda g, st: _attrs(
+            g, name=st.name, type=st.analysis.type, start_time=st.start_time, dt=st.analysis.dt,
+            final_time=st.analysis.final_time, newmark_beta=st.analysis.newmark_beta,
+            newmark_gamma=st.analysis.newmark_gamma, mass=st.analysis.mass))
         _list(root, "time_functions", tables, lambda g, table: (
             _attrs(g, kind="table"), g.create_dataset("table", data=table.astype(np.float64))))
 

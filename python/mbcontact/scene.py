@@ -301,6 +301,8 @@ class Load:
     level: float = 0.0        # hydrostatic: free surface coordinate along axis
     unit_weight: float = 0.0  # hydrostatic: pressure per depth (rho_w g)
     axis: int = 2             # hydrostatic: 0, 1, 2 = x, y, z (up)
+    stage: int = 0            # the stage from which the load acts (stages[i].loads)
+    where: str = ""           # its key path in the YAML (stages[i].loads[j]; "" for loads[i])
 
 
 @dataclass
@@ -311,6 +313,13 @@ class Analysis:
     newmark_beta: float = 0.25
     newmark_gamma: float = 0.5
     mass: str = "consistent"
+
+
+@dataclass
+class Stage:
+    name: str
+    analysis: Analysis
+    start_time: float  # the end of the stage before (0 for the first): time runs on
 
 
 @dataclass
@@ -339,9 +348,10 @@ class Scene:
     analysis: Analysis
     output: Output
     surfaces: dict    # surface name -> list of places it is referenced, in id order
+    stages: list = field(default_factory=list)  # empty: one analysis (`analysis`)
 
 
-TOP_KEYS = ("title", "meshes", "bodies", "couples", "dirichlet", "loads", "analysis", "output")
+TOP_KEYS = ("title", "meshes", "bodies", "couples", "dirichlet", "loads", "analysis", "stages", "output")
 
 
 def parse_scene(doc, base_dir):
@@ -355,15 +365,21 @@ def parse_scene(doc, base_dir):
     couples = _couples(doc.get("couples"))
     dirichlet = [_dirichlet(e, f"dirichlet[{i}]", base_dir) for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
     loads = [_load(e, f"loads[{i}]", body_names, base_dir) for i, e in enumerate(entries(doc.get("loads"), "loads"))]
-    analysis = _analysis(doc.get("analysis"))
+    if "stages" in doc and "analysis" in doc:
+        raise InputError("analysis: a scene with stages gives each stage its analysis "
+                         "(stages[i].analysis), not a top-level one")
+    stages = _stages(doc.get("stages"), loads, body_names, base_dir) if "stages" in doc else []
+    analysis = stages[0].analysis if stages else _analysis(doc.get("analysis"))
     output = _output(doc.get("output"), body_names)
-    if analysis.type == "dynamic":
+    for where, a in ([(f"stages[{i}]", st.analysis) for i, st in enumerate(stages)] or [("analysis", analysis)]):
+        if a.type != "dynamic":
+            continue
         for b in bodies:
             if b.material["density"] == 0:
-                raise InputError(f"bodies.{b.name}.material.density: a dynamic analysis needs "
+                raise InputError(f"bodies.{b.name}.material.density: a dynamic analysis ({where}) needs "
                                  f"density > 0 for every body (body '{b.name}' has 0)")
     surfaces = _surface_references(doc, couples, dirichlet, loads)
-    return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces)
+    return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces, stages)
 
 
 def _meshes(value, base_dir):
@@ -481,31 +497,75 @@ def _load(spec, where, body_names, base_dir="."):
     return load
 
 
-def _analysis(value):
-    spec = mapping(value, "analysis", ("type", "dt", "final_time", "newmark", "mass"))
+def _analysis(value, where="analysis", start=0.0):
+    """The analysis settings; a stage's (`where` = stages[i].analysis) runs from `start`, the end
+    of the stage before, to its final_time (time runs on across stages)."""
+    spec = mapping(value, where, ("type", "dt", "final_time", "newmark", "mass"),
+                   required=("type",) if where != "analysis" else ())
     a = Analysis()
-    a.type = string(spec.get("type", a.type), "analysis.type", choices=("static", "dynamic"))
-    a.mass = string(spec.get("mass", a.mass), "analysis.mass", choices=("consistent", "lumped"))
+    a.type = string(spec.get("type", a.type), f"{where}.type", choices=("static", "dynamic"))
+    a.mass = string(spec.get("mass", a.mass), f"{where}.mass", choices=("consistent", "lumped"))
     if a.type == "dynamic":
         for key in ("dt", "final_time"):
             if key not in spec:
-                raise InputError(f"analysis.{key}: required for a dynamic analysis")
-    # Static: dt and final_time default to each other, both to 1 (one load step).
-    a.dt = real(spec.get("dt", spec.get("final_time", 1.0)), "analysis.dt", gt=0)
-    a.final_time = real(spec.get("final_time", a.dt), "analysis.final_time")
-    if a.final_time < a.dt:
-        raise InputError(f"analysis.final_time: must be >= dt = {a.dt:g}, got {a.final_time:g}")
-    if a.final_time / a.dt > MAX_STEPS:
-        raise InputError(f"analysis.dt: {a.dt:g} to final_time {a.final_time:g} is {a.final_time / a.dt:.3g} "
+                raise InputError(f"{where}.{key}: required for a dynamic analysis")
+    # Static: dt and the stage's length (final_time - start) default to each other, both to 1
+    # (one load step).
+    if "final_time" in spec:
+        a.final_time = real(spec["final_time"], f"{where}.final_time")
+        if not a.final_time > start:
+            raise InputError(f"{where}.final_time: must be > {start:g}, where the stage before ends, "
+                             f"got {a.final_time:g}")
+    a.dt = real(spec.get("dt", a.final_time - start if "final_time" in spec else 1.0), f"{where}.dt", gt=0)
+    if "final_time" not in spec:
+        a.final_time = start + a.dt
+    length = a.final_time - start
+    if length < a.dt * (1 - 1e-12):
+        raise InputError(f"{where}.final_time: must be >= {'the start ' + format(start, 'g') + ' + ' if start else ''}"
+                         f"dt = {start + a.dt:g}, got {a.final_time:g}")
+    if length / a.dt > MAX_STEPS:
+        raise InputError(f"{where}.dt: {a.dt:g} to final_time {a.final_time:g} is {length / a.dt:.3g} "
                          f"steps, more than {MAX_STEPS:g}")
-    newmark = mapping(spec.get("newmark"), "analysis.newmark", ("beta", "gamma"))
-    a.newmark_beta = real(newmark.get("beta", a.newmark_beta), "analysis.newmark.beta", gt=0)
-    a.newmark_gamma = real(newmark.get("gamma", a.newmark_gamma), "analysis.newmark.gamma", gt=0)
+    newmark = mapping(spec.get("newmark"), f"{where}.newmark", ("beta", "gamma"))
+    a.newmark_beta = real(newmark.get("beta", a.newmark_beta), f"{where}.newmark.beta", gt=0)
+    a.newmark_gamma = real(newmark.get("gamma", a.newmark_gamma), f"{where}.newmark.gamma", gt=0)
     stable = a.newmark_gamma >= 0.5 and a.newmark_beta >= (a.newmark_gamma + 0.5) ** 2 / 4 * (1 - 1e-12)
     if a.type == "dynamic" and not stable:
-        warn(f"analysis.newmark: beta={a.newmark_beta:g}, gamma={a.newmark_gamma:g} is not "
+        warn(f"{where}.newmark: beta={a.newmark_beta:g}, gamma={a.newmark_gamma:g} is not "
              "unconditionally stable (needs gamma >= 0.5 and beta >= (gamma + 0.5)^2 / 4)")
     return a
+
+
+def _stages(value, loads, body_names, base_dir):
+    """The stages in order, each from the end of the one before; a stage's `loads` join those
+    acting already (top-level loads act from the first stage) and keep acting to the end. The
+    loads of stage i are appended to `loads` with load.stage = i."""
+    if not isinstance(value, list) or not value:
+        raise InputError(f"stages: expected a non-empty list of stages (lines starting with '- '), "
+                         f"got {_describe(value)}")
+    stages, names, start, steps = [], {}, 0.0, 0.0
+    for i, spec in enumerate(value):
+        where = f"stages[{i}]"
+        spec = mapping(spec, where, ("name", "analysis", "loads"), required=("analysis",))
+        name = string(spec.get("name", f"stage{i}"), f"{where}.name")
+        if name in names:
+            raise InputError(f"{where}.name: stage '{name}' is already stages[{names[name]}]")
+        names[name] = i
+        a = _analysis(spec["analysis"], f"{where}.analysis", start)
+        if stages and a.mass != stages[0].analysis.mass:
+            raise InputError(f"{where}.analysis.mass: every stage uses one mass matrix "
+                             f"({stages[0].analysis.mass} in stages[0]), got {a.mass}")
+        for j, e in enumerate(entries(spec.get("loads"), f"{where}.loads")):
+            load = _load(e, f"{where}.loads[{j}]", body_names, base_dir)
+            load.stage, load.where = i, f"{where}.loads[{j}]"
+            loads.append(load)
+        steps += (a.final_time - start) / a.dt
+        if steps > MAX_STEPS:
+            raise InputError(f"{where}.analysis.dt: the stages up to this one make {steps:.3g} steps, "
+                             f"more than {MAX_STEPS:g}")
+        stages.append(Stage(name, a, start))
+        start = a.final_time
+    return stages
 
 
 def _output(value, body_names):
@@ -556,8 +616,8 @@ def _surface_references(doc, couples, dirichlet, loads):
         elif section == "dirichlet":
             for i, d in enumerate(dirichlet):
                 add(d.surface, f"dirichlet[{i}].surface")
-        elif section == "loads":
+        elif section in ("loads", "stages"):
             for i, load in enumerate(loads):
-                if load.surface:
-                    add(load.surface, f"loads[{i}].surface")
+                if load.surface and bool(load.where) == (section == "stages"):
+                    add(load.surface, f"{load.where or f'loads[{i}]'}.surface")
     return refs

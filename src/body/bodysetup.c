@@ -223,7 +223,7 @@ static PetscErrorCode BodySetUpConstraints(MBCBody body)
 PetscErrorCode MBCBodySetUp(MBCBody body)
 {
   MBCScene scene   = body->scene;
-  PetscBool dynamic = (PetscBool)(scene->analysis == MBC_ANALYSIS_DYNAMIC);
+  PetscBool dynamic = (PetscBool)(scene->has_dynamic || scene->analysis == MBC_ANALYSIS_DYNAMIC); /* some stage needs M */
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_BodyAssemble, 0, 0, 0, 0));

@@ -127,6 +127,7 @@ PetscErrorCode MBCBodyExternalForce(MBCBody body, PetscReal t, PetscBool constan
     PetscReal    factor;
 
     if (constantOnly && load->time != MBC_TIME_CONSTANT) continue;
+    if (load->stage > body->stage) continue;
     PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
     if (factor != 0) PetscCall(VecAXPY(F, factor, body->load[i]));
   }

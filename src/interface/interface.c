@@ -495,6 +495,35 @@ static PetscErrorCode InterfaceScatterLocal(MBCInterface ifc, const PetscReal in
   PetscFunctionReturn(0);
 }
 
+/* The state a restart needs (solvercheckpoint.c), couple order, every rank: nc points, m
+   multipliers; lambda_n+1 (physical, into lamprev[m], the caller's), the warm start r (scaled, m),
+   the slip (3 nc) and the pairs H and D were built for (MBC_PAIR_SIZE nc). Collective. */
+PetscErrorCode MBCInterfaceGetState(MBCInterface ifc, PetscInt *nc, PetscInt *m, PetscReal lamprev[], const PetscReal **r, const PetscReal **slip, const PetscInt **pairs)
+{
+  PetscFunctionBegin;
+  *nc = ifc->lamprev ? ifc->ncontact : 0;
+  *m  = *nc ? ifc->coff[*nc] : 0;
+  if (lamprev && *nc) PetscCall(MBCInterfaceGather(ifc, ifc->lamprev, lamprev));
+  if (r) *r = ifc->rall;
+  if (slip) *slip = ifc->slip;
+  if (pairs) *pairs = ifc->pairs_built;
+  PetscFunctionReturn(0);
+}
+
+/* The multipliers, warm start and slip of MBCInterfaceGetState back, after MBCInterfaceSetUp
+   with the same pairs. */
+PetscErrorCode MBCInterfaceSetState(MBCInterface ifc, const PetscReal lamprev[], const PetscReal r[], const PetscReal slip[])
+{
+  PetscFunctionBegin;
+  if (!ifc->ncontact || !ifc->lamprev) PetscFunctionReturn(0);
+  PetscCall(InterfaceScatterLocal(ifc, lamprev, ifc->lamprev));
+  PetscCall(InterfaceScatterLocal(ifc, r, ifc->lambda));
+  PetscCall(PetscArraycpy(ifc->rall, r, ifc->coff[ifc->ncontact]));
+  PetscCall(PetscArraycpy(ifc->slip, slip, 3 * ifc->ncontact));
+  PetscCall(PetscArrayzero(ifc->stepslip, 3 * ifc->ncontact));
+  PetscFunctionReturn(0);
+}
+
 /* W's preallocation: a point's row couples to the multipliers of the bodies its constraint
    touches (the master body, the slave body). */
 static PetscErrorCode InterfacePreallocation(MBCInterface ifc, PetscInt rstart, PetscInt rend, PetscInt dnz[], PetscInt onz[])
@@ -594,6 +623,31 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
   ifc->dscale /= m;
   PetscCheck(ifc->dscale > 0, ifc->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
   PetscCall(MatScale(ifc->fp.W, 1.0 / ifc->dscale));
+  PetscFunctionReturn(0);
+}
+
+/* D again for the bodies' new operators (the next analysis stage: Newmark's K~ instead of K, or
+   back), H as built: the multipliers go on acting on the geometry they balance. After
+   MBCInterfaceSetTimeStepping; the warm start becomes that of a step at rest (lambda_n+1 =
+   lambda_n, r = dscale (1 + c) lambda_n). Collective. */
+PetscErrorCode MBCInterfaceRebuildD(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  if (!ifc->ncontact || !ifc->fp.W) PetscFunctionReturn(0);
+  PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
+  PetscCall(MatDestroy(&ifc->fp.W));
+  PetscCall(MatDestroy(&ifc->fp.G));
+  PetscCall(VecDestroy(&ifc->fp.e));
+  PetscCall(VecDestroy(&ifc->fp.alpha));
+  PetscCall(PetscFree(ifc->gQ));
+  PetscCall(PetscFree(ifc->grange));
+  PetscCall(PetscFree(ifc->gscale));
+  PetscCall(MBCMultiplierReset(ifc->mult));
+  PetscCall(InterfaceBuildD(ifc, ifc->coff[ifc->ncontact], ifc->poff[ifc->plast] - ifc->poff[ifc->pfirst]));
+  PetscCall(MBCInterfaceRigidModes(ifc));
+  PetscCall(VecAXPBY(ifc->lambda, ifc->dscale * (1 + ifc->carry), 0.0, ifc->lamprev));
+  PetscCall(MBCInterfaceGather(ifc, ifc->lambda, ifc->rall));
+  PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 

@@ -291,6 +291,52 @@ static PetscErrorCode ReadAnalysis(H5Node *root, MBCScene s)
   PetscFunctionReturn(0);
 }
 
+/* The stages (optional list; absent or empty: one analysis). Each runs from where the one
+   before ends; the first one's settings become the scene's analysis. */
+static PetscErrorCode ReadStages(H5Node *root, MBCScene s)
+{
+  H5Node list, e;
+
+  PetscFunctionBegin;
+  s->nstages = 0;
+  if (H5Lexists(root->obj, "stages", H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
+  PetscCall(H5NodeOpen(s->filename, root->obj, root->path, "stages", &list));
+  PetscCall(H5ReadCount(&list, &s->nstages));
+  PetscCheck(s->nstages >= 0 && s->nstages <= MBC_MAX_STEPS, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s has count %" PetscInt_FMT, s->filename, list.path, s->nstages);
+  PetscCall(PetscCalloc1(s->nstages, &s->stages));
+  for (PetscInt i = 0; i < s->nstages; i++) {
+    MBCStageDesc *st = &s->stages[i];
+    PetscInt      v;
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadString(&e, "name", st->name, sizeof(st->name), NULL, PETSC_FALSE));
+    v = MBC_ANALYSIS_STATIC;
+    PetscCall(H5ReadEnum(&e, "type", MBCAnalysisTypes, &v, PETSC_FALSE));
+    st->analysis = (MBCAnalysisType)v;
+    v = MBC_MASS_CONSISTENT;
+    PetscCall(H5ReadEnum(&e, "mass", MBCMassTypes, &v, PETSC_TRUE));
+    st->mass          = (MBCMassType)v;
+    st->newmark_beta  = 0.25;
+    st->newmark_gamma = 0.5;
+    PetscCall(H5ReadReal(&e, "start_time", &st->start_time, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "dt", &st->dt, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "final_time", &st->final_time, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "newmark_beta", &st->newmark_beta, PETSC_TRUE));
+    PetscCall(H5ReadReal(&e, "newmark_gamma", &st->newmark_gamma, PETSC_TRUE));
+    PetscCall(H5NodeClose(&e));
+  }
+  PetscCall(H5NodeClose(&list));
+  PetscCall(MBCSceneCheckStages(s));
+  if (s->nstages) {
+    s->analysis      = s->stages[0].analysis;
+    s->mass          = s->stages[0].mass;
+    s->dt            = s->stages[0].dt;
+    s->final_time    = s->stages[s->nstages - 1].final_time;
+    s->newmark_beta  = s->stages[0].newmark_beta;
+    s->newmark_gamma = s->stages[0].newmark_gamma;
+  }
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode ReadOutput(H5Node *root, MBCScene s)
 {
   H5Node   e, pts, p;
@@ -468,6 +514,10 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   PetscCheck(version == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s has format version %" PetscInt_FMT "; this mbcontact reads version 1", s->filename, version);
   PetscCall(H5ReadString(&root, "title", s->title, sizeof(s->title), NULL, PETSC_TRUE));
   PetscCall(ReadAnalysis(&root, s));
+  PetscCall(ReadStages(&root, s));
+  s->has_dynamic = (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
+  for (PetscInt i = 0; i < s->nstages; i++)
+    if (s->stages[i].analysis == MBC_ANALYSIS_DYNAMIC) s->has_dynamic = PETSC_TRUE;
 
   PetscCall(ReadList(&root, "bodies", &list, &s->nbodies));
   PetscCheck(s->nbodies > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s has no bodies", s->filename);
@@ -475,7 +525,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   for (PetscInt i = 0; i < s->nbodies; i++) {
     PetscCall(H5EntryOpen(&list, i, &e));
     PetscCall(ReadBody(&e, &s->bodies[i]));
-    if (s->analysis == MBC_ANALYSIS_DYNAMIC) PetscCheck(s->bodies[i].density > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->filename, s->bodies[i].name);
+    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->filename, s->bodies[i].name);
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -548,6 +598,8 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCall(H5ReadInt(&e, "surface_id", &l->surface_id, PETSC_TRUE));
     PetscCall(H5ReadString(&e, "bodies", NULL, 0, &l->bodies, PETSC_TRUE));
     PetscCall(ReadTimeKind(&e, s, &l->time, &l->time_function));
+    PetscCall(H5ReadInt(&e, "stage", &l->stage, PETSC_TRUE));
+    PetscCheck(l->stage >= 0 && (l->stage == 0 || l->stage < s->nstages), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: load %s acts from stage %" PetscInt_FMT ", but the scene has %" PetscInt_FMT " stages", s->filename, e.path, l->stage, s->nstages);
     if (l->kind == MBC_LOAD_PRESSURE || l->kind == MBC_LOAD_TRACTION || l->kind == MBC_LOAD_HYDROSTATIC) PetscCheck(l->surface_id >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s load %s needs a surface", s->filename, MBCLoadKinds[l->kind], e.path);
     if (l->kind == MBC_LOAD_HYDROSTATIC) {
       PetscCall(H5ReadReal(&e, "level", &l->level, PETSC_FALSE));
@@ -642,6 +694,7 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   PetscCall(PetscFree(s->dirichlet));
   PetscCall(PetscFree(s->loads));
   PetscCall(PetscFree(s->points));
+  PetscCall(PetscFree(s->stages));
   PetscCall(PetscHeaderDestroy(scene));
   PetscFunctionReturn(0);
 }
@@ -705,6 +758,10 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
   if (!ascii) PetscFunctionReturn(0);
   PetscCall(PetscViewerASCIIPrintf(viewer, "Scene %s%s%s: %s analysis, dt %g, final time %g, Newmark beta %g gamma %g, %s mass\n", s->filename, s->title[0] ? " - " : "", s->title, MBCAnalysisTypes[s->analysis], (double)s->dt, (double)s->final_time, (double)s->newmark_beta, (double)s->newmark_gamma, MBCMassTypes[s->mass]));
   PetscCall(PetscViewerASCIIPushTab(viewer));
+  for (PetscInt i = 0; i < s->nstages; i++) {
+    MBCStageDesc *st = &s->stages[i];
+    PetscCall(PetscViewerASCIIPrintf(viewer, "stage %" PetscInt_FMT " %s: %s, t %g to %g, dt %g, Newmark beta %g gamma %g\n", i, st->name, MBCAnalysisTypes[st->analysis], (double)st->start_time, (double)st->final_time, (double)st->dt, (double)st->newmark_beta, (double)st->newmark_gamma));
+  }
   for (PetscInt i = 0; i < s->nbodies; i++) {
     MBCBodyDesc *b = &s->bodies[i];
     PetscCall(PetscViewerASCIIPrintf(viewer, "body %s: %" PetscInt_FMT " %s cells, %" PetscInt_FMT " vertices, E %g nu %g density %g damping %g rayleigh %g %g\n", b->name, b->num_cells, b->cell_type, b->num_vertices, (double)b->E, (double)b->nu, (double)b->density, (double)b->damping, (double)b->rayleigh_alpha, (double)b->rayleigh_beta));
@@ -715,6 +772,7 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
     MBCLoadDesc *l = &s->loads[i];
     if (l->kind == MBC_LOAD_HYDROSTATIC) PetscCall(PetscViewerASCIIPrintf(viewer, "load hydrostatic on %s: unit weight %g, level %c = %g (%s)\n", l->surface, (double)l->unit_weight, "xyz"[l->axis], (double)l->level, MBCTimeKinds[l->time]));
     else PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
+    if (l->stage) PetscCall(PetscViewerASCIIPrintf(viewer, "  from stage %" PetscInt_FMT " (%s)\n", l->stage, s->stages[l->stage].name));
   }
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);

@@ -447,3 +447,24 @@ PetscErrorCode MBCSceneCheckMeshes(MBCScene s, hid_t file)
   PetscCall(PetscFree2(faces, cfaces));
   PetscFunctionReturn(0);
 }
+
+/* The stages as the prep writes them (docs/scene-h5.md): each from where the one before ends, a
+   positive step that fits its length, stable Newmark parameters, one mass matrix, at most
+   MBC_MAX_STEPS steps in all; the file may have been written by hand. */
+PetscErrorCode MBCSceneCheckStages(MBCScene s)
+{
+  PetscReal steps = 0;
+
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < s->nstages; i++) {
+    const MBCStageDesc *st = &s->stages[i];
+    const PetscReal     start = i ? s->stages[i - 1].final_time : 0, length = st->final_time - st->start_time;
+    PetscCheck(st->start_time == start, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: stage %" PetscInt_FMT " '%s' starts at t = %g, not where the stage before ends (%g)", s->filename, i, st->name, (double)st->start_time, (double)start);
+    PetscCheck(st->dt > 0 && PetscIsNormalReal(st->dt) && PetscIsNormalReal(length) && length >= st->dt * (1 - 1e-12), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: stage %" PetscInt_FMT " '%s': dt %g and final_time %g (from t = %g) must be finite, dt > 0 and at least one step", s->filename, i, st->name, (double)st->dt, (double)st->final_time, (double)st->start_time);
+    steps += length / st->dt;
+    PetscCheck(steps <= MBC_MAX_STEPS, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: the stages up to stage %" PetscInt_FMT " '%s' make %.3g steps, more than %g", s->filename, i, st->name, (double)steps, (double)MBC_MAX_STEPS);
+    PetscCheck(st->mass == s->stages[0].mass, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: stage %" PetscInt_FMT " '%s' has %s mass, stage 0 %s: every stage uses one mass matrix", s->filename, i, st->name, MBCMassTypes[st->mass], MBCMassTypes[s->stages[0].mass]);
+    if (st->analysis == MBC_ANALYSIS_DYNAMIC) PetscCheck(st->newmark_gamma >= 0.5 && st->newmark_beta >= 0.25 * (0.5 + st->newmark_gamma) * (0.5 + st->newmark_gamma) * (1 - 1e-12), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: stage %" PetscInt_FMT " '%s': Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", s->filename, i, st->name, (double)st->newmark_beta, (double)st->newmark_gamma);
+  }
+  PetscFunctionReturn(0);
+}

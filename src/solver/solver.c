@@ -52,17 +52,18 @@ PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
 PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
 {
   PetscEnum analysis = (PetscEnum)s->analysis, mass = (PetscEnum)s->mass;
+  PetscBool set[5] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
 
   PetscFunctionBegin;
   PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
   PetscCheck(s->scene, s->comm, PETSC_ERR_ARG_WRONGSTATE, "Call MBCSolverSetScene() before MBCSolverSetFromOptions()");
   PetscObjectOptionsBegin((PetscObject)s);
-  PetscCall(PetscOptionsEnum("-mbc_analysis", "Analysis type (overrides the scene's)", "MBCSolverSetFromOptions", MBCAnalysisTypes, analysis, &analysis, NULL));
-  PetscCall(PetscOptionsEnum("-mbc_mass", "Mass matrix", "MBCSolverSetFromOptions", MBCMassTypes, mass, &mass, NULL));
-  PetscCall(PetscOptionsReal("-mbc_dt", "Time (or load) step", "MBCSolverSetFromOptions", s->dt, &s->dt, NULL));
+  PetscCall(PetscOptionsEnum("-mbc_analysis", "Analysis type (overrides the scene's)", "MBCSolverSetFromOptions", MBCAnalysisTypes, analysis, &analysis, &set[0]));
+  PetscCall(PetscOptionsEnum("-mbc_mass", "Mass matrix", "MBCSolverSetFromOptions", MBCMassTypes, mass, &mass, &set[1]));
+  PetscCall(PetscOptionsReal("-mbc_dt", "Time (or load) step", "MBCSolverSetFromOptions", s->dt, &s->dt, &set[2]));
   PetscCall(PetscOptionsReal("-mbc_final_time", "Final time", "MBCSolverSetFromOptions", s->final_time, &s->final_time, NULL));
-  PetscCall(PetscOptionsReal("-mbc_newmark_beta", "Newmark beta", "MBCSolverSetFromOptions", s->beta, &s->beta, NULL));
-  PetscCall(PetscOptionsReal("-mbc_newmark_gamma", "Newmark gamma", "MBCSolverSetFromOptions", s->gamma, &s->gamma, NULL));
+  PetscCall(PetscOptionsReal("-mbc_newmark_beta", "Newmark beta", "MBCSolverSetFromOptions", s->beta, &s->beta, &set[3]));
+  PetscCall(PetscOptionsReal("-mbc_newmark_gamma", "Newmark gamma", "MBCSolverSetFromOptions", s->gamma, &s->gamma, &set[4]));
   PetscCall(PetscOptionsInt("-mbc_output_every", "Write fields every this many steps", "MBCSolverSetFromOptions", s->output_every, &s->output_every, NULL));
   PetscCall(PetscOptionsString("-mbc_output", "Prefix of the result files", "MBCSolverSetFromOptions", s->output, s->output, sizeof(s->output), NULL));
   PetscCall(PetscOptionsBool("-mbc_monitor", "Print a line per step", "MBCSolverSetFromOptions", s->monitor, &s->monitor, NULL));
@@ -75,29 +76,37 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
   PetscCall(PetscOptionsReal("-mbc_dt_min", "The smallest step (or load step) a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
+  PetscCall(PetscOptionsInt("-mbc_checkpoint_every", "Write the whole state to <output>_checkpoint.h5 every this many steps (0: only at SIGINT/SIGTERM)", "MBCSolverSetFromOptions", s->checkpoint_every, &s->checkpoint_every, NULL));
+  PetscCall(PetscOptionsString("-mbc_restart", "Go on from this checkpoint (the outputs after it go to <output>_restart.h5)", "MBCSolverSetFromOptions", s->restart, s->restart, sizeof(s->restart), NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
   s->mass     = (MBCMassType)mass;
   s->scene->analysis = s->analysis; /* the bodies read these from the scene */
   s->scene->mass     = s->mass;
+  if (!s->scene->nstages) s->scene->has_dynamic = (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
   PetscCheck(s->dt > 0 && PetscIsNormalReal(s->dt), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive and finite", (double)s->dt);
   PetscCheck(s->final_time >= s->dt * (1 - 1e-12) && PetscIsNormalReal(s->final_time), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be finite and at least one step (%g)", (double)s->final_time, (double)s->dt);
   /* checked before the cast to an integer below (undefined beyond its range); the output
      reserves a few numbers per step up front */
   PetscCheck(s->final_time / s->dt <= MBC_MAX_STEPS, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g to final time -mbc_final_time %g is %.3g steps, more than %g: use a larger dt", (double)s->dt, (double)s->final_time, (double)(s->final_time / s->dt), (double)MBC_MAX_STEPS);
   PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
-  if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
+  if (s->analysis == MBC_ANALYSIS_DYNAMIC && !s->scene->nstages) { /* the stages are checked as read */
     PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);
     for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
-  s->nsteps = (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9);
+  PetscCall(MBCSolverStagesSetUp(s, (PetscBool)(set[0] || set[1] || set[2] || set[3] || set[4])));
   if (s->dt_min < 0) s->dt_min = s->dt / 1024;
   PetscCheck(s->dt_min > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_dt_min %g must be positive", (double)s->dt_min);
   if (s->fclib_step < 0) s->fclib_step = s->nsteps;
   PetscCheck(!s->fclib_file[0] || (s->fclib_step >= 1 && s->fclib_step <= s->nsteps), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT " is not a step of this run (1 to %" PetscInt_FMT ")", s->fclib_step, s->nsteps);
   PetscCheck(s->static_rtol > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_rtol %g must be positive", (double)s->static_rtol);
   PetscCheck(s->dblock >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_block %" PetscInt_FMT " must be at least 1", s->dblock);
+  PetscCheck(s->checkpoint_every >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_checkpoint_every %" PetscInt_FMT " must not be negative", s->checkpoint_every);
+  if (s->restart[0]) { /* the run before keeps its results */
+    size_t len = strlen(s->output);
+    if (len < 8 || strcmp(s->output + len - 8, "_restart")) PetscCall(PetscStrlcat(s->output, "_restart", sizeof(s->output)));
+  }
   PetscCheck(s->static_max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_max_it %" PetscInt_FMT " must be at least 1", s->static_max_it);
   PetscFunctionReturn(0);
 }
@@ -263,6 +272,7 @@ static PetscErrorCode SolverContact(MBCSolver s)
   }
   s->force_build = PETSC_FALSE;
   PetscCall(MBCInterfaceSetUp(s->iface, n, pairs)); /* takes pairs */
+  PetscCall(MBCSolverCheckpointTrack(s)); /* where the search ran for this H, for a restart */
   PetscCall(MBCInterfaceGetSize(s->iface, NULL, &nmult));
   if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %" PetscInt_FMT " contact points, %" PetscInt_FMT " multipliers, flexibility matrix rebuilt\n", s->step, (double)s->time, n, nmult));
   PetscFunctionReturn(0);
@@ -277,6 +287,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 
   PetscFunctionBegin;
   PetscCall(MBCInterfaceSolve(s->iface, s->step, s->time, s->contact_may_fail, &failed));
+  s->step_its += s->iface->mult->its; /* every solve of the step, the failed ones too: the work done */
   if (failed) s->contact_failed = PETSC_TRUE;
   if (s->contact_failed) PetscFunctionReturn(0); /* the step is cut: nothing to count or print */
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) MBCInterfaceContactWork(s->iface, &s->wfriction, &s->wcontact);
@@ -295,7 +306,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
 static PetscErrorCode SolverMonitor(MBCSolver s)
 {
   PetscReal umax = 0, e[MBC_NENERGY];
-  char      timing[128];
+  char      timing[192];
 
   PetscFunctionBegin;
   if (s->usermonitor) PetscCall((*s->usermonitor)(s, s->step, s->time, s->monitorctx));
@@ -308,6 +319,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, s->comm));
   PetscCall(MBCSolverMonitorTiming(s, timing, sizeof(timing)));
+  s->step_its = 0; /* counted again from the next step's first solve */
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscCall(MBCSolverEnergy(s, e));
     PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g max|u| %-12.6e energy: kinetic %.6e strain %.6e work %.6e damped %.6e friction %.6e contact %.6e total %.6e %s\n", s->step, (double)s->time, (double)umax, (double)e[0], (double)e[1], (double)e[2], (double)e[3], (double)e[4], (double)e[5], (double)(e[0] + e[1] - e[2] + e[3] + e[4] + e[5]), timing));
@@ -399,14 +411,19 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
+    PetscCall(KSPDestroy(&body->ksp)); /* a dynamic stage's (a reference) */
+    PetscCall(MatDestroy(&body->A));
     PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
     body->aK = 1.0;
     body->aM = 0.0;
+    if (body->v) PetscCall(VecZeroEntries(body->v)); /* after a dynamic stage: a static one has no inertia */
+    if (body->a) PetscCall(VecZeroEntries(body->a));
   }
   s->static_stabilized = stabilized;
   s->static_floating   = floating;
-  s->step = 0;
-  PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  if (s->restarting) { } /* H and D come with the checkpoint's state */
+  else if (s->istage == 0) PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  else if (s->iface) PetscCall(MBCInterfaceRebuildD(s->iface)); /* D of K, H as the stage before left it */
   PetscFunctionReturn(0);
 }
 
@@ -523,11 +540,42 @@ static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t
 /* Load step s->step. */
 static PetscErrorCode SolverStaticStep(MBCSolver s)
 {
+  const PetscInt k = s->step - s->stages[s->istage].step0;
+
   PetscFunctionBegin;
-  PetscCall(SolverStaticAdvance(s, PetscMin((s->step - 1) * s->dt, s->final_time), PetscMin(s->step * s->dt, s->final_time), 0));
+  PetscCall(SolverStaticAdvance(s, MBCSolverStageTime(s, k - 1), MBCSolverStageTime(s, k), 0));
   PetscCall(SolverMonitor(s));
   PetscCall(SolverCheckDisplacementSize(s));
   PetscCall(MBCSolverOutputStep(s));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode BodyAddDamping(MBCBody, PetscReal, Vec, Vec);
+
+/* The acceleration the forces at time t give the body in its state: M a = F(t) - K u - C v +
+   fc on the free DOFs (fc: the contact force H lambda, or NULL); body->fold = F(t). */
+static PetscErrorCode BodyAcceleration(MBCBody body, PetscReal t, Vec fc)
+{
+  PetscReal rnorm;
+  KSP       ksp;
+  Mat       A;
+
+  PetscFunctionBegin;
+  PetscCall(MBCBodyExternalForce(body, t, PETSC_FALSE, body->fold));
+  PetscCall(VecCopy(body->fold, body->rhs));
+  PetscCall(MatMult(body->K, body->u, body->work));
+  PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+  if (body->cM != 0 || body->cK != 0) PetscCall(BodyAddDamping(body, -1.0, body->v, body->rhs));
+  if (fc) PetscCall(VecAXPY(body->rhs, 1.0, fc));
+  PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rhs));
+  PetscCall(VecZeroEntries(body->a));
+  PetscCall(VecNorm(body->rhs, NORM_INFINITY, &rnorm));
+  if (rnorm > 0) {
+    PetscCall(MBCBodyFactor(body, 0.0, 1.0, &ksp, &A, "mass"));
+    PetscCall(MBCBodyConstrainedSolve(body, ksp, 0.0, 1.0, NULL, body->rhs, body->a));
+    PetscCall(KSPDestroy(&ksp));
+    PetscCall(MatDestroy(&A));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -535,7 +583,7 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
    prescribed values at t = 0, at rest, and the acceleration the loads at t = 0 give. */
 static PetscErrorCode BodyDynamicInitialState(MBCBody body)
 {
-  PetscReal fnorm, gnorm, rnorm;
+  PetscReal fnorm, gnorm;
   KSP       ksp;
   Mat       A;
 
@@ -553,19 +601,7 @@ static PetscErrorCode BodyDynamicInitialState(MBCBody body)
     PetscCall(KSPDestroy(&ksp));
     PetscCall(MatDestroy(&A));
   }
-  /* M a0 = F(0) - K u0 on the free DOFs */
-  PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_FALSE, body->fold));
-  PetscCall(VecCopy(body->fold, body->rhs));
-  PetscCall(MatMult(body->K, body->u, body->work));
-  PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-  PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rhs));
-  PetscCall(VecNorm(body->rhs, NORM_INFINITY, &rnorm));
-  if (rnorm > 0) {
-    PetscCall(MBCBodyFactor(body, 0.0, 1.0, &ksp, &A, "mass"));
-    PetscCall(MBCBodyConstrainedSolve(body, ksp, 0.0, 1.0, NULL, body->rhs, body->a));
-    PetscCall(KSPDestroy(&ksp));
-    PetscCall(MatDestroy(&A));
-  }
+  PetscCall(BodyAcceleration(body, 0.0, NULL));
   PetscCall(VecDot(body->fold, body->u, &body->wext)); /* so that total = T + U - F.u for constant F */
   body->wdamp = 0;
   PetscFunctionReturn(0);
@@ -652,6 +688,99 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
   PetscCall(SolverMonitor(s));
   PetscCall(SolverCheckDisplacementSize(s));
   PetscCall(MBCSolverOutputStep(s));
+  PetscFunctionReturn(0);
+}
+
+/* A dynamic stage after another one goes on from its state: u, the multipliers and the slip as
+   they are, the velocities those of the stage before (0 after a static stage) and the
+   accelerations the forces at the stage's start give (0 at a static equilibrium; a load the
+   stage adds at its start accelerates the bodies). The factors of the stage before's step
+   sizes go, D is rebuilt for this stage's K~ with H as it is. */
+static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
+{
+  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
+  const PetscBool after_static = (PetscBool)(s->stages[s->istage - 1].analysis == MBC_ANALYSIS_STATIC);
+
+  PetscFunctionBegin;
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, gamma));
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    if (!body) continue;
+    body->stab = 0;
+    PetscCall(MBCBodyRigidModesDestroy(body)); /* a static stage's free modes: the mass holds them now */
+    for (PetscInt l = 0; l < MBC_MAX_CUTS; l++) {
+      PetscCall(KSPDestroy(&body->kspcut[l]));
+      PetscCall(MatDestroy(&body->Acut[l]));
+    }
+    PetscCall(KSPDestroy(&body->ksp));
+    PetscCall(MatDestroy(&body->A));
+    if (after_static) PetscCall(VecZeroEntries(body->v));
+    PetscCall(BodyUseLevel(body, 0, Newmark(dt, beta, gamma)));
+  }
+  s->level = s->start_level = s->good_steps = 0;
+  if (s->iface) {
+    PetscCall(MBCInterfaceRebuildD(s->iface));
+    PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
+  }
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    MBCBody body = s->bodies[b];
+    Vec     fc   = NULL;
+    if (!body) continue;
+    if (s->iface) {
+      PetscCall(VecDuplicate(body->u, &fc));
+      PetscCall(MBCInterfaceBodyForce(s->iface, b, fc));
+    }
+    PetscCall(BodyAcceleration(body, s->time, fc));
+    PetscCall(VecDestroy(&fc));
+    if (after_static) PetscCall(VecDot(body->fold, body->u, &body->wext)); /* as at a dynamic run's start */
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The settings of stage i become the current ones. */
+static PetscErrorCode SolverStageSet(MBCSolver s, PetscInt i)
+{
+  const MBCSolverStage *st = &s->stages[i];
+
+  PetscFunctionBegin;
+  s->istage   = i;
+  s->analysis = st->analysis;
+  s->dt       = st->dt;
+  s->beta     = st->beta;
+  s->gamma    = st->gamma;
+  PetscCall(MBCSolverStageLog(s, i));
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) s->bodies[b]->stage = i;
+  PetscFunctionReturn(0);
+}
+
+/* A restart in stage i (solvercheckpoint.c): its settings and operators, the factor of the step
+   size s->level the checkpoint was at; no state and no D (they come from the checkpoint). */
+PetscErrorCode MBCSolverStageResume(MBCSolver s, PetscInt i)
+{
+  PetscFunctionBegin;
+  PetscCall(SolverStageSet(s, i));
+  s->restarting = PETSC_TRUE;
+  if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
+  else {
+    if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, s->gamma));
+    for (PetscInt b = 0; b < s->nbodies; b++)
+      if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], s->level, Newmark(s->dt / PetscPowInt(2, s->level), s->beta, s->gamma)));
+  }
+  s->restarting = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+/* Stage i > 0 begins where stage i - 1 ended (docs/scene.md, stages). */
+static PetscErrorCode SolverStageBegin(MBCSolver s, PetscInt i)
+{
+  const MBCSolverStage *st = &s->stages[i];
+
+  PetscFunctionBegin;
+  PetscCall(SolverStageSet(s, i));
+  if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g stage %" PetscInt_FMT " %s: %s, dt %g, to t = %g\n", s->step, (double)s->time, i, s->scene->nstages ? s->scene->stages[i].name : "", MBCAnalysisTypes[st->analysis], (double)st->dt, (double)st->t1));
+  if (st->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
+  else PetscCall(SolverDynamicStageBegin(s));
   PetscFunctionReturn(0);
 }
 
@@ -753,8 +882,8 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
 #define MBC_GOOD_STEPS 3
 static PetscErrorCode SolverDynamicStep(MBCSolver s)
 {
-  const PetscInt  start = s->start_level, n = PetscPowInt(2, start);
-  const PetscReal t0    = (s->step - 1) * s->dt;
+  const PetscInt  start = s->start_level, n = PetscPowInt(2, start), k = s->step - s->stages[s->istage].step0;
+  const PetscReal t0    = MBCSolverStageTime(s, k - 1);
 
   PetscFunctionBegin;
   s->deepest = start;
@@ -764,7 +893,7 @@ static PetscErrorCode SolverDynamicStep(MBCSolver s)
   }
   if (s->deepest > start) s->start_level = s->deepest, s->good_steps = 0;
   else if (start > 0 && ++s->good_steps >= MBC_GOOD_STEPS) s->start_level--, s->good_steps = 0;
-  s->time = s->step * s->dt; /* not accumulated */
+  s->time = MBCSolverStageTime(s, k); /* not accumulated */
   PetscCall(SolverContact(s));
   PetscCall(SolverMonitor(s));
   PetscCall(SolverCheckDisplacementSize(s));
@@ -789,15 +918,29 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       PetscFunctionReturn(0);
     }
     PetscCall(MBCSolverOutputOpen(s));
-    if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
-    else PetscCall(SolverDynamicBegin(s));
     s->stage = 1;
+    if (s->restart[0]) {
+      PetscCall(MBCSolverRestart(s));
+      s->step_begin = s->step;
+      if (s->step == s->nsteps) { /* the checkpoint of the last step: nothing left */
+        PetscCall(MBCSolverOutputClose(s));
+        PetscCall(MBCSolverStageLog(s, -1));
+        s->stage = 2;
+        PetscFunctionReturn(0);
+      }
+    } else {
+      PetscCall(MBCSolverStageLog(s, 0));
+      if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
+      else PetscCall(SolverDynamicBegin(s));
+    }
   }
+  if (s->step == s->stages[s->istage].step0 + s->stages[s->istage].nsteps) PetscCall(SolverStageBegin(s, s->istage + 1));
   s->step++;
   if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticStep(s));
   else PetscCall(SolverDynamicStep(s));
   if (s->step == s->nsteps) {
     PetscCall(MBCSolverOutputClose(s));
+    PetscCall(MBCSolverStageLog(s, -1));
     s->stage = 2;
   }
   PetscFunctionReturn(0);
@@ -983,7 +1126,10 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree2(s->body_first_rank, s->body_nranks));
   PetscCall(MBCSolverOutputBodiesClose(s));
-  PetscCall(PetscFree3(s->output_times, s->output_npoints, s->output_cuts));
+  PetscCall(MBCSolverCheckpointFree(s));
+  PetscCall(PetscFree4(s->output_times, s->output_npoints, s->output_cuts, s->output_stage));
+  PetscCall(MBCSolverStageLog(s, -1));
+  PetscCall(PetscFree(s->stages));
   PetscCall(PetscFree(s->points));
   PetscCall(MBCSceneDestroy(&s->scene));
   PetscCall(PetscHeaderDestroy(solver));

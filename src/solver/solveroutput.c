@@ -150,6 +150,7 @@ static PetscErrorCode SolverOutputCommit(MBCSolver s)
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(MBCH5WriteRowsGrow(file, "time", H5T_NATIVE_DOUBLE, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_times + s->noutputs - 1 : NULL));
   PetscCall(MBCH5WriteRowsGrow(file, "cuts", H5T_NATIVE_INT, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_cuts + s->noutputs - 1 : NULL));
+  PetscCall(MBCH5WriteRowsGrow(file, "stage", H5T_NATIVE_INT, s->noutputs, PetscMax(s->noutputs - 1, 0), rank || !s->noutputs ? 0 : 1, s->noutputs ? s->output_stage + s->noutputs - 1 : NULL));
   PetscCall(MBCH5WriteAttribute(file, "num_outputs", H5T_NATIVE_INT, 1, &n));
   PetscCall(MBCH5FileFlush(file));
   if (!rank) PetscCall(SolverWriteXdmf(s, &ok));
@@ -171,7 +172,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PetscTime(&s->t_start));
   s->t_last = s->t_start;
-  PetscCall(PetscMalloc3(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints, s->nsteps + 2, &s->output_cuts));
+  PetscCall(PetscMalloc4(s->nsteps + 2, &s->output_times, s->nsteps + 2, &s->output_npoints, s->nsteps + 2, &s->output_cuts, s->nsteps + 2, &s->output_stage));
   s->cuts_written = 0;
   s->noutputs = s->xmf_outputs = 0;
   s->h5_size  = 0;
@@ -198,7 +199,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       fprintf(s->points_csv, "\n");
     }
   }
-  if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC && !rank) {
+  if (scene->output_energy && scene->has_dynamic && !rank) { /* written in the dynamic stages */
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,friction_dissipation,contact_dissipation,total\n");
@@ -241,7 +242,8 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
 {
   MBCScene  scene = s->scene;
   PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress);
-  PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == s->nsteps));
+  const MBCSolverStage *st = &s->stages[s->istage];
+  PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == st->step0 + st->nsteps)); /* and each stage's end */
   int       sig;
 
   PetscFunctionBegin;
@@ -259,14 +261,16 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   if (fieldstep) {
     if (fields) PetscCall(MBCSolverOutputBodiesStep(s));
     if (!s->contact) s->output_npoints[s->noutputs] = 0;
-    s->output_cuts[s->noutputs] = (int)(s->ncuts - s->cuts_written);
+    s->output_cuts[s->noutputs]  = (int)(s->ncuts - s->cuts_written);
+    s->output_stage[s->noutputs] = (int)s->istage;
     s->cuts_written             = s->ncuts;
     s->output_times[s->noutputs++] = s->time;
     PetscCall(SolverOutputCommit(s));
   }
   PetscCall(SolverFlushCsv(s));
   PetscCall(PetscLogEventEnd(MBC_Output, 0, 0, 0, 0));
-  PetscCheck(!sig, s->comm, PETSC_ERR_SIG, "Stopped by signal %d (%s) after step %" PetscInt_FMT " of %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " output steps (the last at t = %g) are in %s.h5, indexed by %s.xmf, and the CSV histories are complete to t = %g", sig, sig == SIGINT ? "SIGINT" : (sig == SIGTERM ? "SIGTERM" : "?"), s->step, s->nsteps, (double)s->time, s->noutputs, s->noutputs ? (double)s->output_times[s->noutputs - 1] : 0.0, s->output, s->output, (double)s->time);
+  if (s->step > 0 && (sig || (s->checkpoint_every && s->step % s->checkpoint_every == 0))) PetscCall(MBCSolverCheckpointWrite(s));
+  PetscCheck(!sig, s->comm, PETSC_ERR_SIG, "Stopped by signal %d (%s) after step %" PetscInt_FMT " of %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " output steps (the last at t = %g) are in %s.h5, indexed by %s.xmf, and the CSV histories are complete to t = %g; -mbc_restart %s_checkpoint.h5 goes on from there", sig, sig == SIGINT ? "SIGINT" : (sig == SIGTERM ? "SIGTERM" : "?"), s->step, s->nsteps, (double)s->time, s->noutputs, s->noutputs ? (double)s->output_times[s->noutputs - 1] : 0.0, s->output, s->output, (double)s->time, s->output);
   PetscFunctionReturn(0);
 }
 
@@ -354,6 +358,8 @@ PetscErrorCode MBCSolverOutputClose(MBCSolver s)
 PetscErrorCode MBCSolverOutputAbort(MBCSolver s)
 {
   if (!s) return 0;
+  if (s->log_pushed) PetscLogStagePop(); /* -log_view of the stages so far */
+  s->log_pushed = PETSC_FALSE;
   if (s->points_csv) fclose(s->points_csv);
   if (s->energy_csv) fclose(s->energy_csv);
   if (s->contact_csv) fclose(s->contact_csv);

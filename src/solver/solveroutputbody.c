@@ -144,19 +144,35 @@ static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscIn
   PetscFunctionReturn(0);
 }
 
-/* The maps of a body this rank is in, and its vertices and cells in this rank's rows. */
-static PetscErrorCode BodyOutputSetUp(MBCBody body, MBCBodyOutput *o, PetscReal **x, int **cells)
+/* The vertex map of a body this rank is in (o->nv set): vstart, nvrows, nvown, vrow and vsf;
+   the owned vertices' points and scene indices if asked. Also the checkpoint's
+   (solvercheckpoint.c), which stores the state in the scene's order. */
+PetscErrorCode MBCBodyVertexMapCreate(MBCBody body, MBCBodyOutput *o, PetscInt **vpoint, PetscInt **vscene)
 {
-  PetscInt vStart, vEnd, cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
+  PetscInt vStart, vEnd, *vp, *vs;
 
   PetscFunctionBegin;
   PetscCall(SplitRows(body->comm, o->nv, &o->vstart, &o->nvrows));
-  PetscCall(SplitRows(body->comm, o->nc, &o->cstart, &o->ncrows));
   PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(OwnedPoints(body->dm, vStart, vEnd, body->vnum, &o->nvown, &vp, &o->vrow, &vs));
+  PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vs, 3, body->name, "vertex", &o->vsf));
+  if (vpoint) *vpoint = vp;
+  else PetscCall(PetscFree(vp));
+  if (vscene) *vscene = vs;
+  else PetscCall(PetscFree(vs));
+  PetscFunctionReturn(0);
+}
+
+/* The maps of a body this rank is in, and its vertices and cells in this rank's rows. */
+static PetscErrorCode BodyOutputSetUp(MBCBody body, MBCBodyOutput *o, PetscReal **x, int **cells)
+{
+  PetscInt cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
+
+  PetscFunctionBegin;
+  PetscCall(MBCBodyVertexMapCreate(body, o, &vpoint, &vscene));
+  PetscCall(SplitRows(body->comm, o->nc, &o->cstart, &o->ncrows));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-  PetscCall(OwnedPoints(body->dm, vStart, vEnd, body->vnum, &o->nvown, &vpoint, &o->vrow, &vscene));
   PetscCall(OwnedPoints(body->dmStress, cStart, cEnd, body->cnum, &o->ncown, &cpoint, &o->crow, &cscene));
-  PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vscene, 3, body->name, "vertex", &o->vsf));
   PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, 6, body->name, "cell", &o->csf));
   PetscCall(PetscMalloc2(6 * PetscMax(o->nvown, o->ncown), &o->leaf, 3 * o->nvrows + 6 * o->ncrows, &o->root));
   PetscCall(PetscMalloc1(3 * o->nvrows, x));

@@ -46,6 +46,7 @@ struct _n_MBCBody {
   PetscReal stab;         /* static: A = K + stab diag(K), a spring to the last iterate */
   PetscReal wext, wdamp;  /* external work and damping dissipation so far (dynamic) */
 
+  PetscInt  stage;        /* the analysis stage under way: loads of later stages do not act yet */
   PetscInt  nloads;       /* scene loads acting on this body */
   PetscInt *load_index;   /* index of each into the scene's loads */
   Vec      *load;         /* assembled load vector of each, for a unit time factor */

@@ -68,7 +68,17 @@ typedef struct {
   PetscInt    surface_id, time_function;
   char       *bodies; /* body names joined by ",", "" for all */
   MBCTimeKind time;
+  PetscInt    stage;  /* acts from this analysis stage on (0: from the start) */
 } MBCLoadDesc;
+
+/* One analysis stage (docs/scene.md, stages): from start_time, where the stage before ends, to
+   final_time; it starts from the state the stage before left. */
+typedef struct {
+  char            name[MBC_NAME_LEN];
+  MBCAnalysisType analysis;
+  MBCMassType     mass;
+  PetscReal       start_time, dt, final_time, newmark_beta, newmark_gamma;
+} MBCStageDesc;
 
 typedef struct {
   char      name[MBC_NAME_LEN], body[MBC_NAME_LEN];
@@ -88,6 +98,9 @@ struct _n_MBCScene {
   PetscReal       dt, final_time, newmark_beta, newmark_gamma;
 
   PetscInt          nbodies, nsurfaces, ncouples, ntables, ndirichlet, nloads, npoints;
+  PetscInt          nstages;   /* 0: one analysis, the settings above */
+  MBCStageDesc     *stages;    /* the first one's settings are also those above */
+  PetscBool         has_dynamic; /* some stage (or the analysis) is dynamic: the bodies need M */
   MBCBodyDesc      *bodies;
   MBCSurfaceDesc   *surfaces;
   MBCCoupleDesc    *couples;
@@ -102,4 +115,5 @@ struct _n_MBCScene {
 
 PETSC_EXTERN PetscErrorCode MBCTimeFactor(MBCScene, MBCTimeKind, PetscInt, PetscReal, PetscReal *);
 PETSC_INTERN PetscErrorCode MBCSceneCheckMeshes(MBCScene, hid_t);
+PETSC_INTERN PetscErrorCode MBCSceneCheckStages(MBCScene);
 PETSC_INTERN PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *, const char[], PetscBool *);

@@ -25,6 +25,15 @@ typedef struct {
 
 #define MBC_NENERGY 6 /* kinetic, strain, external work, damping, friction, normal contact */
 
+/* One analysis stage of the run (the scene's stages, or the one analysis): its steps are
+   step0 + 1 .. step0 + nsteps of the run, from t0 to t1 (solverstage.c). */
+typedef struct {
+  MBCAnalysisType analysis;
+  PetscReal       t0, t1, dt, beta, gamma;
+  PetscInt        step0, nsteps;
+  PetscLogStage   log; /* -log_view */
+} MBCSolverStage;
+
 typedef struct _MBCSolverOps *MBCSolverOps;
 struct _MBCSolverOps {
   PetscErrorCode (*view)(MBCSolver, PetscViewer);
@@ -40,11 +49,14 @@ struct _n_MBCSolver {
   void          *monitorctx;
   PetscErrorCode (*monitordestroy)(void **);
 
-  MBCAnalysisType analysis;
+  MBCAnalysisType analysis; /* of the current stage, as dt, beta, gamma */
   MBCMassType     mass;
   PetscReal       dt, final_time, beta, gamma;
-  PetscInt        nsteps, step;
+  PetscInt        nsteps, step; /* of the whole run, over its stages */
   PetscReal       time;
+  PetscInt        nstages, istage; /* the analysis stages, the current one */
+  MBCSolverStage *stages;
+  PetscBool       log_pushed;  /* stages[istage].log is pushed */
 
   PetscInt  nbodies;
   MBCBody  *bodies;       /* NULL where this rank is not in the body */
@@ -57,6 +69,7 @@ struct _n_MBCSolver {
   PetscReal *output_times;
   PetscInt *output_npoints; /* contact points written at each output (XDMF) */
   int      *output_cuts;    /* step halvings since the output before (/cuts in the result file) */
+  int      *output_stage;   /* the analysis stage of each output (/stage) */
   PetscInt  cuts_written;   /* ncuts at the last output */
   char      h5file[PETSC_MAX_PATH_LEN]; /* <output>.h5: every body and the contact points, written collectively */
   int64_t   h5;           /* its hid_t on every rank, -1 when not open */
@@ -101,9 +114,18 @@ struct _n_MBCSolver {
   /* long runs (solveroutput.c, solvermonitor.c): wall-clock times of the stepping's start and
      of the last monitored step */
   PetscLogDouble t_start, t_last;
+  PetscInt       step_its; /* contact solve iterations of the step so far (all its solves) */
+  PetscInt       step_begin; /* the step the stepping started from (a restart's) */
   PetscInt64     h5_size; /* bytes of the result file at its last commit */
   PetscInt       xmf_outputs; /* outputs in the XDMF index on disk */
   FILE          *reactions_csv; /* solveroutputreaction.c */
+
+  /* checkpoint and restart (solvercheckpoint.c) */
+  PetscInt       checkpoint_every; /* -mbc_checkpoint_every: steps (0: at a signal only) */
+  char           restart[PETSC_MAX_PATH_LEN]; /* -mbc_restart: the checkpoint to go on from */
+  PetscBool      restarting;  /* set-up for a restart: the state comes from the file */
+  MBCBodyOutput *ckpt;        /* per body: its vertex map (scene order rows) */
+  Vec           *ubuild, *ugsbuild; /* per body: u when H was built, and at the global search it used (the search replayed at a restart) */
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
@@ -123,3 +145,12 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[MBC_NENERGY]);
 PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
+PETSC_INTERN PetscErrorCode MBCSolverStagesSetUp(MBCSolver, PetscBool);
+PETSC_INTERN PetscErrorCode MBCBodyVertexMapCreate(MBCBody, MBCBodyOutput *, PetscInt **, PetscInt **);
+PETSC_INTERN PetscErrorCode MBCSolverCheckpointWrite(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverRestart(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverCheckpointTrack(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverCheckpointFree(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverStageResume(MBCSolver, PetscInt);
+PETSC_INTERN PetscErrorCode MBCSolverStageLog(MBCSolver, PetscInt);
+PETSC_INTERN PetscReal      MBCSolverStageTime(MBCSolver, PetscInt);
