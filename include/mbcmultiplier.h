@@ -33,6 +33,7 @@ PETSC_EXTERN PetscErrorCode MBCMultiplierCreate(MPI_Comm, MBCMultiplier *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierSetType(MBCMultiplier, MBCMultiplierType);
 PETSC_EXTERN PetscErrorCode MBCMultiplierGetType(MBCMultiplier, MBCMultiplierType *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierSetOptionsPrefix(MBCMultiplier, const char[]);
+PETSC_EXTERN PetscErrorCode MBCMultiplierAppendOptionsPrefix(MBCMultiplier, const char[]);
 PETSC_EXTERN PetscErrorCode MBCMultiplierSetFromOptions(MBCMultiplier);
 PETSC_EXTERN PetscErrorCode MBCMultiplierSetProblem(MBCMultiplier, MBCFrictionProblem *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierSetTolerances(MBCMultiplier, PetscReal, PetscInt);

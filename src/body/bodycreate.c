@@ -168,13 +168,15 @@ static PetscErrorCode BodyChooseElement(MBCBody body, const char prefix[])
   SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has element '%s', not hex8 or hex8i", body->scene->filename, body->name, value);
 }
 
-PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, MBCBody *newbody)
+/* Body index of the scene on comm; its options are -<prefix>body_<name>_* (prefix: the solver's, or NULL). */
+PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, const char solverprefix[], MBCBody *newbody)
 {
   MBCBody     body;
   PetscDS     ds;
   PetscFE     feStress;
   PetscScalar constants[MBC_NUM_CONSTANTS] = {0};
   char        prefix[MBC_NAME_LEN + 8];
+  const char *bodyprefix;
 
   PetscFunctionBegin;
   PetscCall(PetscHeaderCreate(body, MBC_BODY_CLASSID, "MBCBody", "mbcontact body", "MBCBody", comm, MBCBodyDestroy, MBCBodyView));
@@ -195,7 +197,10 @@ PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, MBCB
   /* P1/Q1 displacement; quadrature of order 2 integrates the mass matrix of affine cells exactly
      and gives hexahedra the full 2x2x2 Gauss rule (no hourglass modes). */
   PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
-  PetscCall(BodyChooseElement(body, prefix));
+  PetscCall(PetscObjectSetOptionsPrefix((PetscObject)body, solverprefix));
+  PetscCall(PetscObjectAppendOptionsPrefix((PetscObject)body, prefix));
+  PetscCall(PetscObjectGetOptionsPrefix((PetscObject)body, &bodyprefix));
+  PetscCall(BodyChooseElement(body, bodyprefix));
   PetscCall(PetscFECreateLagrange(comm, 3, 3, body->simplex, 1, 2, &body->fe));
   PetscCall(PetscObjectSetName((PetscObject)body->fe, "displacement"));
   PetscCall(DMSetField(body->dm, 0, NULL, (PetscObject)body->fe));

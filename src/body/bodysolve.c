@@ -5,18 +5,20 @@
 /* A = aK K + aM M with the constrained rows and columns zeroed and 1 on the diagonal
    (MatZeroRowsColumns: eliminating DOFs or a big diagonal number would make the contact
    flexibility matrix singular or ill-conditioned), factored once by a KSP with the options
-   prefix body_<name>_ (MBCSolverSetUp copies the -body_ options of all bodies to it).
-   The mass matrix alone (aK = 0) is solved by CG with the prefix body_<name>_mass_. */
+   body's prefix, [<solver prefix>]body_<name>_ (MBCSolverSetUp copies the -body_ options of all
+   bodies to it). The mass matrix alone (aK = 0) is solved by CG with that prefix and mass_. */
 PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newksp, Mat *newA, const char purpose[])
 {
   Mat            A;
   KSP            ksp;
   PC             pc;
-  char           prefix[MBC_NAME_LEN + 16];
+  char           prefix[256];
+  const char    *bodyprefix;
   PCFailedReason reason;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_BodyFactor, 0, 0, 0, 0));
+  PetscCall(PetscObjectGetOptionsPrefix((PetscObject)body, &bodyprefix));
   if (aK != 0) {
     PetscCall(MatDuplicate(body->K, MAT_COPY_VALUES, &A));
     if (aK != 1) PetscCall(MatScale(A, aK));
@@ -45,13 +47,13 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
     PetscCall(PCSetType(pc, PCCHOLESKY));
     /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
     PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
+    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "%s", bodyprefix));
   } else {
     /* the mass matrix alone (initial acceleration): well conditioned, CG needs no factorization */
     PetscCall(KSPSetType(ksp, KSPCG));
     PetscCall(PCSetType(pc, PCJACOBI));
     PetscCall(KSPSetTolerances(ksp, 1e-14, 0.0, PETSC_DEFAULT, 1000));
-    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_mass_", body->name));
+    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "%smass_", bodyprefix));
   }
   PetscCall(KSPSetOptionsPrefix(ksp, prefix));
   PetscCall(KSPSetFromOptions(ksp));

@@ -30,10 +30,11 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode MBCContactSetFromOptions(MBCContact c)
+/* The search's options, -<prefix>mbc_contact_* (prefix: the solver's, or NULL). */
+PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
 {
   PetscFunctionBegin;
-  PetscOptionsBegin(c->comm, NULL, "mbcontact contact search options", "MBCContact");
+  PetscOptionsBegin(c->comm, prefix, "mbcontact contact search options", "MBCContact");
   PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));

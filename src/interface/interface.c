@@ -26,8 +26,8 @@ PetscLogEvent MBC_FlexibilityAssemble;
 
 /* The interface between the bodies of a scene with couples; it borrows the scene, the search
    (contact), the bodies and their ranks from the solver, and makes the multiplier solve from the
-   options (prefix mbc_). H and D come with MBCInterfaceSetUp. */
-PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact contact, PetscInt nbodies, MBCBody bodies[], const PetscMPIInt body_first_rank[], const PetscMPIInt body_nranks[], MBCInterface *iface)
+   options (prefix <prefix>mbc_, prefix the solver's or NULL). H and D come with MBCInterfaceSetUp. */
+PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact contact, PetscInt nbodies, MBCBody bodies[], const PetscMPIInt body_first_rank[], const PetscMPIInt body_nranks[], const char prefix[], MBCInterface *iface)
 {
   MBCInterface ifc;
 
@@ -45,7 +45,8 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   ifc->dblock          = 256;
   ifc->fclib_step      = -1;
   PetscCall(MBCMultiplierCreate(comm, &ifc->mult));
-  PetscCall(MBCMultiplierSetOptionsPrefix(ifc->mult, "mbc_"));
+  PetscCall(MBCMultiplierSetOptionsPrefix(ifc->mult, prefix));
+  PetscCall(MBCMultiplierAppendOptionsPrefix(ifc->mult, "mbc_"));
   PetscCall(MBCMultiplierSetFromOptions(ifc->mult));
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));

@@ -119,34 +119,38 @@ static PetscBool IsOptionValue(const char *tok)
   return (PetscBool)(tok && (tok[0] != '-' || isdigit((unsigned char)tok[1]) || tok[1] == '.'));
 }
 
-/* Does option name "-body_..." already belong to one body ("-body_<name>_...")? */
-static PetscBool IsBodyOption(MBCScene scene, const char *name)
+/* Does option name rest (what follows "-<prefix>body_") already belong to one body ("<name>_...")? */
+static PetscBool IsBodyOption(MBCScene scene, const char *rest)
 {
   for (PetscInt c = 0; c < scene->nbodies; c++) {
     size_t len = strlen(scene->bodies[c].name);
-    if (!strncmp(name + 6, scene->bodies[c].name, len) && name[6 + len] == '_') return PETSC_TRUE;
+    if (!strncmp(rest, scene->bodies[c].name, len) && rest[len] == '_') return PETSC_TRUE;
   }
   return PETSC_FALSE;
 }
 
 static PetscErrorCode SolverPropagateBodyOptions(MBCSolver s)
 {
-  char  *all, *save = NULL, **tok;
-  size_t len;
-  int    n = 0;
+  char       *all, *save = NULL, **tok, key[256];
+  const char *prefix;
+  size_t      len, klen;
+  int         n = 0;
 
   PetscFunctionBegin;
+  PetscCall(PetscObjectGetOptionsPrefix((PetscObject)s, &prefix));
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-%sbody_", prefix ? prefix : ""));
+  PetscCall(PetscStrlen(key, &klen));
   PetscCall(PetscOptionsGetAll(NULL, &all));
   PetscCall(PetscStrlen(all, &len));
   PetscCall(PetscMalloc1(len / 2 + 2, &tok));
   for (char *t = strtok_r(all, " ", &save); t; t = strtok_r(NULL, " ", &save)) tok[n++] = t;
   for (int i = 0; i < n; i++) {
     const char *value = (i + 1 < n && IsOptionValue(tok[i + 1])) ? tok[i + 1] : NULL;
-    if (strncmp(tok[i], "-body_", 6) || IsOptionValue(tok[i]) || IsBodyOption(s->scene, tok[i])) continue;
+    if (strncmp(tok[i], key, klen) || IsOptionValue(tok[i]) || IsBodyOption(s->scene, tok[i] + klen)) continue;
     for (PetscInt b = 0; b < s->scene->nbodies; b++) {
-      char      target[2 * MBC_NAME_LEN];
+      char      target[2 * MBC_NAME_LEN + 256];
       PetscBool has;
-      PetscCall(PetscSNPrintf(target, sizeof(target), "-body_%s_%s", s->scene->bodies[b].name, tok[i] + 6));
+      PetscCall(PetscSNPrintf(target, sizeof(target), "%s%s_%s", key, s->scene->bodies[b].name, tok[i] + klen));
       PetscCall(PetscOptionsHasName(NULL, NULL, target, &has));
       if (!has) PetscCall(PetscOptionsSetValue(NULL, target, value));
     }
@@ -175,15 +179,15 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     MPI_Comm  comm;
 
     PetscCallMPI(MPI_Comm_split(s->comm, mine ? 0 : MPI_UNDEFINED, rank, &comm));
-    if (mine) PetscCall(MBCBodyCreate(comm, scene, b, &s->bodies[b]));
+    if (mine) PetscCall(MBCBodyCreate(comm, scene, b, ((PetscObject)s)->prefix, &s->bodies[b]));
   }
   if (!s->search_only)
     for (PetscInt b = 0; b < s->nbodies; b++)
       if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
-    PetscCall(MBCContactSetFromOptions(s->contact));
-    PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, &s->iface));
+    PetscCall(MBCContactSetFromOptions(s->contact, ((PetscObject)s)->prefix));
+    PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
     PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }

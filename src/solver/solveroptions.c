@@ -11,10 +11,11 @@ PetscErrorCode MBCSolverHelp(MBCSolver s)
   PetscFunctionBegin;
   if (s->scene->ncouples) PetscFunctionReturn(0); /* MBCSolverSetUp reads them */
   PetscCall(MBCContactCreate(s->comm, s->scene, &c));
-  PetscCall(MBCContactSetFromOptions(c));
+  PetscCall(MBCContactSetFromOptions(c, ((PetscObject)s)->prefix));
   PetscCall(MBCContactDestroy(&c));
   PetscCall(MBCMultiplierCreate(s->comm, &m)); /* the Newton type lists the pgs type's options too */
-  PetscCall(MBCMultiplierSetOptionsPrefix(m, "mbc_"));
+  PetscCall(MBCMultiplierSetOptionsPrefix(m, ((PetscObject)s)->prefix));
+  PetscCall(MBCMultiplierAppendOptionsPrefix(m, "mbc_"));
   PetscCall(MBCMultiplierSetFromOptions(m));
   PetscCall(MBCMultiplierDestroy(&m));
   PetscFunctionReturn(0);

@@ -147,3 +147,25 @@ def test_hertz_from_python(tmp_path, nproc):
     assert np.abs(a["pressure"] - b["pressure"]).max() <= 1e-10 * np.abs(a["pressure"]).max()
     assert abs(float(out["p_max"]) / b["pressure"].max() - 1) < 1e-12
     assert int(out["closed"]) == int((b["state"] > 0).sum()) > 0
+
+
+def test_options_prefixes_reach_every_object(tmp_path):
+    """Two solvers in one script with prefixes a_ and b_ (docs/python.md): each one's multiplier
+    solve (-a_mbc_multiplier_type pgs, -b_mbc_multiplier_type newton: the monitor names the type),
+    contact search (-a_mbc_contact_cell_factor), bodies' KSPs (prefix a_body_<name>_) and the
+    -b_body_* options copied to b's bodies only. Before, everything but the solver's own options
+    read unprefixed names, so two solvers could not differ in them."""
+    h5 = blocks.build(tmp_path, dt=0.01, final_time=1.0)
+    r = run_python([os.path.join(ROOT, "tests", "python", "drive_prefixes.py"), str(h5), str(tmp_path)],
+                   check=False)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    a = r.stdout[r.stdout.index("begin a_"):r.stdout.index("end a_")]
+    b = r.stdout[r.stdout.index("begin b_"):r.stdout.index("end b_")]
+    assert "contact: pgs CONVERGED" in a and "newton" not in a, a
+    assert "contact: newton CONVERGED" in b and "pgs CONVERGED" not in b, b
+    assert "couple" in a.lower() and "couple" not in b.lower()  # -a_mbc_contact_view
+    for p in ("a_", "b_"):
+        for name in ("block1", "block2"):
+            assert f"{p} {name} ksp_prefix {p}body_{name}_" in lines, r.stdout
+    assert "b_body_block1_ksp_type preonly" in lines and "a_body_block1_ksp_type " in lines, r.stdout

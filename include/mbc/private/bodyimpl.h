@@ -68,7 +68,7 @@ struct _n_MBCBody {
   Vec ustart;             /* static: u where a load step that may be cut began */
 };
 
-PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, MBCBody *);
+PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, const char[], MBCBody *);
 PETSC_INTERN PetscErrorCode MBCBodySetUp(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyDestroy(MBCBody *);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleLoads(MBCBody);

@@ -73,7 +73,7 @@ struct _n_MBCContact {
 PETSC_EXTERN PetscLogEvent MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch;
 
 PETSC_INTERN PetscErrorCode MBCContactCreate(MPI_Comm, MBCScene, MBCContact *);
-PETSC_INTERN PetscErrorCode MBCContactSetFromOptions(MBCContact);
+PETSC_INTERN PetscErrorCode MBCContactSetFromOptions(MBCContact, const char[]);
 PETSC_INTERN PetscErrorCode MBCContactUpdate(MBCContact, PetscInt, MBCBody[], PetscBool, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCContactView(MBCContact, PetscViewer);
 PETSC_INTERN PetscErrorCode MBCContactDump(MBCContact);

@@ -96,6 +96,13 @@ PetscErrorCode MBCMultiplierSetOptionsPrefix(MBCMultiplier m, const char prefix[
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode MBCMultiplierAppendOptionsPrefix(MBCMultiplier m, const char prefix[])
+{
+  PetscFunctionBegin;
+  PetscCall(PetscObjectAppendOptionsPrefix((PetscObject)m, prefix));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCMultiplierSetFromOptions(MBCMultiplier m)
 {
   char      type[256];

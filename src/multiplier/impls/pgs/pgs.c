@@ -115,7 +115,7 @@ static PetscErrorCode ActiveSetRow(MBC_PGS *pgs, PetscInt row, PetscInt grow, co
    Each W slot j of a contact in contact maps to a column col_j with a coefficient e_j: (k, 1)
    for the k-th unknown of a sticking contact, (k, 1), (k, mu d1), (k, mu d2) for the slots of a
    slipping one, (-1, 0) otherwise; the other ranks' maps arrive with the scatter of r. */
-static PetscErrorCode ActiveSetStep(MBC_PGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
+static PetscErrorCode ActiveSetStep(MBCMultiplier m, MBC_PGS *pgs, MBCFrictionProblem *fp, Vec r, Vec u, PetscBool closed, PetscReal *error)
 {
   MPI_Comm           comm = PetscObjectComm((PetscObject)fp->W);
   PetscInt          *S, *first, *contact, ns = 0, nin = 0, n = 0, nstart = 0, N, tot[2];
@@ -270,9 +270,12 @@ static PetscErrorCode ActiveSetStep(MBC_PGS *pgs, MBCFrictionProblem *fp, Vec r,
     PetscCall(VecDestroy(&colv));
     PetscCall(VecDestroy(&coefv));
     { /* a new KSP each time: the system's size changes with the active set */
-      PetscBool mumps;
+      PetscBool   mumps;
+      const char *mprefix;
       PetscCall(KSPCreate(comm, &ksp));
-      PetscCall(KSPSetOptionsPrefix(ksp, "mbc_pgs_"));
+      PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &mprefix));
+      PetscCall(KSPSetOptionsPrefix(ksp, mprefix));
+      PetscCall(KSPAppendOptionsPrefix(ksp, "pgs_"));
       PetscCall(KSPSetType(ksp, KSPPREONLY));
       PetscCall(KSPGetPC(ksp, &pc));
       PetscCall(PCSetType(pc, PCLU));
@@ -430,7 +433,7 @@ static PetscErrorCode MBCMultiplierSolve_PGS(MBCMultiplier m, Vec r, Vec u)
       PetscCall(VecDuplicate(r, &rbest));
       PetscCall(VecCopy(r, rbest));
       for (PetscInt k = 0, stale = 0; k < 10 && stale < 3 && ebest >= m->rtol; k++) {
-        PetscCall(ActiveSetStep(pgs, fp, r, u, (PetscBool)(k == 0 && m->its > 0), &m->merit));
+        PetscCall(ActiveSetStep(m, pgs, fp, r, u, (PetscBool)(k == 0 && m->its > 0), &m->merit));
         if (m->merit < 0.5 * ebest) {
           ebest = m->merit, stale = 0;
           PetscCall(VecCopy(r, rbest));
