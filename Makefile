@@ -37,7 +37,7 @@ run: build
 
 test: build vtk-reader
 	cd $(BUILD) && ctest --output-on-failure
-	$(PYTHON) -m pytest -q tests/python
+	$(PYTHON) -m pytest -q --durations=20 tests/python
 
 # VTK's vtkXdmfReader (what ParaView reads .xmf with) for test_output.py: Debian 12's python3-vtk9
 # lacks it, PyPI's vtk has it; a venv in the build directory, made once.

@@ -93,3 +93,23 @@ def test_cmake_package_driver(prefix, column, tmp_path):
         r = subprocess.run(cmd, capture_output=True, text=True)
         assert r.returncode == 0, r.stdout + r.stderr
     check_driver(tmp_path / "b" / "driver", column)
+
+
+def test_pip_install_into_a_venv(tmp_path):
+    """pip install . (no build isolation: the build needs only what make installs) into a venv
+    made with --system-site-packages (petsc4py, numpy, h5py from Debian): from another folder,
+    without PYTHONPATH, `import mbcontact` is the venv's copy with the compiled binding, and the
+    mbcontact-prep console script runs."""
+    venv = tmp_path / "venv"
+    subprocess.run(["/usr/bin/python3", "-m", "venv", "--system-site-packages", str(venv)], check=True, timeout=120)
+    r = subprocess.run([str(venv / "bin" / "pip"), "install", "-q", "--no-build-isolation", ROOT],
+                       capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    e = {k: v for k, v in env().items() if k != "PYTHONPATH"}
+    r = subprocess.run([str(venv / "bin" / "python"), "-c", "import mbcontact, mbcontact._core; print(mbcontact.__file__, mbcontact.__version__)"],
+                       capture_output=True, text=True, env=e, cwd=tmp_path, timeout=120)
+    assert r.returncode == 0, r.stderr
+    path, version = r.stdout.split()
+    assert path.startswith(str(venv)) and version == cmake_version(), r.stdout
+    r = subprocess.run([str(venv / "bin" / "mbcontact-prep"), "--help"], capture_output=True, text=True, env=e, timeout=120)
+    assert r.returncode == 0 and "usage" in r.stdout.lower(), r.stdout + r.stderr
