@@ -8,7 +8,7 @@ in y, upper flat face moved by -DELTA in y; frictionless face-to-face contact (s
 master upper_arc, as mbcontact's couple) with a linear pressure-overclosure of slope `penalty`
 [MPa/mm]; one *STATIC step, NLGEOM off (ccx's default).
 
-  meshes/hertz/ccx.py OUTDIR [--hc 0.04] [--element C3D8I] [--penalty 1e8]
+  meshes/hertz/ccx.py OUTDIR [--hc 0.04] [--element C3D8I] [--penalty 3e8]
 """
 import argparse
 import os
@@ -43,7 +43,7 @@ def _lines(ids, per=16):
     return "".join(", ".join(str(i) for i in ids[k:k + per]) + ",\n" for k in range(0, len(ids), per))
 
 
-def write_inp(path, hc, element="C3D8I", penalty=1e8, delta=build.DELTA, increment=1.0):
+def write_inp(path, hc, element="C3D8I", penalty=3e8, delta=build.DELTA, increment=1.0):
     """Writes the model; returns (number of nodes, slave node ids, node coordinates (1-based by id))."""
     p2, quads = build.quarter_disc(hc, 0.75)
     parts = [build.extrude("upper", p2, quads, build.LENGTH), build.extrude("lower", p2, quads, build.LENGTH, flip_y=True)]
@@ -111,7 +111,7 @@ def read_dat_totals(path, nset):
     return np.array([float(v) for v in m[-1]])
 
 
-def run(work, hc, element="C3D8I", penalty=1e8, threads=1, delta=build.DELTA, increment=1.0):
+def run(work, hc, element="C3D8I", penalty=3e8, threads=1, delta=build.DELTA, increment=1.0):
     """Writes and solves the model in work; returns dict(hc, dofs, wall, cpu, rss, res, err) as
     bench/hertz_convergence.py's rows (dofs: 3 per node, constrained ones included)."""
     os.makedirs(work, exist_ok=True)
@@ -148,7 +148,7 @@ if __name__ == "__main__":
     ap.add_argument("outdir")
     ap.add_argument("--hc", type=float, default=0.04)
     ap.add_argument("--element", default="C3D8I")
-    ap.add_argument("--penalty", type=float, default=1e8)
+    ap.add_argument("--penalty", type=float, default=3e8)
     ap.add_argument("--increment", type=float, default=1.0, help="initial (and largest) fraction of the approach per increment; ccx cuts it back when an increment does not converge")
     a = ap.parse_args()
     r = run(a.outdir, a.hc, a.element, a.penalty, increment=a.increment)
