@@ -56,6 +56,16 @@ cdef object _vec(PetscVec v):
     return ob
 
 
+cdef object _dm(PetscDM d):
+    """The solver's own DM as a petsc4py DM (a new reference), or None."""
+    if d == NULL:
+        return None
+    cdef DM ob = DM()
+    ob.dm = d
+    CHKERR(PetscObjectReference(<PetscObject>d))
+    return ob
+
+
 cdef object _comm(comm):
     return PETSc.COMM_WORLD if comm is None else comm
 
@@ -176,22 +186,12 @@ cdef class Body:
     def getDM(self):
         cdef PetscDM d = NULL
         CHKERR(MBCBodyGetDM(self.body, &d))
-        if d == NULL:
-            return None
-        cdef DM ob = DM()
-        ob.dm = d
-        CHKERR(PetscObjectReference(<PetscObject>d))
-        return ob
+        return _dm(d)
 
     def getStressDM(self):
         cdef PetscDM d = NULL
         CHKERR(MBCBodyGetStressDM(self.body, &d))
-        if d == NULL:
-            return None
-        cdef DM ob = DM()
-        ob.dm = d
-        CHKERR(PetscObjectReference(<PetscObject>d))
-        return ob
+        return _dm(d)
 
     def getKSP(self):
         """The KSP of the factored operator (after the first step; None before)."""
