@@ -19,6 +19,7 @@ import copy
 import math
 import os
 import random
+import re
 import shutil
 import subprocess
 import sys
@@ -388,8 +389,9 @@ def one(kind, seed, i, bases, workdir, timeout, keep=None):
                 desc = f"(mutation refused: {type(e).__name__})"
             rc, out, t = run([SOLVER, "-fclib", path], timeout)
             garbage = ""
-            if rc in (0, 2) and ("nan" in out.lower() or " inf" in out.lower()):
-                garbage = "FCLIB result: " + out.strip().splitlines()[-1][:120]
+            merit = re.search(r"FCLIB merit (\S+)", out)
+            if rc in (0, 2) and not (merit and math.isfinite(float(merit.group(1)))):  # the result's merit, not the
+                garbage = "FCLIB result: " + out.strip().splitlines()[-1][:120]       # word NANORINF of a reason
             cls = classify(rc, out, garbage)
         if keep:
             os.makedirs(keep, exist_ok=True)

@@ -613,7 +613,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       m->merit = before;
     }
   }
-  if (m->reason < 0 && best < m->merit) { /* not converged: return the best iterate */
+  if (m->reason < 0 && (best < m->merit || PetscIsInfOrNanReal(m->merit))) { /* not converged: return the best iterate (never a NaN one: NaN < x is false) */
     PetscCall(VecCopy(rbest, r));
     if (abest) PetscCall(VecCopy(abest, fp->alpha));
     PetscCall(MBCFrictionVelocity(fp, r, u));
