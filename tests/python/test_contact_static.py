@@ -253,12 +253,10 @@ def test_contact_patch_matrix(tmp_path, master_cell, slave_cell, mesh, master_on
         assert abs(c["normal_force"][step] / p - 1) < 1e-6 and abs(abs(c["fz"][step]) / p - 1) < 1e-6  # fz: on the master body
 
 
-def test_ramped_shear_slip_onset(tmp_path):
-    """A block [0,1]^2 x [1,1.5] held only by contact on a fixed base, pressed by p = 1 MPa and
-    sheared on its top by a traction ramped to 0.7 p in static load steps of 0.05 (mu = 0.6): every
-    step with tau <= mu p is in equilibrium, the friction resultant carrying tau A to 1e-8 and the
-    normal one p A; the first step above mu p (t = 0.9: tau = 0.63 p) has no static equilibrium and
-    is refused at once, within one step of tau = mu p (t* = 0.857), with T / mu N = 1.05."""
+def sheared_block(tmp_path, tau, dt):
+    """A block [0,1]^2 x [1,1.5] held only by contact on a fixed base (mu 0.6), pressed by
+    p = 1 MPa and sheared on its top by tau p ramped over t in [0, 1] in static load steps of dt;
+    returns the scene file."""
     meshgen.boxes(str(tmp_path / "shear.msh"),
                   [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(2, 2, 2), name="base"),
                    dict(lo=(0, 0, 1), hi=(1, 1, 1.5), n=(3, 3, 1), name="block")])
@@ -269,10 +267,20 @@ def test_ramped_shear_slip_onset(tmp_path):
         "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.6}],
         "dirichlet": [{"surface": "base_zmin", "components": "all"}],
         "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p},
-                  {"kind": "traction", "surface": "block_zmax", "vector": [0.7 * p, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
-        "analysis": {"type": "static", "dt": 0.05, "final_time": 1.0},
+                  {"kind": "traction", "surface": "block_zmax", "vector": [tau * p, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
+        "analysis": {"type": "static", "dt": dt, "final_time": 1.0},
     }
-    h5 = prep(tmp_path, scene, name="shear")
+    return prep(tmp_path, scene, name="shear")
+
+
+def test_ramped_shear_slip_onset(tmp_path):
+    """A block [0,1]^2 x [1,1.5] held only by contact on a fixed base, pressed by p = 1 MPa and
+    sheared on its top by a traction ramped to 0.7 p in static load steps of 0.05 (mu = 0.6): every
+    step with tau <= mu p is in equilibrium, the friction resultant carrying tau A to 1e-8 and the
+    normal one p A; the first step above mu p (t = 0.9: tau = 0.63 p) has no static equilibrium and
+    is refused at once, within one step of tau = mu p (t* = 0.857), with T / mu N = 1.05."""
+    p = 1.0e6
+    h5 = sheared_block(tmp_path, 0.7, 0.05)
     r = solve(h5, check=False, timeout=300)
     assert r.returncode != 0 and "no static equilibrium" in r.stderr and "'block'" in r.stderr, r.stderr
     ratio = float(re.search(r"T / mu N = ([0-9.]+)", r.stderr).group(1))
@@ -381,22 +389,10 @@ def test_static_load_step_cut(tmp_path):
     normal p A to 1e-8. "No static equilibrium" (0.62 p) is the load's verdict and is not cut.
     With -mbc_dt_cut 0 the same run stops with the multiplier solve's message."""
     from mbcontact.results import output_cuts
-    meshgen.boxes(str(tmp_path / "shear.msh"),
-                  [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(2, 2, 2), name="base"),
-                   dict(lo=(0, 0, 1), hi=(1, 1, 1.5), n=(3, 3, 1), name="block")])
     p = 1.0e6
 
     def run(tau, *options):
-        scene = {
-            "meshes": {"m": "shear.msh"},
-            "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": 2.0e10, "nu": 0.2}} for b in ("base", "block")},
-            "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.6}],
-            "dirichlet": [{"surface": "base_zmin", "components": "all"}],
-            "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p},
-                      {"kind": "traction", "surface": "block_zmax", "vector": [tau * p, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
-            "analysis": {"type": "static", "dt": 1.0, "final_time": 1.0},
-        }
-        h5 = prep(tmp_path, scene, name="shear")
+        h5 = sheared_block(tmp_path, tau, 1.0)
         return h5, solve(h5, "-mbc_multiplier_max_it", "3", *options, check=False, timeout=120)
 
     h5, r = run(0.58)
