@@ -1,6 +1,7 @@
 # Two entry points, each doing the whole set-up on a fresh Debian 12 machine:
 #   make run   install what is missing, build, run the default scene, compare with theory
-#   make test  the same set-up, then every test (CTest for C, pytest for Python)
+#   make test  the same set-up, then every test (CTest for C, pytest for Python; pytest runs a
+#              worker per core, each test file on one worker so its module fixtures are built once)
 SHELL      := /bin/bash
 BUILD      ?= build
 PYTHON     := /usr/bin/python3
@@ -13,7 +14,7 @@ export MBC_BUILD_DIR := $(CURDIR)/$(BUILD)
 
 DEBS := build-essential cmake pkg-config petsc-dev python3-petsc4py libmetis-dev gmsh \
         libhdf5-openmpi-dev openmpi-bin python3-meshio python3-h5py python3-numpy \
-        python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 python3-dev python3-mpi4py python3-venv \
+        python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 python3-dev python3-mpi4py python3-venv python3-pytest-xdist \
         libopenblas0-serial
 
 .PHONY: all deps build run test test-c test-python fuzz sanitize clean vtk-reader
@@ -37,7 +38,7 @@ run: build
 
 test: build vtk-reader
 	cd $(BUILD) && ctest --output-on-failure
-	$(PYTHON) -m pytest -q --durations=20 tests/python
+	$(PYTHON) -m pytest -q -n $(JOBS) --dist loadfile --durations=20 tests/python
 
 # VTK's vtkXdmfReader (what ParaView reads .xmf with) for test_output.py: Debian 12's python3-vtk9
 # lacks it, PyPI's vtk has it; a venv in the build directory, made once.
