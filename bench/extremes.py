@@ -8,6 +8,8 @@ Swept, each from one scene builder with the solver's default options:
   contrast  E_block / E_base from 1e-6 to 1e6 (soft under stiff and the reverse)
   size      L from 1e-3 m to 1e4 m
   units     the same scene in m/kg/s and in mm/t/s (u in mm = 1e3 u in m, forces N vs N)
+  friction  mu = 0, 0.01, 0.3, 1, 10 with a shear min(mu/2, 1/2) p on the block (held only by contact:
+            the friction resultant must carry it exactly; "u_z err" is then the error of fx)
   ratio     element size ratio across the couple 1:1 to 1:20, either side fine
 For each case: the multiplier solves' converged reasons and iterations, the static iterations,
 the errors of u_z and of the normal force, wall time; a pass/fail column (errors < 1e-8).
@@ -36,7 +38,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 TOL = 1e-8  # exact answer: only rounding and the multiplier tolerance (1e-8 relative) remain
 
 
-def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3):
+def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0):
     """The block on the base; returns (u_z of the block's top centre, normal force, exact u_z,
     exact force, monitor output, wall s)."""
     meshgen.boxes(os.path.join(work, f"{name}.msh"),
@@ -45,9 +47,10 @@ def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block
     scene = {"meshes": {"m": f"{name}.msh"},
              "bodies": {"base": {"mesh": "m", "regions": "base", "material": {"E": E_base, "nu": 0.0}},
                         "block": {"mesh": "m", "regions": "block", "material": {"E": E_block, "nu": 0.0}}},
-             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.0}],
+             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": mu}],
              "dirichlet": [{"surface": "base_zmin", "components": "all"}],
-             "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p}],
+             "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p}]
+             + ([{"kind": "traction", "surface": "block_zmax", "vector": [tau, 0, 0]}] if tau else []),
              "analysis": {"type": "static"},
              "output": {"points": {"top": {"x": [L / 2, L / 2, 1.5 * L], "body": "block"}}}}
     h5 = prepare(work, name, scene)
@@ -58,6 +61,8 @@ def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block
         return None, None, -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout + r.stderr, wall
     pts = read_csv(h5[:-3] + "_result_points.csv")
     c = read_csv(h5[:-3] + "_result_contact.csv")
+    if tau:  # friction: the tangential resultant carries the shear exactly (the block is held only by contact)
+        return c["fx"][-1], c["fz"][-1], -tau * L * L, p * L * L, r.stdout, wall
     return pts["top_uz"][-1], c["fz"][-1], -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout, wall
 
 
@@ -100,6 +105,11 @@ def main():
     print(f"{'units':>9} {'mm/t/s':>10} {'':>16} {'':>6} {'':>6} {e_u:10.2e} {e_f:10.2e} {si[5] + mm[5]:7.2f} {'pass' if max(e_u, e_f) < 1e-10 else 'FAIL':>5}"
           "   (mm run against the m run, 1e-10)")
     rows.append(dict(category="units", value="mm", e_u=e_u, e_f=e_f, ok=max(e_u, e_f) < 1e-10))
+    # friction: a shear tau = min(mu / 2, 1/2) p on the top (stick: fx = -tau L^2 exactly); mu = 0 with no shear.
+    # Above tau = p the block (h = L/2) tips over its edge: no static equilibrium (docs/stability.md)
+    mus = [10.0] if a.smoke else [0.0, 0.01, 0.3, 1.0, 10.0]
+    for i, mu in enumerate(mus):
+        rows.append(row("friction", f"mu {mu:g}", stack(work, f"f{i}", mu=mu, tau=min(0.5 * mu, 0.5) * 1e6)))
     for nb, nk in ratios:
         rows.append(row("ratio", f"{nb}:{nk}", stack(work, f"r{nb}_{nk}", n_base=nb, n_block=nk)))
     failed = [r for r in rows if not r["ok"]]
