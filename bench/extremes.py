@@ -10,6 +10,8 @@ Swept, each from one scene builder with the solver's default options:
   units     the same scene in m/kg/s and in mm/t/s (u in mm = 1e3 u in m, forces N vs N)
   friction  mu = 0, 0.01, 0.3, 1, 10 with a shear min(mu/2, 1/2) p on the block (held only by contact:
             the friction resultant must carry it exactly; "u_z err" is then the error of fx)
+  gap       initial gap 0 .. 10 element sizes, the block's top pushed by gap + delta in 1 or 10
+            static load steps (F err: the contact force against delta E L / 1.5)
   ratio     element size ratio across the couple 1:1 to 1:20, either side fine
 For each case: the multiplier solves' converged reasons and iterations, the static iterations,
 the errors of u_z and of the normal force, wall time; a pass/fail column (errors < 1e-8).
@@ -66,6 +68,31 @@ def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block
     return pts["top_uz"][-1], c["fz"][-1], -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout, wall
 
 
+def gap_case(work, name, gap, steps, L=1.0, E=2e10, delta=1e-4):
+    """The block starts gap above the base and its top is pushed down by gap + delta (u_z
+    prescribed, x and y free) in one static load step or ramped over steps: the contact force is
+    delta E L^2 / (1.5 L) exactly (both bodies uniaxial, nu = 0)."""
+    meshgen.boxes(os.path.join(work, f"{name}.msh"),
+                  [dict(lo=(0, 0, 0), hi=(L, L, L), n=(2, 2, 2), name="base"),
+                   dict(lo=(0, 0, L + gap), hi=(L, L, 1.5 * L + gap), n=(3, 3, 1), name="block")])
+    scene = {"meshes": {"m": f"{name}.msh"},
+             "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": E, "nu": 0.0}} for b in ("base", "block")},
+             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.0}],
+             "dirichlet": [{"surface": "base_zmin", "components": "all"},
+                           {"surface": "block_zmax", "components": ["z"], "value": -(gap + delta),
+                            "time": {"table": [[0, 0], [1, 1]]}}],
+             "analysis": {"type": "static", "dt": 1.0 / steps, "final_time": 1.0}}
+    h5 = prepare(work, name, scene)
+    t0 = time.perf_counter()
+    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    wall = time.perf_counter() - t0
+    f_ex = delta * E * L * L / (1.5 * L)
+    if r.returncode:
+        return None, None, 1.0, f_ex, r.stdout + r.stderr, wall
+    c = read_csv(h5[:-3] + "_result_contact.csv")
+    return 1.0, c["fz"][-1], 1.0, f_ex, r.stdout, wall
+
+
 def row(category, value, res):
     uz, fz, uz_ex, fz_ex, out, wall = res
     reasons = sorted(set(re.findall(r"contact: \w+ (\w+) in", out))) or ["(none)"]
@@ -110,6 +137,10 @@ def main():
     mus = [10.0] if a.smoke else [0.0, 0.01, 0.3, 1.0, 10.0]
     for i, mu in enumerate(mus):
         rows.append(row("friction", f"mu {mu:g}", stack(work, f"f{i}", mu=mu, tau=min(0.5 * mu, 0.5) * 1e6)))
+    # initial gaps 0 .. 10 element sizes (h = L/2 through the block), closed in one load step or in 10
+    gaps = [(10, 1)] if a.smoke else [(0, 1), (0.1, 1), (1, 1), (10, 1), (1, 10), (10, 10)]
+    for i, (g, n) in enumerate(gaps):
+        rows.append(row("gap", f"{g:g}h/{n}st", gap_case(work, f"g{i}", g * 0.5, n)))
     for nb, nk in ratios:
         rows.append(row("ratio", f"{nb}:{nk}", stack(work, f"r{nb}_{nk}", n_base=nb, n_block=nk)))
     failed = [r for r in rows if not r["ok"]]
