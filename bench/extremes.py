@@ -1,0 +1,159 @@
+#!/usr/bin/python3
+"""Numerical stability on extreme cases (issue 17), first part: static scenes with an exact answer.
+
+A block [0,L]^2 x [L,1.5L] pressed by p on its top onto a base [0,L]^3 fixed at its bottom,
+frictionless, nu = 0: uniaxial stress, so every hex8i mesh gives the exact field. Reference:
+the block's top moves u_z = -p (L/E_base + L/(2 E_block)); the contact normal force is p L^2.
+Swept, each from one scene builder with the solver's default options:
+  contrast  E_block / E_base from 1e-6 to 1e6 (soft under stiff and the reverse)
+  size      L from 1e-3 m to 1e4 m
+  units     the same scene in m/kg/s and in mm/t/s (u in mm = 1e3 u in m, forces N vs N)
+  friction  mu = 0, 0.01, 0.3, 1, 10 with a shear min(mu/2, 1/2) p on the block (held only by contact:
+            the friction resultant must carry it exactly; "u_z err" is then the error of fx)
+  gap       initial gap 0 .. 10 element sizes, the block's top pushed by gap + delta in 1 or 10
+            static load steps (F err: the contact force against delta E L / 1.5)
+  ratio     element size ratio across the couple 1:1 to 1:20, either side fine
+For each case: the multiplier solves' converged reasons and iterations, the static iterations,
+the errors of u_z and of the normal force, wall time; a pass/fail column (errors < 1e-8).
+Writes docs/extremes.png (error against the swept parameter).
+
+  bench/extremes.py [--smoke] [--plot PNG]
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "python"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import plot  # noqa: E402  (bench/plot.py)
+from mbcontact import meshgen  # noqa: E402
+from mbcontact.prep import prepare  # noqa: E402
+from mbcontact.results import read_csv  # noqa: E402
+
+SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+TOL = 1e-8  # exact answer: only rounding and the multiplier tolerance (1e-8 relative) remain
+
+
+def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0):
+    """The block on the base; returns (u_z of the block's top centre, normal force, exact u_z,
+    exact force, monitor output, wall s)."""
+    meshgen.boxes(os.path.join(work, f"{name}.msh"),
+                  [dict(lo=(0, 0, 0), hi=(L, L, L), n=(n_base, n_base, 2), name="base"),
+                   dict(lo=(0, 0, L), hi=(L, L, 1.5 * L), n=(n_block, n_block, 1), name="block")])
+    scene = {"meshes": {"m": f"{name}.msh"},
+             "bodies": {"base": {"mesh": "m", "regions": "base", "material": {"E": E_base, "nu": 0.0}},
+                        "block": {"mesh": "m", "regions": "block", "material": {"E": E_block, "nu": 0.0}}},
+             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": mu}],
+             "dirichlet": [{"surface": "base_zmin", "components": "all"}],
+             "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p}]
+             + ([{"kind": "traction", "surface": "block_zmax", "vector": [tau, 0, 0]}] if tau else []),
+             "analysis": {"type": "static"},
+             "output": {"points": {"top": {"x": [L / 2, L / 2, 1.5 * L], "body": "block"}}}}
+    h5 = prepare(work, name, scene)
+    t0 = time.perf_counter()
+    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    wall = time.perf_counter() - t0
+    if r.returncode:
+        return None, None, -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout + r.stderr, wall
+    pts = read_csv(h5[:-3] + "_result_points.csv")
+    c = read_csv(h5[:-3] + "_result_contact.csv")
+    if tau:  # friction: the tangential resultant carries the shear exactly (the block is held only by contact)
+        return c["fx"][-1], c["fz"][-1], -tau * L * L, p * L * L, r.stdout, wall
+    return pts["top_uz"][-1], c["fz"][-1], -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout, wall
+
+
+def gap_case(work, name, gap, steps, L=1.0, E=2e10, delta=1e-4):
+    """The block starts gap above the base and its top is pushed down by gap + delta (u_z
+    prescribed, x and y free) in one static load step or ramped over steps: the contact force is
+    delta E L^2 / (1.5 L) exactly (both bodies uniaxial, nu = 0)."""
+    meshgen.boxes(os.path.join(work, f"{name}.msh"),
+                  [dict(lo=(0, 0, 0), hi=(L, L, L), n=(2, 2, 2), name="base"),
+                   dict(lo=(0, 0, L + gap), hi=(L, L, 1.5 * L + gap), n=(3, 3, 1), name="block")])
+    scene = {"meshes": {"m": f"{name}.msh"},
+             "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": E, "nu": 0.0}} for b in ("base", "block")},
+             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.0}],
+             "dirichlet": [{"surface": "base_zmin", "components": "all"},
+                           {"surface": "block_zmax", "components": ["z"], "value": -(gap + delta),
+                            "time": {"table": [[0, 0], [1, 1]]}}],
+             "analysis": {"type": "static", "dt": 1.0 / steps, "final_time": 1.0}}
+    h5 = prepare(work, name, scene)
+    t0 = time.perf_counter()
+    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    wall = time.perf_counter() - t0
+    f_ex = delta * E * L * L / (1.5 * L)
+    if r.returncode:
+        return None, None, 1.0, f_ex, r.stdout + r.stderr, wall
+    c = read_csv(h5[:-3] + "_result_contact.csv")
+    return 1.0, c["fz"][-1], 1.0, f_ex, r.stdout, wall
+
+
+def row(category, value, res):
+    uz, fz, uz_ex, fz_ex, out, wall = res
+    reasons = sorted(set(re.findall(r"contact: \w+ (\w+) in", out))) or ["(none)"]
+    its = [int(i) for i in re.findall(r" in (\d+) iterations", out)]
+    static_its = len(re.findall(r"static iteration", out))
+    if uz is None:
+        e_u = e_f = float("inf")
+    else:
+        e_u, e_f = abs(uz / uz_ex - 1), abs(fz / fz_ex - 1)
+    ok = e_u < TOL and e_f < TOL and reasons and all(r.startswith("CONVERGED") for r in reasons)
+    print(f"{category:>9} {value:>10} {','.join(reasons):>16} {sum(its):>6} {static_its:>6} {e_u:10.2e} {e_f:10.2e} {wall:7.2f} {'pass' if ok else 'FAIL':>5}",
+          flush=True)
+    return dict(category=category, value=value, e_u=e_u, e_f=e_f, ok=ok)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--smoke", action="store_true", help="one case per category")
+    ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "extremes.png"))
+    a = ap.parse_args()
+    work = tempfile.mkdtemp(prefix="mbc_extremes_")
+    contrasts = [1e-6, 1e6] if a.smoke else [1e-6, 1e-4, 1e-2, 1.0, 1e2, 1e4, 1e6]
+    sizes = [1e-3] if a.smoke else [1e-3, 1e-1, 1.0, 1e2, 1e4]
+    ratios = [(1, 20)] if a.smoke else [(2, 2), (1, 5), (5, 1), (1, 20), (20, 1)]
+    print(f"{'category':>9} {'value':>10} {'reasons':>16} {'mult':>6} {'static':>6} {'u_z err':>10} {'F err':>10} {'wall':>7} {'':>5}")
+    rows = []
+    for i, k in enumerate(contrasts):
+        # p = 1e-4 of the softer E: a small strain on both sides (the solver refuses motions above ten model sizes)
+        rows.append(row("contrast", f"{k:g}", stack(work, f"c{i}", E_block=2e10 * k, p=1e-4 * 2e10 * min(k, 1.0))))
+    for i, L in enumerate(sizes):
+        rows.append(row("size", f"{L:g} m", stack(work, f"s{i}", L=L)))
+    # units: m/kg/s (E in Pa, p in Pa) against mm/t/s (E in MPa, p in MPa); u in mm = 1e3 u in m
+    si = stack(work, "u_si", L=1.0, E_base=2e10, E_block=2e10, p=1e6)
+    mm = stack(work, "u_mm", L=1e3, E_base=2e4, E_block=2e4, p=1.0)
+    e_u = abs(mm[0] / (1e3 * si[0]) - 1) if si[0] and mm[0] else float("inf")
+    e_f = abs(mm[1] / si[1] - 1) if si[1] and mm[1] else float("inf")
+    print(f"{'units':>9} {'mm/t/s':>10} {'':>16} {'':>6} {'':>6} {e_u:10.2e} {e_f:10.2e} {si[5] + mm[5]:7.2f} {'pass' if max(e_u, e_f) < 1e-10 else 'FAIL':>5}"
+          "   (mm run against the m run, 1e-10)")
+    rows.append(dict(category="units", value="mm", e_u=e_u, e_f=e_f, ok=max(e_u, e_f) < 1e-10))
+    # friction: a shear tau = min(mu / 2, 1/2) p on the top (stick: fx = -tau L^2 exactly); mu = 0 with no shear.
+    # Above tau = p the block (h = L/2) tips over its edge: no static equilibrium (docs/stability.md)
+    mus = [10.0] if a.smoke else [0.0, 0.01, 0.3, 1.0, 10.0]
+    for i, mu in enumerate(mus):
+        rows.append(row("friction", f"mu {mu:g}", stack(work, f"f{i}", mu=mu, tau=min(0.5 * mu, 0.5) * 1e6)))
+    # initial gaps 0 .. 10 element sizes (h = L/2 through the block), closed in one load step or in 10
+    gaps = [(10, 1)] if a.smoke else [(0, 1), (0.1, 1), (1, 1), (10, 1), (1, 10), (10, 10)]
+    for i, (g, n) in enumerate(gaps):
+        rows.append(row("gap", f"{g:g}h/{n}st", gap_case(work, f"g{i}", g * 0.5, n)))
+    for nb, nk in ratios:
+        rows.append(row("ratio", f"{nb}:{nk}", stack(work, f"r{nb}_{nk}", n_base=nb, n_block=nk)))
+    failed = [r for r in rows if not r["ok"]]
+    print(f"\n{len(rows) - len(failed)} of {len(rows)} cases pass" + (": failing " + ", ".join(f"{r['category']} {r['value']}" for r in failed) if failed else ""))
+    floor = 1e-17  # a log plot of an exact zero
+    series = []
+    for cat, xs, style in (("contrast", contrasts, "o-"), ("size", sizes, "s-")):
+        rs = [r for r in rows if r["category"] == cat]
+        series.append((xs, [max(r["e_u"], r["e_f"], floor) for r in rs], style, f"{cat} (x: E ratio / L in m)"))
+    rs = [r for r in rows if r["category"] == "ratio"]
+    series.append(([nk / nb for nb, nk in ratios], [max(r["e_u"], r["e_f"], floor) for r in rs], "^-", "ratio (x: h_base / h_block)"))
+    plot.loglog(a.plot, "exact static stack: worst relative error", "swept parameter", series, ylabel="relative error")
+
+
+if __name__ == "__main__":
+    main()

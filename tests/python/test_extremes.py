@@ -1,0 +1,35 @@
+"""Extreme static cases of bench/extremes.py (docs/stability.md), one per category that passes:
+a block on a base, nu = 0, frictionless unless stated, whose exact answer is uniaxial stress
+(hex8i represents it exactly): top u_z = -p (L/E_base + L/(2 E_block)), contact force p L^2.
+Tolerance 1e-8 relative: the multiplier tolerance (1e-8 of the step's free gap increment) is the
+only inexact part; measured errors 1e-16..3e-12. About 5 s in all."""
+import pytest
+
+from conftest import load_script
+
+bench = load_script("bench/extremes.py", "bench_extremes")
+
+
+def errors(res):
+    uz, fz, uz_ex, fz_ex, out, _ = res
+    assert uz is not None, out
+    assert "DIVERGED" not in out, out
+    return abs(uz / uz_ex - 1), abs(fz / fz_ex - 1)
+
+
+@pytest.mark.parametrize("case", ["contrast 1e6", "contrast 1e-6", "size 1e4", "size 1e-3", "friction 10", "ratio 20:1"])
+def test_extreme_static_case_is_exact(tmp_path, case):
+    kw = {"contrast 1e6": dict(E_block=2e16, p=2e6), "contrast 1e-6": dict(E_block=2e4, p=2.0),
+          "size 1e4": dict(L=1e4), "size 1e-3": dict(L=1e-3),
+          "friction 10": dict(mu=10.0, tau=0.5e6),  # below tipping (tau <= p for h = L/2)
+          "ratio 20:1": dict(n_base=20, n_block=1)}[case]
+    e_u, e_f = errors(bench.stack(str(tmp_path), "s", **kw))
+    assert e_u < 1e-8 and e_f < 1e-8, (e_u, e_f)
+
+
+def test_units_m_and_mm_agree(tmp_path):
+    """The same scene in m/kg/s (E, p in Pa) and mm/t/s (MPa): u in mm = 1e3 u in m, forces in N
+    equal, to 1e-10 (measured 2e-13): no absolute tolerance in the solve depends on the units."""
+    si = bench.stack(str(tmp_path), "si", L=1.0, E_base=2e10, E_block=2e10, p=1e6)
+    mm = bench.stack(str(tmp_path), "mm", L=1e3, E_base=2e4, E_block=2e4, p=1.0)
+    assert abs(mm[0] / (1e3 * si[0]) - 1) < 1e-10 and abs(mm[1] / si[1] - 1) < 1e-10
