@@ -215,11 +215,13 @@ PetscErrorCode MBCInterfaceRigidMotion(MBCInterface ifc)
 
 /* e = (-R_ij^T (F_i - K_i u_i)) from the bodies (each held on its ranks), Q^T e on the last rank.
    Along a combined rigid motion v that no contact resists the load must balance, v^T e = 0 (to
-   1e-8 of the load R^T F): else no static equilibrium exists, an input error named here. */
+   1e-8 of the load R^T F, or to the rounding of K u where no load acts on it: a prescribed
+   displacement that moves a body rigidly): else no static equilibrium exists, an input error
+   named here. */
 PetscErrorCode MBCInterfaceRigidRHS(MBCInterface ifc, PetscInt step, PetscReal time)
 {
   const PetscInt ng = ifc->ngrigid;
-  PetscReal     *e, fscale = 0;
+  PetscReal     *e, fscale = 0, eround = 0;
   PetscMPIInt    size, rank;
 
   PetscFunctionBegin;
@@ -233,8 +235,10 @@ PetscErrorCode MBCInterfaceRigidRHS(MBCInterface ifc, PetscInt step, PetscReal t
     PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
     if (!brank)
       for (PetscInt j = 0; j < ifc->bodies[b]->nrigid; j++) e[ifc->goff[b] + j] = ifc->bodies[b]->erigid[j], e[ng + ifc->goff[b] + j] = ifc->bodies[b]->frigid[j];
+    eround = PetscMax(eround, ifc->bodies[b]->erigid_round);
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, e, 2 * ng, MPIU_REAL, MPIU_SUM, ifc->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &eround, 1, MPIU_REAL, MPIU_MAX, ifc->comm));
   for (PetscInt i = 0; i < ng; i++) fscale = PetscMax(fscale, PetscAbsReal(e[ng + i]));
   if (ifc->grange) {
     PetscInt c = 0;
@@ -245,7 +249,7 @@ PetscErrorCode MBCInterfaceRigidRHS(MBCInterface ifc, PetscInt step, PetscReal t
         e[ng + c++] = ve;
         continue;
       }
-      if (PetscAbsReal(ve) > 1e-8 * fscale) { /* a mechanism under load: name its bodies */
+      if (PetscAbsReal(ve) > PetscMax(1e-8 * fscale, eround)) { /* a mechanism under load: name its bodies */
         char     names[512] = "";
         size_t   len;
         for (PetscInt b = 0; b < ifc->nbodies; b++) {
@@ -256,7 +260,7 @@ PetscErrorCode MBCInterfaceRigidRHS(MBCInterface ifc, PetscInt step, PetscReal t
             PetscCall(PetscSNPrintf(names + len, sizeof(names) - len, "%s'%s'", len ? ", " : "", ifc->scene->bodies[b].name));
           }
         }
-        SETERRQ(ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: bod%s %s can move as one rigid body that no support and no contact resists, and the load along that motion does not balance (%g, %.3g of the largest load on a rigid mode %g); prescribe a displacement that holds it, or run a dynamic analysis", step, (double)time, strchr(names, ',') ? "ies" : "y", names, (double)ve, (double)(PetscAbsReal(ve) / fscale), (double)fscale);
+        SETERRQ(ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: bod%s %s can move as one rigid body that no support and no contact resists, and the load along that motion does not balance (%g against a largest load on a rigid mode of %g); prescribe a displacement that holds it, or run a dynamic analysis", step, (double)time, strchr(names, ',') ? "ies" : "y", names, (double)ve, (double)fscale);
       }
     }
   } else

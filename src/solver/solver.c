@@ -266,6 +266,7 @@ static PetscErrorCode SolverContact(MBCSolver s)
   PetscInt   n, nmult, *pairs;
 
   PetscFunctionBegin;
+  s->contact_rebuilt = PETSC_FALSE;
   if (!c) PetscFunctionReturn(0);
   PetscCall(MBCContactUpdate(c, s->nbodies, s->bodies, PETSC_FALSE, &researched));
   if (researched && s->monitor && c->nsearches > 1) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: re-search (global search %" PetscInt_FMT ")\n", s->step, (double)s->time, c->nsearches));
@@ -274,7 +275,8 @@ static PetscErrorCode SolverContact(MBCSolver s)
     PetscCall(PetscFree(pairs));
     PetscFunctionReturn(0);
   }
-  s->force_build = PETSC_FALSE;
+  s->force_build     = PETSC_FALSE;
+  s->contact_rebuilt = PETSC_TRUE;
   PetscCall(MBCInterfaceSetUp(s->iface, n, pairs)); /* takes pairs */
   PetscCall(MBCSolverCheckpointTrack(s)); /* where the search ran for this H, for a restart */
   PetscCall(MBCInterfaceGetSize(s->iface, NULL, &nmult));
@@ -372,7 +374,8 @@ static PetscErrorCode SolverCheckDisplacementSize(MBCSolver s)
 
 /* Static analysis in the incremental form of the dynamic one, without inertia:
    (K + eps diag K) du = F(t) - K u + H lambda, u += du, repeated within a step until the
-   out-of-balance force of the last iterate, max|A du|, is below rtol max|K u|. The spring
+   out-of-balance force of the last iterate, max|A du|, is below rtol max|K u| (or below the
+   rounding of K u, eps |K| |u|, where the bodies only move rigidly). The spring
    eps diag(K) pulls towards the last iterate only, so at convergence it carries no force and
    K u = F + H lambda holds; it makes K regular for a body held only by contact (block 2 of the
    two-block example), whose rigid motion the contact constraints then fix. The test is on
@@ -438,7 +441,7 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
 static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
 {
   const PetscBool stabilized = s->static_stabilized, floating = s->static_floating;
-  PetscReal       fmax = 0, kumax = 0;
+  PetscReal       fmax = 0, kumax = 0, kufloor = 0;
 
   PetscFunctionBegin;
   s->contact_failed = PETSC_FALSE;
@@ -465,20 +468,26 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
       }
       PetscCall(MatMult(body->K, body->u, body->work));
       PetscCall(VecAXPY(body->rhs, -1.0, body->work));
+      body->erigid_round = 0;
       for (PetscInt j = 0; j < body->nrigid; j++) { /* the equilibrium's right side -R^T (F - K u) */
         PetscScalar d;
+        PetscReal   knorm, unorm, rnorm;
         PetscCall(VecDot(body->rhs, body->rigid[j], &d));
         body->erigid[j] = -PetscRealPart(d);
+        PetscCall(MatNorm(body->K, NORM_INFINITY, &knorm));
+        PetscCall(VecNorm(body->u, NORM_INFINITY, &unorm));
+        PetscCall(VecNorm(body->rigid[j], NORM_1, &rnorm));
+        body->erigid_round = PetscMax(body->erigid_round, PETSC_MACHINE_EPSILON * knorm * unorm * rnorm);
       }
       PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
       PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
     }
     if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda (+ R alpha) */
     if (s->contact_failed) break; /* the caller cuts the step */
-    fmax = kumax = 0;
+    fmax = kumax = kufloor = 0;
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody   body = s->bodies[b];
-      PetscReal n;
+      PetscReal n, knorm;
       if (!body) continue;
       PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
       if (body->nrigid) { /* K du off the prescribed rows: A du is not the force of a rigid motion */
@@ -491,15 +500,20 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
       PetscCall(MatMult(body->K, body->u, body->work));
       PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
       kumax = PetscMax(kumax, n);
+      /* K u is known only to about eps |K|_inf |u|_inf: where the bodies move rigidly (a load step
+         that closes a gap) K u is that rounding, and so is the out-of-balance force */
+      PetscCall(MatNorm(body->K, NORM_INFINITY, &knorm));
+      PetscCall(VecNorm(body->u, NORM_INFINITY, &n));
+      kufloor = PetscMax(kufloor, PETSC_MACHINE_EPSILON * knorm * n);
     }
     {
-      PetscReal mx[2] = {fmax, kumax};
-      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPIU_REAL, MPIU_MAX, s->comm));
-      fmax = mx[0], kumax = mx[1];
+      PetscReal mx[3] = {fmax, kumax, kufloor};
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 3, MPIU_REAL, MPIU_MAX, s->comm));
+      fmax = mx[0], kumax = mx[1], kufloor = mx[2];
     }
     PetscCall(SolverContact(s));
     if (s->monitor && (s->contact || stabilized || floating)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
-    if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax) break;
+    if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax || (fmax <= kufloor && !s->contact_rebuilt)) break; /* new pairs: not yet in balance */
     if (s->static_its == s->static_max_it && s->contact_may_fail) {
       s->contact_failed = PETSC_TRUE; /* the caller cuts the step */
       break;

@@ -61,6 +61,7 @@ struct _n_MBCBody {
   PetscInt   nfix, *fix_rows; /* DOFs held at 0 by the generalised inverse K^+ (owned, sorted) */
   PetscReal *erigid;      /* per mode: -R^T (F - K u), the right side of the equilibrium G lambda = e */
   PetscReal *frigid;      /* per mode: R^T F, the load it carries (the scale of e) */
+  PetscReal  erigid_round; /* what rounding leaves in e: eps |K|_inf |u|_inf max_j |R_j|_1 */
   PetscReal  fres[3];     /* the resultant of the load F (static, this step) */
 
   Vec u, v, a;            /* displacement, velocity, acceleration */

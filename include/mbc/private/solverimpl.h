@@ -88,6 +88,7 @@ struct _n_MBCSolver {
   /* step control: a dynamic step whose contact solve fails, a static load step that does not
      converge, is cut in two, down to dt_min */
   PetscBool  dt_cut, contact_may_fail, contact_failed, force_build;
+  PetscBool  contact_rebuilt; /* the last SolverContact found other pairs and rebuilt H and D */
   PetscReal  dt_min;
   PetscInt   level, ncuts; /* the current step is dt / 2^level; steps cut so far */
   PetscInt   start_level, good_steps, deepest; /* a scene step starts at dt / 2^start_level; steps since without a cut; finest level of this step */
