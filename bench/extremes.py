@@ -68,7 +68,7 @@ def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block
     return pts["top_uz"][-1], c["fz"][-1], -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout, wall
 
 
-def gap_case(work, name, gap, steps, hold=True, L=1.0, E=2e10, delta=1e-4):
+def gap_case(work, name, gap, steps, hold=True, L=1.0, E=2e10, delta=1e-4, nproc=1):
     """The block starts gap above the base and its top is pushed down by gap + delta (u_z
     prescribed; x and y held on the block's xmin/ymin faces, or free with hold=False) in one
     static load step or ramped over steps: the contact force is delta E L^2 / (1.5 L) exactly
@@ -85,8 +85,9 @@ def gap_case(work, name, gap, steps, hold=True, L=1.0, E=2e10, delta=1e-4):
              + ([{"surface": "block_xmin", "components": ["x"]}, {"surface": "block_ymin", "components": ["y"]}] if hold else []),
              "analysis": {"type": "static", "dt": 1.0 / steps, "final_time": 1.0}}
     h5 = prepare(work, name, scene)
+    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
     t0 = time.perf_counter()
-    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
     wall = time.perf_counter() - t0
     f_ex = delta * E * L * L / (1.5 * L)
     if r.returncode:

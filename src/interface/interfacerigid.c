@@ -98,6 +98,32 @@ static PetscErrorCode InterfaceRigidReduce(MBCInterface ifc)
   PetscFunctionReturn(0);
 }
 
+/* A copy of A with the magnitudes of its entries (PETSc 3.18 has no MatAbs). */
+static PetscErrorCode MatAbsCopy(Mat A, Mat *B)
+{
+  PetscInt rstart, rend;
+
+  PetscFunctionBegin;
+  PetscCall(MatDuplicate(A, MAT_DO_NOT_COPY_VALUES, B));
+  PetscCall(MatGetOwnershipRange(A, &rstart, &rend));
+  for (PetscInt r = rstart; r < rend; r++) {
+    PetscInt           nc;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscScalar        abs[64];
+    PetscCall(MatGetRow(A, r, &nc, &cols, &vals));
+    for (PetscInt c0 = 0; c0 < nc; c0 += 64) {
+      const PetscInt m = PetscMin(64, nc - c0);
+      for (PetscInt c = 0; c < m; c++) abs[c] = PetscAbsScalar(vals[c0 + c]);
+      PetscCall(MatSetValues(*B, 1, &r, m, cols + c0, abs, INSERT_VALUES));
+    }
+    PetscCall(MatRestoreRow(A, r, &nc, &cols, &vals));
+  }
+  PetscCall(MatAssemblyBegin(*B, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*B, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
 /* Static analysis with bodies their supports leave free (FETI's natural coarse space): the
    equilibrium of body i, R_i^T (f_i + H_i lambda) = 0, is G lambda = e with G's rows
    (H_i^T R_ij)^T, one per free mode, in the multiplier layout (W's); the free motion
@@ -108,7 +134,7 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
 {
   PetscMPIInt size, rank;
   PetscInt    ng = 0, mloc, *nr;
-  Vec         row;
+  Vec         row, rowabs;
 
   PetscFunctionBegin;
   PetscCall(PetscFree(ifc->goff));
@@ -132,9 +158,13 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
   PetscCall(MatCreateAIJ(ifc->comm, rank == size - 1 ? ng : 0, mloc, ng, PETSC_DETERMINE, 0, NULL, 0, NULL, &ifc->fp.G));
   PetscCall(MatSetOption(ifc->fp.G, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
   PetscCall(VecDuplicate(ifc->fp.q, &row));
-  for (PetscInt b = 0; b < ifc->nbodies; b++)
+  PetscCall(VecDuplicate(ifc->fp.q, &rowabs));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    Mat Habs = NULL;
+    Vec Rabs = NULL;
+    if (ifc->goff[b + 1] > ifc->goff[b] && ifc->H[b]) PetscCall(MatAbsCopy(ifc->H[b], &Habs));
     for (PetscInt j = 0; j < ifc->goff[b + 1] - ifc->goff[b]; j++) {
-      const PetscScalar *a;
+      const PetscScalar *a, *aa;
       PetscInt           rstart, n, g = ifc->goff[b] + j;
       for (PetscInt o = 0; o < ifc->nbodies; o++) { /* H_b^T R_bj, the other bodies 0 */
         if (!ifc->Hu[o]) continue;
@@ -142,13 +172,32 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
         else PetscCall(VecZeroEntries(ifc->Hu[o]));
       }
       PetscCall(MBCInterfaceFromBodies(ifc, row));
+      if (Habs) { /* |H_b|^T 1 max|R_bj|: the scale of each entry's rounding (the modes' entries
+                     are known to a few eps of their largest: syev mixes the six modes) */
+        PetscReal rmax;
+        if (!Rabs) PetscCall(VecDuplicate(ifc->bodies[b]->rigid[j], &Rabs));
+        PetscCall(VecNorm(ifc->bodies[b]->rigid[j], NORM_INFINITY, &rmax));
+        PetscCall(VecSet(Rabs, rmax));
+        PetscCall(MatMultTranspose(Habs, Rabs, ifc->Hu[b]));
+      }
+      PetscCall(MBCInterfaceFromBodies(ifc, rowabs));
       PetscCall(VecGetOwnershipRange(row, &rstart, NULL));
       PetscCall(VecGetLocalSize(row, &n));
       PetscCall(VecGetArrayRead(row, &a));
+      PetscCall(VecGetArrayRead(rowabs, &aa));
+      /* An entry below 1e-10 of the sum of its terms' magnitudes is rounding, not resistance: a
+         flat frictionless face against the rotation about its normal gives ~1e-17 (the mode's
+         few-eps share of the other rotations, measured). Kept, such a row made G lambda = e a saddle point
+         of rank rounding and the rotation ~1e28 (a block held in z only, docs/stability.md). */
       for (PetscInt i = 0; i < n; i++)
-        if (a[i] != 0.0) PetscCall(MatSetValue(ifc->fp.G, g, rstart + i, a[i] / ifc->dscale, INSERT_VALUES));
+        if (PetscAbsScalar(a[i]) > 1e-10 * PetscRealPart(aa[i])) PetscCall(MatSetValue(ifc->fp.G, g, rstart + i, a[i] / ifc->dscale, INSERT_VALUES));
+      PetscCall(VecRestoreArrayRead(rowabs, &aa));
       PetscCall(VecRestoreArrayRead(row, &a));
     }
+    PetscCall(VecDestroy(&Rabs));
+    PetscCall(MatDestroy(&Habs));
+  }
+  PetscCall(VecDestroy(&rowabs));
   PetscCall(VecDestroy(&row));
   PetscCall(MatAssemblyBegin(ifc->fp.G, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(ifc->fp.G, MAT_FINAL_ASSEMBLY));
