@@ -40,7 +40,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 TOL = 1e-8  # exact answer: only rounding and the multiplier tolerance (1e-8 relative) remain
 
 
-def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0):
+def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0, block_master=True, nproc=1):
     """The block on the base; returns (u_z of the block's top centre, normal force, exact u_z,
     exact force, monitor output, wall s)."""
     meshgen.boxes(os.path.join(work, f"{name}.msh"),
@@ -49,22 +49,25 @@ def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block
     scene = {"meshes": {"m": f"{name}.msh"},
              "bodies": {"base": {"mesh": "m", "regions": "base", "material": {"E": E_base, "nu": 0.0}},
                         "block": {"mesh": "m", "regions": "block", "material": {"E": E_block, "nu": 0.0}}},
-             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": mu}],
+             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": mu} if block_master
+                         else {"master": "base_zmax", "slave": "block_zmin", "mu": mu}],
              "dirichlet": [{"surface": "base_zmin", "components": "all"}],
              "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p}]
              + ([{"kind": "traction", "surface": "block_zmax", "vector": [tau, 0, 0]}] if tau else []),
              "analysis": {"type": "static"},
              "output": {"points": {"top": {"x": [L / 2, L / 2, 1.5 * L], "body": "block"}}}}
     h5 = prepare(work, name, scene)
+    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
     t0 = time.perf_counter()
-    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
     wall = time.perf_counter() - t0
     if r.returncode:
         return None, None, -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout + r.stderr, wall
     pts = read_csv(h5[:-3] + "_result_points.csv")
     c = read_csv(h5[:-3] + "_result_contact.csv")
     if tau:  # friction: the tangential resultant carries the shear exactly (the block is held only by contact)
-        return c["fx"][-1], c["fz"][-1], -tau * L * L, p * L * L, r.stdout, wall
+        sign = 1 if block_master else -1  # the CSV's resultant acts on the master side
+        return c["fx"][-1], c["fz"][-1], -sign * tau * L * L, sign * p * L * L, r.stdout, wall
     return pts["top_uz"][-1], c["fz"][-1], -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout, wall
 
 

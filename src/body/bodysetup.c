@@ -111,9 +111,9 @@ PetscErrorCode MBCBodyAssembleLoads(MBCBody body)
   PetscFunctionReturn(0);
 }
 
-/* This rank's share of the resultant force and moment about the origin of the body's load i
-   (unit time factor): sums over the owned vertices, r = (F, x x F). */
-PetscErrorCode MBCBodyLoadResultant(MBCBody body, PetscInt i, PetscReal r[6])
+/* This rank's share of the resultant force and moment about the origin of the nodal forces F
+   (a global Vec of the body): sums over the owned vertices, r = (F, x x F). */
+PetscErrorCode MBCBodyLoadResultant(MBCBody body, Vec F, PetscReal r[6])
 {
   DM                 cdm;
   PetscSection       csec, lsec, gsec;
@@ -129,7 +129,7 @@ PetscErrorCode MBCBodyLoadResultant(MBCBody body, PetscInt i, PetscReal r[6])
   PetscCall(DMGetGlobalSection(body->dm, &gsec));
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(DMGetLocalVector(body->dm, &Floc));
-  PetscCall(DMGlobalToLocal(body->dm, body->load[i], INSERT_VALUES, Floc));
+  PetscCall(DMGlobalToLocal(body->dm, F, INSERT_VALUES, Floc));
   PetscCall(VecGetArrayRead(coords, &x));
   PetscCall(VecGetArrayRead(Floc, &f));
   PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));

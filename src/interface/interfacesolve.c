@@ -52,27 +52,120 @@ static PetscErrorCode InterfaceWriteFclib(MBCInterface ifc, PetscInt step)
   PetscFunctionReturn(0);
 }
 
+/* Convex hull (counter-clockwise, Andrew's monotone chain) of n points p (2 each, sorted here);
+   returns its vertex count, written to h (room for n + 1). */
+static PetscInt Hull2D(PetscInt n, PetscReal p[], PetscReal h[])
+{
+  PetscInt k = 0;
+
+  for (PetscInt i = 1; i < n; i++) /* insertion sort by (x, y): patches are small */
+    for (PetscInt j = i; j > 0 && (p[2 * j] < p[2 * j - 2] || (p[2 * j] == p[2 * j - 2] && p[2 * j + 1] < p[2 * j - 1])); j--) {
+      PetscReal t0 = p[2 * j], t1 = p[2 * j + 1];
+      p[2 * j] = p[2 * j - 2], p[2 * j + 1] = p[2 * j - 1], p[2 * j - 2] = t0, p[2 * j - 1] = t1;
+    }
+#define CROSS(o, a, b) (((a)[0] - (o)[0]) * ((b)[1] - (o)[1]) - ((a)[1] - (o)[1]) * ((b)[0] - (o)[0]))
+  for (PetscInt i = 0; i < n; i++) {
+    while (k >= 2 && CROSS(h + 2 * k - 4, h + 2 * k - 2, p + 2 * i) <= 0) k--;
+    h[2 * k] = p[2 * i], h[2 * k + 1] = p[2 * i + 1], k++;
+  }
+  for (PetscInt i = n - 2, lo = k + 1; i >= 0; i--) {
+    while (k >= lo && CROSS(h + 2 * k - 4, h + 2 * k - 2, p + 2 * i) <= 0) k--;
+    h[2 * k] = p[2 * i], h[2 * k + 1] = p[2 * i + 1], k++;
+  }
+#undef CROSS
+  return k > 1 ? k - 1 : k;
+}
+
+/* A body held only by contact on one plane (nrigid 6, coplanar contact nodes and normals): its
+   contact pressures are >= 0, so their resultant acts inside the contact area. The load's
+   resultant meets the plane at c = O + (nu x M_O) / (F . nu) (moment balance normal to nu;
+   friction acts in the plane and has no moment there): outside the convex hull of the body's
+   contact nodes the body overturns, an input error named here. Other shapes are not judged. */
+static PetscErrorCode InterfaceOverturning(MBCInterface ifc, PetscInt b, const PetscReal F[3], const PetscReal M[3], const PetscReal nu[3], PetscInt step, PetscReal time)
+{
+  MBCContact c = ifc->contact;
+  PetscReal *x, *p2, *h, O[3] = {0, 0, 0}, t1[3], t2[3], MO[3], cp[3], fn, diam = 0, out = -PETSC_MAX_REAL;
+  PetscInt   n = 0, nmax = 0, nh;
+
+  PetscFunctionBegin;
+  for (PetscInt k = 0; k < ifc->ncontact; k++) {
+    const MBCCouple *cpl = &c->couples[ifc->kcouple[k]];
+    const PetscInt   j   = ifc->kpoint[k];
+    nmax += cpl->moff[j + 1] - cpl->moff[j] + cpl->soff[j + 1] - cpl->soff[j];
+    if (MBCInterfacePointTouches(cpl, j, b) && PetscAbsReal(ifc->frames[9 * k] * nu[0] + ifc->frames[9 * k + 1] * nu[1] + ifc->frames[9 * k + 2] * nu[2]) < 1 - 1e-8) PetscFunctionReturn(0); /* curved */
+  }
+  PetscCall(PetscMalloc3(3 * nmax + 3, &x, 2 * nmax + 2, &p2, 2 * nmax + 4, &h));
+  for (PetscInt k = 0; k < ifc->ncontact; k++) { /* the body's nodes of its contact points, reference coordinates */
+    const MBCCouple *cpl = &c->couples[ifc->kcouple[k]];
+    const PetscInt   j   = ifc->kpoint[k];
+    for (PetscInt l = cpl->moff[j]; l < cpl->moff[j + 1]; l++)
+      if (cpl->master.nbody[cpl->mnode[l]] == b) PetscCall(PetscArraycpy(x + 3 * n++, cpl->master.x0 + 3 * cpl->mnode[l], 3));
+    for (PetscInt l = cpl->soff[j]; l < cpl->soff[j + 1]; l++)
+      if (cpl->slave.nbody[cpl->snode[l]] == b) PetscCall(PetscArraycpy(x + 3 * n++, cpl->slave.x0 + 3 * cpl->snode[l], 3));
+  }
+  for (PetscInt i = 0; i < n; i++)
+    for (PetscInt d = 0; d < 3; d++) O[d] += x[3 * i + d] / n;
+  for (PetscInt i = 0; i < n; i++) diam = PetscMax(diam, PetscSqrtReal(PetscSqr(x[3 * i] - O[0]) + PetscSqr(x[3 * i + 1] - O[1]) + PetscSqr(x[3 * i + 2] - O[2])));
+  { /* t1, t2: a basis of the plane */
+    const PetscInt a = PetscAbsReal(nu[0]) < 0.6 ? 0 : 1;
+    PetscReal      e[3] = {0, 0, 0}, l;
+    e[a]  = 1;
+    t1[0] = nu[1] * e[2] - nu[2] * e[1], t1[1] = nu[2] * e[0] - nu[0] * e[2], t1[2] = nu[0] * e[1] - nu[1] * e[0];
+    l     = PetscSqrtReal(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
+    for (PetscInt d = 0; d < 3; d++) t1[d] /= l;
+    t2[0] = nu[1] * t1[2] - nu[2] * t1[1], t2[1] = nu[2] * t1[0] - nu[0] * t1[2], t2[2] = nu[0] * t1[1] - nu[1] * t1[0];
+  }
+  for (PetscInt i = 0; i < n; i++) {
+    PetscReal r[3] = {x[3 * i] - O[0], x[3 * i + 1] - O[1], x[3 * i + 2] - O[2]};
+    if (PetscAbsReal(r[0] * nu[0] + r[1] * nu[1] + r[2] * nu[2]) > 1e-6 * diam) { /* not one plane */
+      PetscCall(PetscFree3(x, p2, h));
+      PetscFunctionReturn(0);
+    }
+    p2[2 * i] = r[0] * t1[0] + r[1] * t1[1] + r[2] * t1[2], p2[2 * i + 1] = r[0] * t2[0] + r[1] * t2[1] + r[2] * t2[2];
+  }
+  nh = Hull2D(n, p2, h);
+  fn = F[0] * nu[0] + F[1] * nu[1] + F[2] * nu[2];
+  MO[0] = M[0] - (O[1] * F[2] - O[2] * F[1]), MO[1] = M[1] - (O[2] * F[0] - O[0] * F[2]), MO[2] = M[2] - (O[0] * F[1] - O[1] * F[0]);
+  if (nh >= 3 && fn != 0) {
+    PetscReal q[2], nxm[3] = {nu[1] * MO[2] - nu[2] * MO[1], nu[2] * MO[0] - nu[0] * MO[2], nu[0] * MO[1] - nu[1] * MO[0]};
+    for (PetscInt d = 0; d < 3; d++) cp[d] = O[d] + nxm[d] / fn;
+    q[0] = (cp[0] - O[0]) * t1[0] + (cp[1] - O[1]) * t1[1] + (cp[2] - O[2]) * t1[2];
+    q[1] = (cp[0] - O[0]) * t2[0] + (cp[1] - O[1]) * t2[1] + (cp[2] - O[2]) * t2[2];
+    for (PetscInt i = 0; i < nh; i++) { /* distance outside the edge i -> i + 1 (counter-clockwise) */
+      const PetscReal *a = h + 2 * i, *e = h + 2 * ((i + 1) % nh);
+      const PetscReal  l = PetscSqrtReal(PetscSqr(e[0] - a[0]) + PetscSqr(e[1] - a[1]));
+      out                = PetscMax(out, -((e[0] - a[0]) * (q[1] - a[1]) - (e[1] - a[1]) * (q[0] - a[0])) / l);
+    }
+  }
+  PetscCall(PetscFree3(x, p2, h));
+  PetscCheck(!(out > 1e-6 * diam), ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: body '%s' overturns: its load's resultant (%g normal to its contact plane) meets that plane at (%g, %g, %g), %g outside its contact area (the convex hull of its contact nodes, extent %g); contact pressures can only push, so a static state needs the resultant inside the contact area: lower the load, prescribe a displacement that holds the body, or run a dynamic analysis", step, (double)time, ifc->scene->bodies[b].name, (double)PetscAbsReal(fn), (double)cp[0], (double)cp[1], (double)cp[2], (double)out, (double)(2 * diam));
+  PetscFunctionReturn(0);
+}
+
 /* A static contact solve with free bodies that failed: is the load on some free body beyond
-   what friction can hold? Per body its load's resultant F (this step's), the mean normal n of
-   the contact points that touch it and the largest mu of its couples: a tangential load
-   |F - (F.n) n| above mu |F.n| has no static equilibrium, an input error named here. */
+   what friction can hold, or does it overturn it? Per body its load's resultant F (this
+   step's), the mean normal n of the contact points that touch it and the largest mu of its
+   couples: a tangential load |F - (F.n) n| above mu |F.n| has no static equilibrium, an input
+   error named here; so has a body held only by contact whose load's resultant acts outside its
+   contact area (InterfaceOverturning). */
 static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step, PetscReal time)
 {
   MBCContact c = ifc->contact;
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    PetscReal F[4] = {0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N;
+    PetscReal F[8] = {0, 0, 0, 0, 0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N;
     PetscInt  cnt = 0;
-    if (ifc->bodies[b]) { /* F and whether the body is free, from its first rank */
+    if (ifc->bodies[b]) { /* F, its moment and whether the body is free (held only by contact), from its first rank */
       PetscMPIInt brank;
       PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
       if (!brank && ifc->bodies[b]->nrigid) {
-        for (PetscInt d = 0; d < 3; d++) F[d] = ifc->bodies[b]->fres[d];
+        for (PetscInt d = 0; d < 3; d++) F[d] = ifc->bodies[b]->fres[d], F[4 + d] = ifc->bodies[b]->fres[3 + d];
         F[3] = 1;
+        F[7] = ifc->bodies[b]->nrigid == 6;
       }
     }
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, F, 4, MPIU_REAL, MPIU_SUM, ifc->comm));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, F, 8, MPIU_REAL, MPIU_SUM, ifc->comm));
     if (!F[3]) continue;
     for (PetscInt k = 0; k < ifc->ncontact; k++) { /* the points touching b (replicated bookkeeping) */
       const MBCCouple *cp = &c->couples[ifc->kcouple[k]];
@@ -88,6 +181,7 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
     for (PetscInt d = 0; d < 3; d++) ft[d] = F[d] - fn * n[d], T += ft[d] * ft[d];
     T = PetscSqrtReal(T);
     PetscCheck(!(T > mu * PetscAbsReal(fn)), ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: body '%s' carries a tangential load of %g along (%.3f, %.3f, %.3f) against a friction capacity mu N = %g x %g = %g on its contact surfaces (T / mu N = %.4f); a static state needs T <= mu N: lower the load, prescribe a displacement that holds the body, or run a dynamic analysis", step, (double)time, ifc->scene->bodies[b].name, (double)T, (double)(ft[0] / T), (double)(ft[1] / T), (double)(ft[2] / T), (double)mu, (double)PetscAbsReal(fn), (double)(mu * PetscAbsReal(fn)), (double)(T / (mu * PetscAbsReal(fn))));
+    if (F[7]) PetscCall(InterfaceOverturning(ifc, b, F, F + 4, n, step, time));
   }
   PetscFunctionReturn(0);
 }

@@ -456,15 +456,9 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
         PetscCall(VecDot(body->rhs, body->rigid[j], &d));
         body->frigid[j] = PetscRealPart(d);
       }
-      if (body->nrigid) { /* and its resultant (x, y, z interleaved per vertex) */
-        const PetscScalar *fv;
-        PetscInt           n;
-        PetscCall(VecGetLocalSize(body->rhs, &n));
-        PetscCall(VecGetArrayRead(body->rhs, &fv));
-        body->fres[0] = body->fres[1] = body->fres[2] = 0;
-        for (PetscInt i = 0; i < n; i++) body->fres[i % 3] += PetscRealPart(fv[i]);
-        PetscCall(VecRestoreArrayRead(body->rhs, &fv));
-        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, body->fres, 3, MPIU_REAL, MPIU_SUM, body->comm));
+      if (body->nrigid) { /* and its resultant and moment */
+        PetscCall(MBCBodyLoadResultant(body, body->rhs, body->fres));
+        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, body->fres, 6, MPIU_REAL, MPIU_SUM, body->comm));
       }
       PetscCall(MatMult(body->K, body->u, body->work));
       PetscCall(VecAXPY(body->rhs, -1.0, body->work));
@@ -1086,7 +1080,7 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
       PetscReal r[7] = {0, 0, 0, 0, 0, 0, 0};
       for (PetscInt i = 0; s->bodies[b] && i < s->bodies[b]->nloads; i++)
         if (s->bodies[b]->load_index[i] == l) {
-          PetscCall(MBCBodyLoadResultant(s->bodies[b], i, r));
+          PetscCall(MBCBodyLoadResultant(s->bodies[b], s->bodies[b]->load[i], r));
           r[6] = 1;
         }
       PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, r, 7, MPIU_REAL, MPIU_SUM, s->comm));

@@ -55,3 +55,25 @@ def test_partly_supported_block_is_exact(tmp_path, gap, nproc):
     6e-13), also on 2 ranks."""
     e_u, e_f = errors(bench.gap_case(str(tmp_path), "g", gap, 1, hold=False, nproc=nproc))
     assert e_f < 1e-8, e_f
+
+
+@pytest.mark.parametrize("tau, block_master, nproc", [(1.2, True, 1), (1.01, False, 1), (1.2, False, 2)])
+def test_overturning_block_is_refused(tmp_path, tau, block_master, nproc):
+    """A block of height L/2 held only by contact (mu = 10, so friction holds any tau <= 10 p)
+    under p and a shear tau on its top: above tau = p the resultant meets the contact plane
+    outside the block's footprint (x = L/2 + tau L / 2p), so it overturns and no static state
+    exists. It ended in Newton DIVERGED_ITS at every cut and a message blaming the multiplier
+    solve; now refused at once, naming the body and where the resultant acts."""
+    uz, _, _, _, out, _ = bench.stack(str(tmp_path), "t", mu=10.0, tau=tau * 1e6, block_master=block_master, nproc=nproc)
+    assert uz is None, out
+    assert "no static equilibrium: body 'block' overturns" in out, out
+    assert f"meets that plane at ({0.5 + tau / 2:g}, 0.5, 1.)" in out, out
+
+
+@pytest.mark.parametrize("block_master", [True, False])
+def test_block_just_below_overturning_is_exact(tmp_path, block_master):
+    """tau = 0.99 p: the resultant 0.005 L inside the footprint's edge: a static state, the
+    friction resultant carries the shear exactly (either side master)."""
+    fx, _, fx_ex, _, out, _ = bench.stack(str(tmp_path), "t", mu=10.0, tau=0.99e6, block_master=block_master)
+    assert fx is not None, out
+    assert abs(fx / fx_ex - 1) < 1e-8, (fx, fx_ex)

@@ -62,7 +62,7 @@ struct _n_MBCBody {
   PetscReal *erigid;      /* per mode: -R^T (F - K u), the right side of the equilibrium G lambda = e */
   PetscReal *frigid;      /* per mode: R^T F, the load it carries (the scale of e) */
   PetscReal  erigid_round; /* what rounding leaves in e: eps |K|_inf |u|_inf max_j |R_j|_1 */
-  PetscReal  fres[3];     /* the resultant of the load F (static, this step) */
+  PetscReal  fres[6];     /* the resultant of the load F and its moment about the origin (static, this step) */
 
   Vec u, v, a;            /* displacement, velocity, acceleration */
   Vec du, rhs, f, fold, g, work, work2;
@@ -74,7 +74,7 @@ PETSC_INTERN PetscErrorCode MBCBodySetUp(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyDestroy(MBCBody *);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleLoads(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody, MBCLoadDesc *, Vec);
-PETSC_INTERN PetscErrorCode MBCBodyLoadResultant(MBCBody, PetscInt, PetscReal[6]);
+PETSC_INTERN PetscErrorCode MBCBodyLoadResultant(MBCBody, Vec, PetscReal[6]);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleElasticity(MBCBody, Mat, Mat);
 PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);
 PETSC_INTERN PetscErrorCode MBCBodyExternalForce(MBCBody, PetscReal, PetscBool, Vec);
