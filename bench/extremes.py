@@ -37,6 +37,7 @@ from mbcontact.results import read_csv  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+CATEGORY_MODULES = []  # the categories of other files (bench/extremes_*.py): cases(work, smoke) -> rows
 TOL = 1e-8  # exact answer: only rounding and the multiplier tolerance (1e-8 relative) remain
 
 
@@ -99,19 +100,116 @@ def gap_case(work, name, gap, steps, hold=True, L=1.0, E=2e10, delta=1e-4, nproc
     return 1.0, c["fz"][-1], 1.0, f_ex, r.stdout, wall
 
 
-def row(category, value, res):
-    uz, fz, uz_ex, fz_ex, out, wall = res
+def stack3(work, name, E=(2e10, 2e10, 2e10), p=None, L=1.0, nproc=1):
+    """Three bodies: the base [0,L]^3 (E[0], fixed at its bottom), a middle block [L, 1.5L] (E[1])
+    and a top block [1.5L, 2L] (E[2]), frictionless couples, nu = 0, p on the top: uniaxial in
+    all three, the middle and top blocks held only by contact. Top u_z = -p L (1/E0 + 1/(2 E1) +
+    1/(2 E2)); each couple carries p L^2. p defaults to 1e-4 of the softest E (small strain)."""
+    p = 1e-4 * min(E) if p is None else p
+    meshgen.boxes(os.path.join(work, f"{name}.msh"),
+                  [dict(lo=(0, 0, 0), hi=(L, L, L), n=(2, 2, 2), name="base"),
+                   dict(lo=(0, 0, L), hi=(L, L, 1.5 * L), n=(3, 3, 1), name="mid"),
+                   dict(lo=(0, 0, 1.5 * L), hi=(L, L, 2 * L), n=(2, 2, 1), name="top")])
+    scene = {"meshes": {"m": f"{name}.msh"},
+             "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": e, "nu": 0.0}} for b, e in zip(("base", "mid", "top"), E)},
+             "couples": [{"master": "mid_zmin", "slave": "base_zmax", "mu": 0.0},
+                         {"master": "top_zmin", "slave": "mid_zmax", "mu": 0.0}],
+             "dirichlet": [{"surface": "base_zmin", "components": "all"}],
+             "loads": [{"kind": "pressure", "surface": "top_zmax", "value": p}],
+             "analysis": {"type": "static"},
+             "output": {"points": {"top": {"x": [L / 2, L / 2, 2 * L], "body": "top"}}}}
+    h5 = prepare(work, name, scene)
+    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
+    t0 = time.perf_counter()
+    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    wall = time.perf_counter() - t0
+    uz_ex = -p * L * (1 / E[0] + 0.5 / E[1] + 0.5 / E[2])
+    if r.returncode:
+        return None, None, uz_ex, p * L * L, r.stdout + r.stderr, wall
+    pts = read_csv(h5[:-3] + "_result_points.csv")
+    c = read_csv(h5[:-3] + "_result_contact.csv")
+    # the worse of the two couples' normal forces
+    fz = [f for f in c["fz"][-2:]] if c["fz"].size >= 2 else [c["fz"][-1]]
+    worst = max(fz, key=lambda f: abs(f / (p * L * L) - 1))
+    return pts["top_uz"][-1], worst, uz_ex, p * L * L, r.stdout, wall
+
+
+HEADER = f"{'category':>9} {'value':>12} {'reasons':>16} {'mult':>6} {'static':>6} {'error':>9} {'drift':>9} {'wall':>7} {'':>5}"
+
+
+def solve_stats(out):
+    """The multiplier solves' converged reasons, their iterations and the static iterations, from
+    -mbc_monitor's output."""
     reasons = sorted(set(re.findall(r"contact: \w+ (\w+) in", out))) or ["(none)"]
     its = [int(i) for i in re.findall(r" in (\d+) iterations", out)]
-    static_its = len(re.findall(r"static iteration", out))
+    return reasons, sum(its), len(re.findall(r"static iteration", out))
+
+
+def show(r):
+    """Prints one case of any category (the dicts of the category modules too)."""
+    drift = "" if r.get("drift") is None else f"{r['drift']:9.2e}"
+    print(f"{r['category']:>9} {r['value']:>12} {','.join(r['reasons']):>16} {r['mult_its']:>6} {r['static_its']:>6} "
+          f"{r['error']:9.2e} {drift:>9} {r['wall']:7.2f} {'pass' if r['ok'] else 'FAIL':>5}", flush=True)
+    return r
+
+
+def row(category, value, res, x=None, count=True):
+    """A static case against its exact answer: the error is the worse of u_z and the force."""
+    uz, fz, uz_ex, fz_ex, out, wall = res
+    reasons, mult_its, static_its = solve_stats(out)
     if uz is None:
         e_u = e_f = float("inf")
     else:
         e_u, e_f = abs(uz / uz_ex - 1), abs(fz / fz_ex - 1)
-    ok = e_u < TOL and e_f < TOL and reasons and all(r.startswith("CONVERGED") for r in reasons)
-    print(f"{category:>9} {value:>10} {','.join(reasons):>16} {sum(its):>6} {static_its:>6} {e_u:10.2e} {e_f:10.2e} {wall:7.2f} {'pass' if ok else 'FAIL':>5}",
-          flush=True)
-    return dict(category=category, value=value, e_u=e_u, e_f=e_f, ok=ok)
+    ok = e_u < TOL and e_f < TOL and all(r.startswith("CONVERGED") for r in reasons)
+    return show(dict(category=category, value=value, x=x, reasons=reasons, mult_its=mult_its, static_its=static_its,
+                     error=max(e_u, e_f), e_u=e_u, e_f=e_f, drift=None, wall=wall, ok=ok, count=count))
+
+
+def static_cases(work, smoke):
+    """The categories with an exact static answer."""
+    rows = []
+    contrasts = [1e-6, 1e6] if smoke else [1e-6, 1e-4, 1e-2, 1.0, 1e2, 1e4, 1e6]
+    for i, k in enumerate(contrasts):
+        # p = 1e-4 of the softer E: a small strain on both sides (the solver refuses motions above ten model sizes)
+        rows.append(row("contrast", f"{k:g}", stack(work, f"c{i}", E_block=2e10 * k, p=1e-4 * 2e10 * min(k, 1.0)), x=k))
+    # three bodies, the middle one held only by contact: stiff between soft, soft between stiff, graded
+    triples = [(1, 1e6, 1)] if smoke else [(1, 1e6, 1), (1e6, 1, 1e6), (1, 1e3, 1e6), (1e6, 1e3, 1)]
+    for i, t in enumerate(triples):
+        rows.append(row("contrast3", ":".join(f"{k:g}" for k in t), stack3(work, f"t{i}", E=tuple(2e10 * k for k in t)),
+                        x=max(t) / min(t) * (1.0 + 0.1 * i)))
+    sizes = [1e-3] if smoke else [1e-3, 1e-1, 1.0, 1e2, 1e4]
+    for i, L in enumerate(sizes):
+        rows.append(row("size", f"{L:g} m", stack(work, f"s{i}", L=L), x=L))
+    # units: m/kg/s (E in Pa, p in Pa) against mm/t/s (E in MPa, p in MPa); u in mm = 1e3 u in m
+    si = stack(work, "u_si", L=1.0, E_base=2e10, E_block=2e10, p=1e6)
+    mm = stack(work, "u_mm", L=1e3, E_base=2e4, E_block=2e4, p=1.0)
+    e_u = abs(mm[0] / (1e3 * si[0]) - 1) if si[0] and mm[0] else float("inf")
+    e_f = abs(mm[1] / si[1] - 1) if si[1] and mm[1] else float("inf")
+    reasons, mult_its, static_its = solve_stats(si[4] + mm[4])
+    rows.append(show(dict(category="units", value="mm vs m", x=1.0, reasons=reasons, mult_its=mult_its, static_its=static_its,
+                          error=max(e_u, e_f), drift=None, wall=si[5] + mm[5], ok=max(e_u, e_f) < 1e-10, count=True)))
+    # friction: a shear tau = min(mu / 2, 1/2) p on the top (stick: fx = -tau L^2 exactly); mu = 0 with no shear.
+    # Above tau = p the block (h = L/2) overturns: refused (test_extremes.py)
+    mus = [10.0] if smoke else [0.0, 0.01, 0.3, 1.0, 10.0]
+    for i, mu in enumerate(mus):
+        rows.append(row("friction", f"mu {mu:g}", stack(work, f"f{i}", mu=mu, tau=min(0.5 * mu, 0.5) * 1e6), x=max(mu, 1e-3)))
+    # initial gaps 0 .. 10 element sizes (h = L/2 through the block), closed in one load step or in 10;
+    # the block's x and y held, or free (its x, y and rotation about z resisted by nothing, unloaded)
+    gaps = [(10, 10)] if smoke else [(0, 1), (0.1, 1), (1, 1), (10, 1), (1, 10), (10, 10)]
+    for hold in (True, False):
+        for i, (g, n) in enumerate(gaps):
+            rows.append(row("gap" if hold else "gap free", f"{g:g}h/{n}st", gap_case(work, f"g{i}{hold:d}", g * 0.5, n, hold=hold),
+                            x=max(g, 0.01) * (1.1 if n > 1 else 1.0)))
+    ratios = [(1, 20)] if smoke else [(2, 2), (1, 5), (5, 1), (1, 20), (20, 1)]
+    for nb, nk in ratios:
+        rows.append(row("ratio", f"{nb}:{nk}", stack(work, f"r{nb}_{nk}", n_base=nb, n_block=nk), x=nk / nb))
+    return rows
+
+
+XLABEL = {"contrast": "E_block / E_base", "contrast3": "largest / smallest E", "size": "L [m]", "units": "",
+          "friction": "mu", "gap": "gap / h", "gap free": "gap / h", "ratio": "h_base / h_block",
+          "poisson": "nu", "timestep": "dt [s]", "bounce": "bounces"}
 
 
 def main():
@@ -120,49 +218,25 @@ def main():
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "extremes.png"))
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="mbc_extremes_")
-    contrasts = [1e-6, 1e6] if a.smoke else [1e-6, 1e-4, 1e-2, 1.0, 1e2, 1e4, 1e6]
-    sizes = [1e-3] if a.smoke else [1e-3, 1e-1, 1.0, 1e2, 1e4]
-    ratios = [(1, 20)] if a.smoke else [(2, 2), (1, 5), (5, 1), (1, 20), (20, 1)]
-    print(f"{'category':>9} {'value':>10} {'reasons':>16} {'mult':>6} {'static':>6} {'u_z err':>10} {'F err':>10} {'wall':>7} {'':>5}")
-    rows = []
-    for i, k in enumerate(contrasts):
-        # p = 1e-4 of the softer E: a small strain on both sides (the solver refuses motions above ten model sizes)
-        rows.append(row("contrast", f"{k:g}", stack(work, f"c{i}", E_block=2e10 * k, p=1e-4 * 2e10 * min(k, 1.0))))
-    for i, L in enumerate(sizes):
-        rows.append(row("size", f"{L:g} m", stack(work, f"s{i}", L=L)))
-    # units: m/kg/s (E in Pa, p in Pa) against mm/t/s (E in MPa, p in MPa); u in mm = 1e3 u in m
-    si = stack(work, "u_si", L=1.0, E_base=2e10, E_block=2e10, p=1e6)
-    mm = stack(work, "u_mm", L=1e3, E_base=2e4, E_block=2e4, p=1.0)
-    e_u = abs(mm[0] / (1e3 * si[0]) - 1) if si[0] and mm[0] else float("inf")
-    e_f = abs(mm[1] / si[1] - 1) if si[1] and mm[1] else float("inf")
-    print(f"{'units':>9} {'mm/t/s':>10} {'':>16} {'':>6} {'':>6} {e_u:10.2e} {e_f:10.2e} {si[5] + mm[5]:7.2f} {'pass' if max(e_u, e_f) < 1e-10 else 'FAIL':>5}"
-          "   (mm run against the m run, 1e-10)")
-    rows.append(dict(category="units", value="mm", e_u=e_u, e_f=e_f, ok=max(e_u, e_f) < 1e-10))
-    # friction: a shear tau = min(mu / 2, 1/2) p on the top (stick: fx = -tau L^2 exactly); mu = 0 with no shear.
-    # Above tau = p the block (h = L/2) tips over its edge: no static equilibrium (docs/stability.md)
-    mus = [10.0] if a.smoke else [0.0, 0.01, 0.3, 1.0, 10.0]
-    for i, mu in enumerate(mus):
-        rows.append(row("friction", f"mu {mu:g}", stack(work, f"f{i}", mu=mu, tau=min(0.5 * mu, 0.5) * 1e6)))
-    # initial gaps 0 .. 10 element sizes (h = L/2 through the block), closed in one load step or in 10
-    gaps = [(10, 10)] if a.smoke else [(0, 1), (0.1, 1), (1, 1), (10, 1), (1, 10), (10, 10)]
-    for i, (g, n) in enumerate(gaps):
-        rows.append(row("gap", f"{g:g}h/{n}st", gap_case(work, f"g{i}", g * 0.5, n)))
-    # the same with the block's x, y and rotation about z free (no load along them): a known
-    # defect, refused with exit 1 (docs/stability.md); listed, not counted
-    for i, (g, n) in enumerate([] if a.smoke else gaps):
-        row("gap free", f"{g:g}h/{n}st", gap_case(work, f"gf{i}", g * 0.5, n, hold=False))
-    for nb, nk in ratios:
-        rows.append(row("ratio", f"{nb}:{nk}", stack(work, f"r{nb}_{nk}", n_base=nb, n_block=nk)))
-    failed = [r for r in rows if not r["ok"]]
-    print(f"\n{len(rows) - len(failed)} of {len(rows)} cases pass" + (": failing " + ", ".join(f"{r['category']} {r['value']}" for r in failed) if failed else ""))
+    print(HEADER)
+    rows = static_cases(work, a.smoke)
+    for module in CATEGORY_MODULES:
+        rows += [show(r) for r in module.cases(work, a.smoke)]
+    counted = [r for r in rows if r.get("count", True)]
+    failed = [r for r in counted if not r["ok"]]
+    print(f"\n{len(counted) - len(failed)} of {len(counted)} cases pass" + (": failing " + ", ".join(f"{r['category']} {r['value']}" for r in failed) if failed else ""))
     floor = 1e-17  # a log plot of an exact zero
-    series = []
-    for cat, xs, style in (("contrast", contrasts, "o-"), ("size", sizes, "s-")):
-        rs = [r for r in rows if r["category"] == cat]
-        series.append((xs, [max(r["e_u"], r["e_f"], floor) for r in rs], style, f"{cat} (x: E ratio / L in m)"))
-    rs = [r for r in rows if r["category"] == "ratio"]
-    series.append(([nk / nb for nb, nk in ratios], [max(r["e_u"], r["e_f"], floor) for r in rs], "^-", "ratio (x: h_base / h_block)"))
-    plot.loglog(a.plot, "exact static stack: worst relative error", "swept parameter", series, ylabel="relative error")
+    panels = []
+    for cat in dict.fromkeys(r["category"] for r in rows):
+        rs = [r for r in rows if r["category"] == cat and r.get("x") is not None]
+        if not rs:
+            continue
+        xs = [r["x"] for r in rs]
+        series = [(xs, [min(max(r["error"], floor), 1e3) for r in rs], "o-", "error")]
+        if any(r.get("drift") is not None for r in rs):
+            series.append((xs, [max(r["drift"] or 0.0, floor) for r in rs], "s--", "energy drift"))
+        panels.append((cat, XLABEL.get(cat, ""), "relative error", series, min(xs) > 0 and max(xs) / min(xs) > 50))
+    plot.panels(a.plot, "bench/extremes.py: error against the swept parameter", panels)
 
 
 if __name__ == "__main__":
