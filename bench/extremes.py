@@ -39,6 +39,7 @@ SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build"
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 CATEGORY_MODULES = []  # the categories of other files (bench/extremes_*.py): cases(work, smoke) -> rows
 TOL = 1e-8  # exact answer: only rounding and the multiplier tolerance (1e-8 relative) remain
+STATIC_RTOL = 1e-6  # the solver's default -mbc_static_rtol: what a step that iterates promises
 
 
 def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0, block_master=True, nproc=1):
@@ -153,7 +154,7 @@ def show(r):
     return r
 
 
-def row(category, value, res, x=None, count=True):
+def row(category, value, res, x=None, count=True, series=""):
     """A static case against its exact answer: the error is the worse of u_z and the force."""
     uz, fz, uz_ex, fz_ex, out, wall = res
     reasons, mult_its, static_its = solve_stats(out)
@@ -161,9 +162,15 @@ def row(category, value, res, x=None, count=True):
         e_u = e_f = float("inf")
     else:
         e_u, e_f = abs(uz / uz_ex - 1), abs(fz / fz_ex - 1)
-    ok = e_u < TOL and e_f < TOL and all(r.startswith("CONVERGED") for r in reasons)
+    # exact where a step's first equilibrium iteration ends it (linear problem, pairs known); a step
+    # that iterates stops at -mbc_static_rtol (1e-6 of the force, default): the gap is measured
+    # along the current normals, so after a mid-step re-search the iterations contract linearly
+    # (docs/stability.md) and the answer is as exact as that tolerance
+    steps = max(1, len(re.findall(r"max\|u\|", out)))
+    tol = TOL if static_its <= 2 * steps else STATIC_RTOL
+    ok = e_u < tol and e_f < tol and all(r.startswith("CONVERGED") for r in reasons)
     return show(dict(category=category, value=value, x=x, reasons=reasons, mult_its=mult_its, static_its=static_its,
-                     error=max(e_u, e_f), e_u=e_u, e_f=e_f, drift=None, wall=wall, ok=ok, count=count))
+                     error=max(e_u, e_f), e_u=e_u, e_f=e_f, drift=None, wall=wall, ok=ok, count=count, series=series))
 
 
 def static_cases(work, smoke):
@@ -177,7 +184,7 @@ def static_cases(work, smoke):
     triples = [(1, 1e6, 1)] if smoke else [(1, 1e6, 1), (1e6, 1, 1e6), (1, 1e3, 1e6), (1e6, 1e3, 1)]
     for i, t in enumerate(triples):
         rows.append(row("contrast3", ":".join(f"{k:g}" for k in t), stack3(work, f"t{i}", E=tuple(2e10 * k for k in t)),
-                        x=max(t) / min(t) * (1.0 + 0.1 * i)))
+                        x=t[1] / t[0]))
     sizes = [1e-3] if smoke else [1e-3, 1e-1, 1.0, 1e2, 1e4]
     for i, L in enumerate(sizes):
         rows.append(row("size", f"{L:g} m", stack(work, f"s{i}", L=L), x=L))
@@ -200,14 +207,14 @@ def static_cases(work, smoke):
     for hold in (True, False):
         for i, (g, n) in enumerate(gaps):
             rows.append(row("gap" if hold else "gap free", f"{g:g}h/{n}st", gap_case(work, f"g{i}{hold:d}", g * 0.5, n, hold=hold),
-                            x=max(g, 0.01) * (1.1 if n > 1 else 1.0)))
+                            x=max(g, 0.01), series=f"{n} load step{'s' if n > 1 else ''}"))
     ratios = [(1, 20)] if smoke else [(2, 2), (1, 5), (5, 1), (1, 20), (20, 1)]
     for nb, nk in ratios:
         rows.append(row("ratio", f"{nb}:{nk}", stack(work, f"r{nb}_{nk}", n_base=nb, n_block=nk), x=nk / nb))
     return rows
 
 
-XLABEL = {"contrast": "E_block / E_base", "contrast3": "largest / smallest E", "size": "L [m]", "units": "",
+XLABEL = {"contrast": "E_block / E_base", "contrast3": "E_middle / E_base", "size": "L [m]", "units": "",
           "friction": "mu", "gap": "gap / h", "gap free": "gap / h", "ratio": "h_base / h_block",
           "poisson": "nu", "timestep": "dt [s]", "bounce": "bounces"}
 
@@ -231,10 +238,14 @@ def main():
         rs = [r for r in rows if r["category"] == cat and r.get("x") is not None]
         if not rs:
             continue
+        series = []
+        for name in dict.fromkeys(r.get("series", "") for r in rs):  # a line per series, in x order
+            sr = sorted((r for r in rs if r.get("series", "") == name), key=lambda r: r["x"])
+            xs = [r["x"] for r in sr]
+            series.append((xs, [min(max(r["error"], floor), 1e3) for r in sr], "o-", f"error {name}".strip()))
+            if any(r.get("drift") is not None for r in sr):
+                series.append((xs, [max(r["drift"] or 0.0, floor) for r in sr], "s--", f"energy drift {name}".strip()))
         xs = [r["x"] for r in rs]
-        series = [(xs, [min(max(r["error"], floor), 1e3) for r in rs], "o-", "error")]
-        if any(r.get("drift") is not None for r in rs):
-            series.append((xs, [max(r["drift"] or 0.0, floor) for r in rs], "s--", "energy drift"))
         panels.append((cat, XLABEL.get(cat, ""), "relative error", series, min(xs) > 0 and max(xs) / min(xs) > 50))
     plot.panels(a.plot, "bench/extremes.py: error against the swept parameter", panels)
 
