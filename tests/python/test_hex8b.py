@@ -130,3 +130,20 @@ def test_bad_element_scene_key_lists_hex8b(tmp_path):
         assert r.returncode != 0
         for w in words:
             assert w in r.stderr, (w, r.stderr)
+
+
+def test_bench_extremes_poisson_smoke(tmp_path):
+    """bench/extremes_poisson.py's cases(work, smoke=True), as bench/extremes.py will import it:
+    one dict per element and scene at nu = 0.499 with the agreed keys; every multiplier solve
+    converges; the confined stack is exact for every element; on Lame's cylinder hex8b and hex8i
+    pass and hex8 and tet4 fail, labelled as locking. ~9 s."""
+    rows = ep.cases(str(tmp_path), True)
+    keys = {"category", "value", "x", "reasons", "mult_its", "static_its", "error", "drift", "wall", "ok", "ref"}
+    assert len(rows) == 8 and all(keys <= set(r) for r in rows)
+    assert all(r["category"] == "poisson" and r["x"] == 0.499 and r["drift"] is None for r in rows)
+    assert all(r["reasons"] == ["CONVERGED_RTOL"] for r in rows), [r["reasons"] for r in rows]
+    ok = {(r["scene"], r["element"]): r["ok"] for r in rows}
+    assert all(ok[("confined", e)] for e in ep.ELEMENTS)
+    assert ok[("lame", "hex8b")] and ok[("lame", "hex8i")]
+    assert not ok[("lame", "hex8")] and not ok[("lame", "tet4")]
+    assert all(r["note"] == "locking (use hex8b)" for r in rows if not r["ok"])
