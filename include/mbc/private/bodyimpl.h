@@ -9,7 +9,8 @@ struct _MBCBodyOps {
 };
 
 /* The element of a body's cells: tet4 bodies have tet4; hex bodies hex8, hex8i (incompatible
-   modes) or hex8b (B-bar, mean dilatation), chosen by the scene's body key `element` or -body_[<name>_]element. */
+   modes) or hex8b (B-bar, mean dilatation), chosen by the scene's body key `element` or
+   -body_[<name>_]element. */
 typedef enum {
   MBC_ELEMENT_TET4,
   MBC_ELEMENT_HEX8,
