@@ -261,7 +261,7 @@ MATERIAL_DEFAULTS = dict(nu=0.0, density=0.0, damping=0.0, rayleigh_alpha=0.0, r
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
 LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic")
 FIELDS = ("displacement", "stress")
-ELEMENTS = ("hex8", "hex8i")  # the element of a hex body (a tet4 body has tet4)
+ELEMENTS = ("hex8", "hex8i", "hex8b")  # the element of a hex body (a tet4 body has tet4)
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
@@ -271,7 +271,7 @@ class Body:
     mesh: str
     regions: list
     material: dict
-    element: str = ""  # hex bodies: "hex8" | "hex8i"; "" = the solver's default
+    element: str = ""  # hex bodies: "hex8" | "hex8i" | "hex8b"; "" = the solver's default
 
 
 @dataclass

@@ -139,7 +139,7 @@ static PetscErrorCode BodyLoadMesh(MBCBody body)
   PetscFunctionReturn(0);
 }
 
-const char *const MBCElementTypes[] = {"tet4", "hex8", "hex8i", "MBCElementType", "MBC_ELEMENT_", NULL};
+const char *const MBCElementTypes[] = {"tet4", "hex8", "hex8i", "hex8b", "MBCElementType", "MBC_ELEMENT_", NULL};
 
 /* The element of the body's cells: tet4 for a tet mesh (the choice below is ignored); for hexes
    -body_<name>_element (or -body_element, copied to every body by the solver), else the scene's
@@ -156,7 +156,7 @@ static PetscErrorCode BodyChooseElement(MBCBody body, const char prefix[])
   if (body->desc.element[0]) PetscCall(PetscStrncpy(value, body->desc.element, sizeof(value)));
   PetscCall(PetscOptionsGetString(NULL, prefix, "-element", value, sizeof(value), &set));
   if (!value[0]) PetscFunctionReturn(0);
-  for (PetscInt e = MBC_ELEMENT_HEX8; e <= MBC_ELEMENT_HEX8I; e++) {
+  for (PetscInt e = MBC_ELEMENT_HEX8; e <= MBC_ELEMENT_HEX8B; e++) {
     PetscBool match;
     PetscCall(PetscStrcmp(value, MBCElementTypes[e], &match));
     if (match) {
@@ -164,8 +164,8 @@ static PetscErrorCode BodyChooseElement(MBCBody body, const char prefix[])
       PetscFunctionReturn(0);
     }
   }
-  if (set) SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "-%selement %s (or -body_element): unknown element for body '%s'; use hex8 or hex8i", prefix, value, body->name);
-  SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has element '%s', not hex8 or hex8i", body->scene->filename, body->name, value);
+  if (set) SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "-%selement %s (or -body_element): unknown element for body '%s'; use hex8, hex8i or hex8b", prefix, value, body->name);
+  SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has element '%s', not hex8, hex8i or hex8b", body->scene->filename, body->name, value);
 }
 
 /* Body index of the scene on comm; its options are -<prefix>body_<name>_* (prefix: the solver's, or NULL). */

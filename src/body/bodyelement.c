@@ -120,6 +120,66 @@ void MBCElementHex8(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscRe
   }
 }
 
+/* Physical gradients G[q] of the 8 trilinear functions at the 2x2x2 Gauss points, the points'
+   weights w[q] = |det J| and the cell-mean gradient Gm = sum_q w[q] G[q] / sum_q w[q]; returns
+   the volume. N[q] (may be NULL): the shape functions at the points. */
+static PetscReal HexGaussGradients(const PetscReal X[], PetscReal G[8][8][3], PetscReal w[8], PetscReal Gm[8][3], PetscReal N[8][8])
+{
+  const PetscReal g = 1.0 / PetscSqrtReal(3.0);
+  PetscReal       vol = 0;
+
+  for (PetscInt a = 0; a < 8; a++) Gm[a][0] = Gm[a][1] = Gm[a][2] = 0;
+  for (PetscInt q = 0; q < 8; q++) {
+    const PetscReal xi[3] = {HexCorner[q][0] * g, HexCorner[q][1] * g, HexCorner[q][2] * g};
+    PetscReal       dN[8][3], Nq[8], Ji[9];
+
+    w[q] = PetscAbsReal(HexMap(X, xi, Nq, dN, Ji));
+    PhysicalGradients(8, dN, Ji, 1.0, G[q]);
+    if (N)
+      for (PetscInt a = 0; a < 8; a++) N[q][a] = Nq[a];
+    for (PetscInt a = 0; a < 8; a++)
+      for (PetscInt k = 0; k < 3; k++) Gm[a][k] += w[q] * G[q][a][k];
+    vol += w[q];
+  }
+  for (PetscInt a = 0; a < 8; a++)
+    for (PetscInt k = 0; k < 3; k++) Gm[a][k] /= vol;
+  return vol;
+}
+
+/* hex8b: hex8 with B-bar, mean dilatation (Hughes 1980): the volumetric strain at every Gauss
+   point is replaced by its cell mean, the deviatoric strain is hex8's. With the bulk modulus
+   kappa = lambda + 2 mu / 3, the energy 2 mu dev(e):dev(e) + kappa tr(e)^2 splits into the
+   isotropic form with lambda' = -2 mu / 3 at each Gauss point (the deviatoric part) plus
+   kappa V Gm Gm^T with the cell-mean gradient Gm (one volumetric constraint per cell instead of
+   eight: no volumetric locking as nu -> 1/2). The same 2x2x2 rule, the plain hex8 mass. A linear
+   field has the same dilatation at every point, so the patch test holds on any mesh. */
+void MBCElementHex8B(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
+{
+  PetscReal G[8][8][3], w[8], Gm[8][3], N[8][8], vol;
+
+  vol = HexGaussGradients(X, G, w, Gm, N);
+  for (PetscInt q = 0; q < 8; q++) AddPoint(8, G[q], N[q], w[q], -2.0 * mu / 3.0, mu, rho, Ke, Me);
+  AddPoint(8, Gm, NULL, vol, lambda + 2.0 * mu / 3.0, 0, 0, Ke, NULL);
+}
+
+/* The dilatation div u of the hex with vertices X and displacements U at the centre (*centre)
+   and its cell mean over the 2x2x2 rule (*mean, hex8b's volumetric strain). */
+void MBCElementHex8Dilatation(const PetscReal X[], const PetscReal U[], PetscReal *centre, PetscReal *mean)
+{
+  const PetscReal xi[3] = {0, 0, 0};
+  PetscReal       G[8][8][3], w[8], Gm[8][3], N[8], dN[8][3], Ji[9], Gc[8][3];
+
+  (void)HexGaussGradients(X, G, w, Gm, NULL);
+  (void)HexMap(X, xi, N, dN, Ji);
+  PhysicalGradients(8, dN, Ji, 1.0, Gc);
+  *centre = *mean = 0;
+  for (PetscInt a = 0; a < 8; a++)
+    for (PetscInt k = 0; k < 3; k++) {
+      *centre += Gc[a][k] * U[3 * a + k];
+      *mean += Gm[a][k] * U[3 * a + k];
+    }
+}
+
 /* In place Cholesky factor L (lower, row-major) of the SPD n x n matrix A; returns 0 if A is not
    positive definite. */
 static PetscBool Cholesky(PetscInt n, PetscReal A[])
@@ -226,6 +286,7 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
     if (M) PetscCall(PetscArrayzero(Me, 9 * nv * nv));
     if (nv == 4) MBCElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     else if (body->element == MBC_ELEMENT_HEX8I) PetscCheck(MBCElementHex8I(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': cell %" PetscInt_FMT " is degenerate (hex8i: its incompatible-mode stiffness is not positive definite)", body->name, c);
+    else if (body->element == MBC_ELEMENT_HEX8B) MBCElementHex8B(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     else MBCElementHex8(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     PetscCall(MatSetValuesLocal(K, 3 * nv, idx, 3 * nv, idx, Ke, ADD_VALUES));
     if (M) PetscCall(MatSetValuesLocal(M, 3 * nv, idx, 3 * nv, idx, Me, ADD_VALUES));

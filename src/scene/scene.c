@@ -441,10 +441,11 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
     PetscCall(PetscStrcmp(b->cell_type, "hex8", &hex));
     PetscCheck(tet || hex, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has cell_type '%s', not tet4 or hex8", s->filename, b->name, b->cell_type);
     if (b->element[0]) {
-      PetscBool h8, h8i;
+      PetscBool h8, h8i, h8b;
       PetscCall(PetscStrcmp(b->element, "hex8", &h8));
       PetscCall(PetscStrcmp(b->element, "hex8i", &h8i));
-      PetscCheck(hex && (h8 || h8i), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' of %s cells has element '%s' (hex bodies: hex8 or hex8i; tet4 bodies: none)", s->filename, b->name, b->cell_type, b->element);
+      PetscCall(PetscStrcmp(b->element, "hex8b", &h8b));
+      PetscCheck(hex && (h8 || h8i || h8b), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' of %s cells has element '%s' (hex bodies: hex8, hex8i or hex8b; tet4 bodies: none)", s->filename, b->name, b->cell_type, b->element);
     }
     PetscCheck(b->num_cells >= 1 && b->num_vertices >= 4, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " cells and %" PetscInt_FMT " vertices", s->filename, b->name, b->num_cells, b->num_vertices);
   }

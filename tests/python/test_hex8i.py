@@ -220,7 +220,7 @@ def test_bad_element_option(tmp_path, option):
     r = solve(h5, option, "hex20", check=False)
     text = r.stdout + r.stderr
     assert r.returncode == 1, text
-    for w in ("-body_cube_element hex20", "-body_element", "'cube'", "hex8 or hex8i"):
+    for w in ("-body_cube_element hex20", "-body_element", "'cube'", "hex8, hex8i or hex8b"):
         assert w in text, (w, text)
 
 

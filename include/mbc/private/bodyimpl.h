@@ -8,12 +8,14 @@ struct _MBCBodyOps {
   PetscErrorCode (*view)(MBCBody, PetscViewer);
 };
 
-/* The element of a body's cells: tet4 bodies have tet4; hex bodies hex8 or hex8i (incompatible
-   modes), chosen by the scene's body key `element` or -body_[<name>_]element. */
+/* The element of a body's cells: tet4 bodies have tet4; hex bodies hex8, hex8i (incompatible
+   modes) or hex8b (B-bar, mean dilatation), chosen by the scene's body key `element` or
+   -body_[<name>_]element. */
 typedef enum {
   MBC_ELEMENT_TET4,
   MBC_ELEMENT_HEX8,
-  MBC_ELEMENT_HEX8I
+  MBC_ELEMENT_HEX8I,
+  MBC_ELEMENT_HEX8B
 } MBCElementType;
 PETSC_EXTERN const char *const MBCElementTypes[];
 

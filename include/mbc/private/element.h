@@ -10,3 +10,7 @@ PETSC_EXTERN void MBCElementTet4(const PetscReal[], PetscReal, PetscReal, PetscR
    cell is degenerate. */
 PETSC_EXTERN void MBCElementHex8(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
 PETSC_EXTERN PetscBool MBCElementHex8I(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
+/* MBCElementHex8B: hex8 with B-bar (mean dilatation); MBCElementHex8Dilatation(X, U, &centre,
+   &mean): div u at the centre and its cell mean over the 2x2x2 rule (hex8b's stress). */
+PETSC_EXTERN void MBCElementHex8B(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
+PETSC_EXTERN void MBCElementHex8Dilatation(const PetscReal[], const PetscReal[], PetscReal *, PetscReal *);

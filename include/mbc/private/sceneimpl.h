@@ -35,7 +35,7 @@ typedef struct {
 
 typedef struct {
   char      name[MBC_NAME_LEN], cell_type[16];
-  char      element[16]; /* hex bodies: "hex8" | "hex8i" | "" (the solver's default) */
+  char      element[16]; /* hex bodies: "hex8" | "hex8i" | "hex8b" | "" (the solver's default) */
   PetscInt  num_cells, num_vertices;
   PetscReal E, nu, density, damping, rayleigh_alpha, rayleigh_beta;
 } MBCBodyDesc;
