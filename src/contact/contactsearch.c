@@ -8,6 +8,7 @@ PetscErrorCode MBCSurfaceReset(MBCSurface *s)
   PetscFunctionBegin;
   PetscCall(PetscFree4(s->nbody, s->nrow, s->x0, s->x));
   PetscCall(PetscFree(s->nnormal));
+  PetscCall(PetscFree(s->fcnormal));
   PetscCall(PetscFree3(s->fnv, s->fnode, s->fbody));
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
@@ -16,8 +17,9 @@ PetscErrorCode MBCSurfaceReset(MBCSurface *s)
   PetscFunctionReturn(0);
 }
 
-/* Face normals (Newell), centres, node -> face map, free-boundary edges and averaged nodal
-   normals (mean of the unit normals of the faces around the node), from the current coordinates. */
+/* Face normals (Newell), centres, node -> face map, free-boundary edges, averaged nodal normals
+   (mean of the unit normals of the faces around the node) and the faces' corner normals (the same
+   mean over the faces within the feature angle of the face), from the current coordinates. */
 PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
 {
   PetscInt *count;
@@ -25,6 +27,7 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
   PetscFunctionBegin;
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree(s->nnormal));
+  PetscCall(PetscFree(s->fcnormal));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
   PetscCall(PetscFree(s->ffree));
   PetscCall(PetscCalloc2(3 * s->nfaces, &s->fnormal, 3 * s->nfaces, &s->fcenter));
@@ -55,6 +58,20 @@ PetscErrorCode MBCSurfaceSetUp(MBCSurface *s)
   }
   PetscCall(PetscFree(count));
   for (PetscInt v = 0; v < s->nnodes; v++) MBCNormalize(&s->nnormal[3 * v]);
+  /* corner normals: a faceted curved surface's normal, continuous across the faces' shared edges
+     (the contact normal at a point is their interpolation), a feature edge kept sharp */
+  PetscCall(PetscCalloc1(3 * MBC_MAX_FACE_NODES * s->nfaces + 1, &s->fcnormal));
+  for (PetscInt f = 0; f < s->nfaces; f++)
+    for (PetscInt i = 0; i < s->fnv[f]; i++) {
+      const PetscInt v = s->fnode[MBC_MAX_FACE_NODES * f + i];
+      PetscReal     *cn = &s->fcnormal[3 * (MBC_MAX_FACE_NODES * f + i)];
+      for (PetscInt k = s->n2foff[v]; k < s->n2foff[v + 1]; k++) {
+        const PetscReal *ng = &s->fnormal[3 * s->n2f[k]];
+        if (s->n2f[k] != f && !(MBCDot(ng, &s->fnormal[3 * f]) > MBC_FEATURE_COS)) continue;
+        for (PetscInt d = 0; d < 3; d++) cn[d] += ng[d];
+      }
+      MBCNormalize(cn);
+    }
   PetscCall(PetscMalloc1(MBC_MAX_FACE_NODES * s->nfaces + 1, &s->ffree));
   for (PetscInt f = 0; f < s->nfaces; f++) { /* edge (a, b) is free when no other face around a has b */
     const PetscInt nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
@@ -263,12 +280,19 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
   }
   for (PetscInt i = 0; i < nv; i++) wmin = PetscMin(wmin, cp->w[i]);
   cp->face = f;
+  /* the contact normal: the face's corner normals interpolated with the weights, so it does not
+     depend on which of the faces sharing an edge or vertex takes the point (on a faceted curved
+     surface the face normal would tilt the normal of a point on a shared vertex by half the kink,
+     always towards the face the tie rule picks: a tangential force on a frictionless interface) */
   for (PetscInt d = 0; d < 3; d++) {
     cp->p[d] = p[d];
-    cp->n[d] = nf[d];
+    cp->n[d] = 0;
+    for (PetscInt i = 0; i < nv; i++) cp->n[d] += cp->w[i] * s->fcnormal[3 * (MBC_MAX_FACE_NODES * f + i) + d];
   }
+  if (!(MBCNormalize(cp->n) > 0) || !(MBCDot(cp->n, nm) < 0))
+    for (PetscInt d = 0; d < 3; d++) cp->n[d] = nf[d];
   MBCSub(xm, p, e);
-  cp->gap  = MBCDot(e, nf);
+  cp->gap  = MBCDot(e, cp->n);
   *quality = out < 0 ? out : wmin;
   return PETSC_TRUE;
 }

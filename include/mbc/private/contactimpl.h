@@ -5,6 +5,10 @@
 
 #define MBC_MAX_FACE_NODES 4
 #define MBC_SEARCH_CANDIDATES 8 /* slave nodes tried per master node, nearest first */
+/* two faces sharing a node belong to one smooth surface there when their normals are less than
+   acos(0.75) = 41.4 degrees apart (a faceted cylinder of 3 or more cells per quarter); a larger kink
+   (a block's edge, 2 cells per quarter) is a feature edge and keeps each face's own normal */
+#define MBC_FEATURE_COS 0.75
 
 /* One side of a couple: nodes and faces gathered from all bodies and ranks, in canonical
    order (body, then reference coordinates), so results do not depend on the rank count. */
@@ -18,6 +22,8 @@ typedef struct {
   PetscInt  *fbody;
   PetscReal *fnormal;       /* per face: unit outward normal (Newell: area-weighted, warped quads too) */
   PetscReal *fcenter;
+  PetscReal *fcnormal;      /* per face corner (MBC_MAX_FACE_NODES x 3 per face): unit mean of the normals of the faces around the
+                               corner's node within the feature angle of this face (MBC_FEATURE_COS): the smoothed surface's normal there */
   PetscInt  *n2foff, *n2f;  /* node -> faces (CSR) */
   PetscBool *ffree;         /* per face edge i (vertex i to i+1): on the surface's free boundary (no other face shares it) */
 } MBCSurface;
