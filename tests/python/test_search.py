@@ -33,6 +33,7 @@ from mbcontact.scene import load_yaml, parse_scene
 BODY_BASE = 0  # index of the first body of the scene in the dump's master_body / slave_body
 MATERIAL = {"E": 1.0e9, "nu": 0.3}
 INSIDE_TOL = 1e-10  # the document's relative tolerance of the inside test
+FEATURE_COS = 0.75  # faces around a node less than acos(0.75) = 41.4 degrees apart share its corner normal
 
 
 # ---------------------------------------------------------------- scenes and runs
@@ -96,6 +97,14 @@ class Side:
         summed = np.zeros_like(self.x)
         np.add.at(summed, self.faces.ravel(), np.repeat(self.normal, self.faces.shape[1], axis=0))
         self.node_normal = unit(summed)  # normalised mean of the unit normals around the node
+        # corner normals: per face corner, the mean of the unit normals of the faces around the
+        # corner's node whose normal is within the feature angle of the face's (cos > FEATURE_COS)
+        around = [[] for _ in range(len(self.x))]
+        for j, f in enumerate(self.faces):
+            for v in f:
+                around[v].append(j)
+        self.corner_normal = np.array([[unit(sum(self.normal[g] for g in around[v] if g == j or self.normal[g] @ self.normal[j] > FEATURE_COS))
+                                        for v in f] for j, f in enumerate(self.faces)])
         self.face_index = {frozenset(f): j for j, f in enumerate(self.faces)}
         self.order = np.lexsort((self.x[:, 2], self.x[:, 1], self.x[:, 0], self.body))  # canonical
 
@@ -226,9 +235,11 @@ def check_points(couple, points):
         faces[r] = f = s.face_index.get(frozenset(vi), -1)
         assert f >= 0, f"row {r}: vertices {xyz} are not a slave face"
         size = np.linalg.norm(np.roll(xyz, -1, axis=0) - xyz, axis=1).max()
-        # the face's outward normal, vertices counter-clockwise seen from outside
-        assert np.abs(nf - s.normal[f]).max() < 1e-12, f"row {r}: n {nf} is not the face normal {s.normal[f]}"
-        assert np.abs(unit(newell(xyz[None]))[0] - nf).max() < 1e-12, f"row {r}: vertices not counter-clockwise"
+        # vertices counter-clockwise seen from outside; the normal: the face's corner normals
+        # interpolated with the weights (on a flat surface the face's outward normal)
+        assert np.abs(unit(newell(xyz[None]))[0] - s.normal[f]).max() < 1e-12, f"row {r}: vertices not counter-clockwise"
+        corner = s.corner_normal[f][[list(s.faces[f]).index(v) for v in vi]]
+        assert np.abs(nf - unit(w @ corner)).max() < 1e-12, f"row {r}: n {nf} is not the interpolated corner normal {unit(w @ corner)}"
         # frame: orthonormal, right-handed, t1 = normalise(e x n) with e a least aligned axis
         t1, t2 = d["T1"][r], d["T2"][r]
         basis = np.array([nf, t1, t2])
@@ -239,17 +250,18 @@ def check_points(couple, points):
             f"row {r}: t1 {t1} is not normalise(e x n) for a least aligned axis e"
         # projection point: on the face's plane, inside the face, reproduced by the weights
         centroid = xyz.mean(axis=0)
-        assert abs(np.dot(p - centroid, nf)) < 1e-12 * size, f"row {r}: p not on the face's plane"
+        assert abs(np.dot(p - centroid, s.normal[f])) < 1e-12 * size, f"row {r}: p not on the face's plane"
         assert abs(w.sum() - 1) < 1e-12, f"row {r}: weights sum to {w.sum()}"
         assert w.min() > -INSIDE_TOL, f"row {r}: p outside the face (weights {w})"
-        warp = np.abs((xyz - centroid) @ nf).max()
+        warp = np.abs((xyz - centroid) @ s.normal[f]).max()
         assert np.linalg.norm(w @ xyz - p) <= warp + 1e-12 * size, f"row {r}: sum w_i v_i != p"
         if warp < 1e-14 * size:  # planar face: the documented coordinates exactly
-            assert np.abs(w - wachspress(xyz, p, nf)).max() < 1e-12, f"row {r}: weights {w} are not the documented ones"
+            assert np.abs(w - wachspress(xyz, p, s.normal[f])).max() < 1e-12, f"row {r}: weights {w} are not the documented ones"
         # projection along the master node's averaged normal; the gap
         xm, nm = d["M"][r], m.node_normal[mi[r]]
         assert np.linalg.norm(np.cross(p - xm, nm)) < 1e-12 * m.scale, f"row {r}: p not on the line x_m + t n_m"
-        assert np.dot(nf, nm) < 0, f"row {r}: face normal does not oppose the master normal"
+        assert np.dot(s.normal[f], nm) < 0, f"row {r}: face normal does not oppose the master normal"
+        assert np.dot(nf, nm) < 0, f"row {r}: contact normal does not oppose the master normal"
         assert abs(d["gap"][r] - np.dot(xm - p, nf)) < 1e-12 * m.scale, f"row {r}: gap != (x_m - p).n"
     return d, mi, faces
 
