@@ -224,8 +224,6 @@ def main():
     failed = [r for r in counted if not r["ok"]]
     print(f"\n{len(counted) - len(failed)} of {len(counted)} cases pass" + (": failing " + ", ".join(f"{r['category']} {r['value']}" for r in failed) if failed else "")
           + f"; {sum(r['wall'] for r in rows):.1f} s of solver wall time")
-    if a.smoke:
-        return
     import plot  # noqa: E402  (bench/plot.py)
     floor = 1e-17  # a log plot of an exact zero
     ts = [r for r in rows if r["category"] == "timestep"]
