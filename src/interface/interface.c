@@ -445,16 +445,17 @@ PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
 
 /* The gap a step starts from at point k. H (normals, weights) stays as the last rebuild made it
    while the search recomputes the gap on the current geometry every step, so the gap a step
-   predicted (g_n + H^T du, complementary to z) and the one the next step finds differ by the
-   rotation of the normals since the rebuild times the motion: second order, but of either sign.
-   A dynamic step that closed the negative part within the step would make the contact forces do
-   work z |g| on the bodies, and that work feeds back: an undamped block bouncing on an elastic
-   block (docs/stability-dynamic.md) pumped its twisting and rocking motion up to 3700 times the
-   impact energy within 0.45 s. So a dynamic step starts from max(g, 0): a penetration only may
-   not grow, its work z max(g, 0) is never negative; it stays of the order of that second-order
-   mismatch (measured 8.5e-9 m, 3e-4 of the 25 um drop) and closes when the point separates.
-   -mbc_contact_push_out: closed within the step, as before. Static load steps iterate on the
-   geometry to equilibrium and keep the gap as it is. */
+   predicted (g_n + H^T du, complementary to z) and the one the next step finds differ, with
+   either sign (measured on a block bouncing on an elastic block, one cell each: +-7e-12 m at
+   first, then growing with the motion, up to 1.9e-7 m in a step, in a saddle pattern over the
+   four corners). A dynamic step that closed the negative part within itself made the contact
+   forces do work z |g| on the bodies, and that work fed back: such undamped blocks gained 47 to
+   3700 times their impact energy within 0.45 s (docs/stability-dynamic.md). So a dynamic step
+   starts from max(g, 0): a penetration may only not grow, and the normal work z max(g, 0) is
+   never negative. What is left is not pushed out (measured: 4e-14 m on the bouncing block of
+   bench/extremes_dynamic.py, up to 9e-7 m, 3.6 % of the drop, with an elastic lower block);
+   it closes when the point separates. -mbc_contact_push_out: closed within the step, as before.
+   Static load steps iterate on the geometry to equilibrium and keep the gap as it is. */
 PetscReal MBCInterfaceStartGap(MBCInterface ifc, PetscInt k)
 {
   const PetscReal g = ifc->contact->couples[ifc->kcouple[k]].igap[ifc->kpoint[k]];
