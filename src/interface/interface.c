@@ -443,24 +443,22 @@ PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
   PetscFunctionReturn(0);
 }
 
-/* The gap a step starts from at point k. H (normals, weights) stays as the last rebuild made it
-   while the search recomputes the gap on the current geometry every step, so the gap a step
-   predicted (g_n + H^T du, complementary to z) and the one the next step finds differ, with
-   either sign (measured on a block bouncing on an elastic block, one cell each: +-7e-12 m at
-   first, then growing with the motion, up to 1.9e-7 m in a step, in a saddle pattern over the
-   four corners). A dynamic step that closed the negative part within itself made the contact
-   forces do work z |g| on the bodies, and that work fed back: such undamped blocks gained 47 to
-   3700 times their impact energy within 0.45 s (docs/stability-dynamic.md). So a dynamic step
-   starts from max(g, 0): a penetration may only not grow, and the normal work z max(g, 0) is
-   never negative. What is left is not pushed out (measured: 4e-14 m on the bouncing block of
-   bench/extremes_dynamic.py, up to 9e-7 m, 3.6 % of the drop, with an elastic lower block);
-   it closes when the point separates. -mbc_contact_push_out: closed within the step, as before.
-   Static load steps iterate on the geometry to equilibrium and keep the gap as it is. */
+/* The gap a step starts from at point k: the search's, on the current geometry. A dynamic step
+   closes a penetration it starts from within the step, and the contact forces then do work
+   z |g| on the bodies (docs/design.md, departure 2, needs g_n >= 0 for no gain). Such
+   penetrations are the second-order difference between the gap a step predicted (g_n + H^T du
+   with H of the last rebuild) and the one the search finds after it: ~1e-12 m on the bouncing
+   blocks of bench/extremes_dynamic.py. (A first-order one, the gap measured to a warped slave
+   quad's mean plane while H moved its corners, reached 1e-5 m per step and pumped in 2600 times
+   the impact energy: MBCCoupleProjectOnFace.) -mbc_contact_keep_penetration starts a dynamic step
+   from max(g, 0): the normal work z max(g, 0) is then never negative whatever the geometry does,
+   and a penetration is only kept from growing (an initial one, accepted by
+   -mbc_contact_penetration_tol, stays). */
 PetscReal MBCInterfaceStartGap(MBCInterface ifc, PetscInt k)
 {
   const PetscReal g = ifc->contact->couples[ifc->kcouple[k]].igap[ifc->kpoint[k]];
 
-  return ifc->analysis == MBC_ANALYSIS_DYNAMIC && !ifc->contact->push_out ? PetscMax(g, 0) : g;
+  return ifc->analysis == MBC_ANALYSIS_DYNAMIC && ifc->contact->keep_penetration ? PetscMax(g, 0) : g;
 }
 
 /* q = sum_i H_i^T du_i + (gap, 0, 0): this rank's rows. */
