@@ -160,7 +160,7 @@ def case(scene, element, nu, res):
         note = "locking (use hex8b)" if nu > 0 else "discretization (coarse tets)"
     return dict(category="poisson", value=f"{element} {nu:g} {scene}", x=nu, reasons=reasons, mult_its=mult_its,
                 static_its=static_its, error=error, drift=None, wall=wall, ok=ok, ref=ref, note=note,
-                scene=scene, element=element)
+                scene=scene, element=element, series=f"{scene} {element}")
 
 
 def cases(work, smoke):

@@ -43,6 +43,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_penetration_tol", "Largest initial penetration accepted (< 0: that fraction of the mean face edge)", "MBCContactSetFromOptions", c->penetration_tol, &c->penetration_tol, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_accept_penetration", "Warn about a larger initial penetration instead of stopping", "MBCContactSetFromOptions", c->accept_penetration, &c->accept_penetration, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_keep_penetration", "Dynamic: a step starts from max(gap, 0), so a penetration it finds may only not grow (the contact forces never do work on the bodies) instead of being closed within the step", "MBCContactSetFromOptions", c->keep_penetration, &c->keep_penetration, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
   PetscCall(PetscOptionsString("-mbc_contact_dump", "Write PREFIX_pairs.csv and PREFIX_points.csv", "MBCContactSetFromOptions", c->dump, c->dump, sizeof(c->dump), NULL));
   PetscOptionsEnd();

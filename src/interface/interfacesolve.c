@@ -335,18 +335,16 @@ PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt 
 
 /* Work of the step's mean contact force z on the bodies, z . H^T du per point, added to
    *wfriction (tangential) and *wcontact (normal): u = D lambda_n+1 + q is (g_n, 0, 0) + H^T du
-   (g_n the gap the step started from, still in igap: the search comes after the step), in the
+   (g_n the gap the step started from, MBCInterfaceStartGap: the search comes after the step), in the
    frames the multipliers live in; friction dissipates -z_t . du_t >= 0, the normal contact takes
    -z_n (g_n+1 - g_n) = z_n g_n >= 0 where complementarity holds. The trapezoidal rule's energy
    balance holds with the step's mean force, so with these the total is conserved to the
    multiplier tolerance. Replicated data (couple order): the same on every rank. */
 void MBCInterfaceContactWork(MBCInterface ifc, PetscReal *wfriction, PetscReal *wcontact)
 {
-  MBCContact c = ifc->contact;
-
   for (PetscInt k = 0; k < ifc->ncontact; k++) {
     const PetscInt o = ifc->coff[k], dim = ifc->coff[k + 1] - o;
-    const PetscReal g = c->couples[ifc->kcouple[k]].igap[ifc->kpoint[k]];
+    const PetscReal g = MBCInterfaceStartGap(ifc, k); /* the gap the step started from */
     for (PetscInt d = 0; d < dim; d++) {
       const PetscReal z = ifc->theta * ifc->rall[o + d] / ifc->dscale, du = ifc->uall[o + d] - (d ? 0 : g);
       if (d) *wfriction -= z * du;

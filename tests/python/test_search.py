@@ -262,7 +262,8 @@ def check_points(couple, points):
         assert np.linalg.norm(np.cross(p - xm, nm)) < 1e-12 * m.scale, f"row {r}: p not on the line x_m + t n_m"
         assert np.dot(s.normal[f], nm) < 0, f"row {r}: face normal does not oppose the master normal"
         assert np.dot(nf, nm) < 0, f"row {r}: contact normal does not oppose the master normal"
-        assert abs(d["gap"][r] - np.dot(xm - p, nf)) < 1e-12 * m.scale, f"row {r}: gap != (x_m - p).n"
+        # the gap: to the weights' point of the slave element (p itself on a planar face), along n
+        assert abs(d["gap"][r] - np.dot(xm - w @ xyz, nf)) < 1e-12 * m.scale, f"row {r}: gap != (x_m - sum w_i x_i).n"
     return d, mi, faces
 
 

@@ -73,6 +73,7 @@ struct _n_MBCContact {
   PetscReal  penetration_tol;     /* initial penetration refused beyond this (< 0: this times -1 the mean face edge) */
   PetscBool  accept_penetration;  /* warn instead */
   PetscBool  check_penetration;   /* off for -mbc_contact_search_only: a report, no steps */
+  PetscBool  keep_penetration; /* -mbc_contact_keep_penetration: a dynamic step starts from max(gap, 0) */
   Vec       *usearch;       /* per body: displacement at the last global search (NULL off the body) */
 };
 

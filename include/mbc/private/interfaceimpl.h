@@ -86,6 +86,7 @@ PETSC_INTERN PetscBool      MBCInterfacePointTouches(const MBCCouple *, PetscInt
 PETSC_INTERN PetscErrorCode MBCInterfaceToBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceFromBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceGapRate(MBCInterface, Vec);
+PETSC_INTERN PetscReal      MBCInterfaceStartGap(MBCInterface, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGather(MBCInterface, Vec, PetscReal[]);
 /* interfacerigid.c: free bodies in a static analysis */
 PETSC_INTERN PetscErrorCode MBCInterfaceRigidModes(MBCInterface);
