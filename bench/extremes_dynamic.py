@@ -34,7 +34,7 @@ bounce    An upper block 1 x 1 x 0.5 m (one hex8i cell, E 1e11 Pa, nu 0, rho 200
           deepest penetration at a corner node (on a corner node).
           A last row repeats 100 periods with -mbc_contact_keep_penetration (a dynamic step starts
           from max(gap, 0)). Before the fix of the gap to warped slave quads (MBCCoupleProjectOnFace)
-          the 100 periods gained 2600 K_i (docs/stability-dynamic.md).
+          the 100 periods gained 2600 K_i (docs/stability.md).
 
 Every case returns a dict (cases()); main() prints the table and writes docs/extremes_dynamic.png.
 

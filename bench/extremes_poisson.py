@@ -19,7 +19,7 @@ hex8b (B-bar) and tet4:
             which full-integration hex8 and tet4 cannot follow (volumetric locking). Error: the
             mean radial displacement of the inner surface's vertices against Lame; the modelling
             error (faceted circles, 12 cells per quarter, 3 through each wall) is that of hex8b at
-            nu = 0: see docs/stability-poisson.md.
+            nu = 0: see docs/stability.md.
 Columns: the multiplier solves' converged reasons, their iterations, the static iterations, the
 error, wall time; pass: every multiplier solve CONVERGED and error < 1e-8 (confined), < LAME_TOL
 (lame). A locking element fails the lame case near nu = 1/2: listed as "locking (use hex8b)".
@@ -51,7 +51,7 @@ NUS = (0.0, 0.3, 0.45, 0.49, 0.499)
 ELEMENTS = ("hex8", "hex8i", "hex8b", "tet4")
 E, P = 2.0e10, 1.0e6
 EXACT_TOL = 1e-8  # confined: exact fields, only rounding and the multiplier tolerance remain
-LAME_TOL = 0.0075  # lame: about 2x hex8b's worst error over the sweep (0.34 %, the mesh's); docs/stability-poisson.md
+LAME_TOL = 0.0075  # lame: about 2x hex8b's worst error over the sweep (0.34 %, the mesh's); docs/stability.md
 RA, RB, RC, LZ = 1.0, 1.5, 2.0, 0.25  # inner, contact and outer radii; axial length
 N_LAME = (3, 12, 1)  # cells per tube: radial, per quarter, axial
 

@@ -1,4 +1,4 @@
-"""A curved conforming contact interface (issue 17, docs/stability-curved.md): the lame scene of
+"""A curved conforming contact interface (issue 17, docs/stability.md): the lame scene of
 bench/extremes_poisson.py, two concentric quarter tubes 1 <= r <= 1.5 and 1.5 <= r <= 2 (3 x 12 x 1
 hex8b cells each, matching vertices at r = 1.5), frictionless, plane strain, symmetry planes,
 internal pressure p. The problem is symmetric about the 45 degree plane and, by Lame, the interface
@@ -38,7 +38,7 @@ def faceted_tube(name, r0, r1, n, m, side):
     circle: the faceted surface of the other tube when that one has m cells per quarter. With n a
     multiple of m the two meshes are non-matching but their surfaces conform (two independently
     meshed circles would differ by the facets' sagitta, 3.2e-3 at 12 per quarter, 30x the
-    displacement here: docs/stability-curved.md)."""
+    displacement here: docs/stability.md)."""
     axis, mid = np.array([0, 0, 1.0]), np.array([1, 1, 0]) / np.sqrt(2)
     other, half = np.cross(axis, mid), np.pi / 4
     d = 2 * half / m

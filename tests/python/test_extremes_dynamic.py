@@ -1,4 +1,4 @@
-"""Dynamic cases of bench/extremes_dynamic.py (docs/stability-dynamic.md), one per category and
+"""Dynamic cases of bench/extremes_dynamic.py (docs/stability.md), one per category and
 both ends of the time-step sweep, against their references. About 25 s in all (nice 10, shared
 machine)."""
 import numpy as np
