@@ -676,6 +676,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
   PetscCall(InterfaceReset(ifc));
   ifc->pairs_built  = pairs;
   ifc->npairs_built = n;
+  PetscCall(MBCContactSetPreferredFaces(c, n, pairs, MBC_PAIR_SIZE)); /* the next searches keep these faces where they tie */
   ifc->ncontact     = nc;
   PetscCall(PetscMalloc1(nc + 1, &dims));
   PetscCall(PetscMalloc2(nc + 1, &ifc->kcouple, nc + 1, &ifc->kpoint));
