@@ -20,6 +20,7 @@
    (lambda_n . g_n+1 - lambda_n+1 . g_n) / 2, an energy gain whenever a loaded contact opens (a
    bouncing block gains energy at every bounce). */
 #include <mbc/private/interfaceimpl.h>
+#include <petscblaslapack.h>
 #include <stdint.h>
 
 PetscLogEvent MBC_FlexibilityAssemble;
@@ -71,6 +72,14 @@ PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface ifc, PetscInt dblock)
 {
   PetscFunctionBegin;
   ifc->dblock = dblock;
+  PetscFunctionReturn(0);
+}
+
+/* How D_i is built (-mbc_d_route): 0 multi-right-hand-side solves, 1 the Schur complement. */
+PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route)
+{
+  PetscFunctionBegin;
+  ifc->droute = route;
   PetscFunctionReturn(0);
 }
 
@@ -556,6 +565,87 @@ static PetscErrorCode InterfacePreallocation(MBCInterface ifc, PetscInt rstart, 
   PetscFunctionReturn(0);
 }
 
+/* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
+   C the rows of H_b that are not zero and not held (MBCBodyZeroHeldRows), S = A_CC - A_CI A_II^-1 A_IC
+   from a MUMPS factorization of the body's operator with C as its Schur set, S^-1 by LAPACK, then
+   D_b = H_C^T S^-1 H_C: the same D as the multi-right-hand-side route, (A^-1)_CC = S^-1, without one
+   solve per multiplier; its costs are a second factorization and |C|^3 dense. *Dout: the dense
+   nb x nb D_b. */
+static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
+{
+  MBCBody        body = ifc->bodies[b];
+  Mat            A, P, F, S, HC, HCd, Y;
+  Vec            r;
+  IS             isC;
+  PetscInt       n, nC = 0, *idx;
+  PetscScalar   *ra;
+  MatFactorInfo  info;
+
+  PetscFunctionBegin;
+  PetscCall(KSPGetOperators(body->ksp, &A, &P));
+  PetscCall(MatGetLocalSize(ifc->H[b], &n, NULL));
+  PetscCall(MatCreateVecs(ifc->H[b], NULL, &r));
+  { /* rows of H with an entry that is not zero */
+    PetscScalar *a;
+    PetscCall(VecGetArray(r, &a));
+    for (PetscInt i = 0; i < n; i++) {
+      PetscInt           nc;
+      const PetscScalar *v;
+      a[i] = 0;
+      PetscCall(MatGetRow(ifc->H[b], i, &nc, NULL, &v));
+      for (PetscInt k = 0; k < nc; k++)
+        if (v[k] != 0.0) a[i] = 1;
+      PetscCall(MatRestoreRow(ifc->H[b], i, &nc, NULL, &v));
+    }
+    PetscCall(VecRestoreArray(r, &a));
+  }
+  PetscCall(MBCBodyZeroHeldRows(body, r, NULL));
+  PetscCall(VecGetArray(r, &ra));
+  PetscCall(PetscMalloc1(n + 1, &idx));
+  for (PetscInt i = 0; i < n; i++)
+    if (ra[i] != 0.0) idx[nC++] = i;
+  PetscCall(VecRestoreArray(r, &ra));
+  PetscCall(VecDestroy(&r));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, &isC));
+  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT ", %" PetscInt_FMT " multipliers\n", body->name, nC, n, ifc->nbcols[b]));
+  PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+  PetscCall(MatFactorSetSchurIS(F, isC));
+  PetscCall(MatFactorInfoInitialize(&info));
+  PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
+  PetscCall(MatCholeskyFactorNumeric(F, A, &info));
+  PetscCall(MatFactorCreateSchurComplement(F, &S, NULL));
+  PetscCall(MatDestroy(&F)); /* the factor's memory goes; S is ours */
+  PetscCall(MatSetOption(S, MAT_SPD, PETSC_TRUE));
+  { /* S^-1 in place: Cholesky of the dense SPD S, then its inverse (LAPACK potrf, potri) */
+    PetscScalar *s;
+    PetscBLASInt bn, lda, info2;
+    PetscInt     ld;
+    PetscCall(MatDenseGetLDA(S, &ld));
+    PetscCall(PetscBLASIntCast(nC, &bn));
+    PetscCall(PetscBLASIntCast(ld, &lda));
+    PetscCall(MatDenseGetArray(S, &s));
+    if (bn) {
+      PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, s, &lda, &info2));
+      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': the Schur complement onto its contact DOFs is not positive definite (potrf %d)", body->name, (int)info2);
+      PetscCallBLAS("LAPACKpotri", LAPACKpotri_("L", &bn, s, &lda, &info2));
+      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': potri %d", body->name, (int)info2);
+      for (PetscInt j = 0; j < nC; j++) /* the upper triangle from the lower */
+        for (PetscInt i = 0; i < j; i++) s[i + j * ld] = s[j + i * ld];
+    }
+    PetscCall(MatDenseRestoreArray(S, &s));
+  }
+  PetscCall(MatCreateSubMatrix(ifc->H[b], isC, NULL, MAT_INITIAL_MATRIX, &HC));
+  PetscCall(MatConvert(HC, MATDENSE, MAT_INITIAL_MATRIX, &HCd));
+  PetscCall(MatMatMult(S, HCd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(MatTransposeMatMult(HC, Y, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Dout));
+  PetscCall(MatDestroy(&Y));
+  PetscCall(MatDestroy(&HCd));
+  PetscCall(MatDestroy(&HC));
+  PetscCall(MatDestroy(&S));
+  PetscCall(ISDestroy(&isC));
+  PetscFunctionReturn(0);
+}
+
 /* D_i = H_i^T A_i^-1 H_i of the bodies on this rank, by blocks of -mbc_contact_block columns
    (memory: DOFs x block, not DOFs x multipliers), added into W (rows where they live); then
    W = D / dscale with dscale the mean diagonal: r = dscale lambda has the units of u, so the
@@ -579,6 +669,24 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
     if (!body || !nb) continue;
     PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
     PetscCall(MatGetOwnershipRangeColumn(ifc->H[b], &clo, &chi));
+    if (ifc->droute == 1) {
+      PetscMPIInt bsize;
+      PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
+      if (bsize == 1) {
+        Mat                D;
+        const PetscScalar *a;
+        PetscInt           lda;
+        PetscCall(BodyDSchur(ifc, b, &D));
+        PetscCall(MatDenseGetArrayRead(D, &a));
+        PetscCall(MatDenseGetLDA(D, &lda));
+        for (PetscInt i = 0; i < nb; i++)
+          for (PetscInt j = 0; j < nb; j++)
+            if (a[i + j * lda] != 0.0) PetscCall(MatSetValue(ifc->fp.W, ifc->bcols[b][i], ifc->bcols[b][j], a[i + j * lda], ADD_VALUES));
+        PetscCall(MatDenseRestoreArrayRead(D, &a));
+        PetscCall(MatDestroy(&D));
+        continue;
+      }
+    }
     for (PetscInt j0 = 0; j0 < nb; j0 += ifc->dblock) {
       const PetscInt     j1 = PetscMin(nb, j0 + ifc->dblock), w = j1 - j0;
       Mat                Hd, X, D;
