@@ -51,6 +51,7 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   PetscCall(MBCMultiplierSetFromOptions(ifc->mult));
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
+  PetscCall(PetscCalloc4(nbodies, &ifc->sinv, nbodies, &ifc->sinv_is, nbodies, &ifc->sinv_id, nbodies, &ifc->sinv_state));
   *iface = ifc;
   PetscFunctionReturn(0);
 }
@@ -614,39 +615,48 @@ static PetscErrorCode AddDenseBlock(Mat W, const PetscInt rows[], PetscInt lo, P
 }
 
 /* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
-   C the rows of H_b that are not zero and not held (MBCBodyZeroHeldRows), S = A_CC - A_CI A_II^-1 A_IC
-   from a MUMPS factorization of the body's operator with C as its Schur set, S^-1 by LAPACK, then
-   D_b = H_C^T S^-1 H_C: the same D as the multi-right-hand-side route, (A^-1)_CC = S^-1, without one
-   solve per multiplier; its costs are a second factorization and |C|^3 dense. *Dout: the dense
-   nb x nb D_b. */
-static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
+   C the DOFs of the body's nodes on its contact surfaces (every couple, both sides) that are not
+   held (MBCBodyZeroHeldRows): a set fixed by the scene, which holds the rows of every H_b the search
+   can make. S = A_CC - A_CI A_II^-1 A_IC from a MUMPS factorization of the body's operator with C
+   as its Schur set, S^-1 by LAPACK, kept while the operator is the same object in the same state;
+   then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the multi-right-hand-side
+   route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
+   restart computes S^-1 from the same operator and the same C, so it builds the same D. *Dout:
+   the dense nb x nb D_b. */
+static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
 {
   MBCBody        body = ifc->bodies[b];
-  Mat            A, P, F, S, HC, HCd, Y;
+  MBCContact     c    = ifc->contact;
+  Mat            A, P, F, S;
   Vec            r;
-  IS             isC;
   PetscInt       n, nC = 0, *idx;
   PetscScalar   *ra;
+  PetscObjectState state;
+  PetscObjectId  id;
   MatFactorInfo  info;
 
   PetscFunctionBegin;
   PetscCall(KSPGetOperators(body->ksp, &A, &P));
-  PetscCall(MatGetLocalSize(ifc->H[b], &n, NULL));
-  PetscCall(MatCreateVecs(ifc->H[b], NULL, &r));
-  { /* rows of H with an entry that is not zero */
-    PetscScalar *a;
-    PetscCall(VecGetArray(r, &a));
-    for (PetscInt i = 0; i < n; i++) {
-      PetscInt           nc;
-      const PetscScalar *v;
-      a[i] = 0;
-      PetscCall(MatGetRow(ifc->H[b], i, &nc, NULL, &v));
-      for (PetscInt k = 0; k < nc; k++)
-        if (v[k] != 0.0) a[i] = 1;
-      PetscCall(MatRestoreRow(ifc->H[b], i, &nc, NULL, &v));
-    }
-    PetscCall(VecRestoreArray(r, &a));
+  PetscCall(PetscObjectStateGet((PetscObject)A, &state));
+  PetscCall(PetscObjectGetId((PetscObject)A, &id));
+  if (ifc->sinv[b] && ifc->sinv_id[b] == id && ifc->sinv_state[b] == state) {
+    PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement, S^-1 reused\n", body->name));
+    PetscFunctionReturn(0);
   }
+  PetscCall(MatDestroy(&ifc->sinv[b]));
+  PetscCall(ISDestroy(&ifc->sinv_is[b]));
+  PetscCall(VecDuplicate(body->u, &r));
+  PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetArray(r, &ra));
+  for (PetscInt i = 0; i < n; i++) ra[i] = 0;
+  for (PetscInt k = 0; k < c->ncouples; k++)
+    for (PetscInt side = 0; side < 2; side++) {
+      const MBCSurface *sf = side ? &c->couples[k].slave : &c->couples[k].master;
+      for (PetscInt v = 0; v < sf->nnodes; v++)
+        if (sf->nbody[v] == b)
+          for (PetscInt d = 0; d < 3; d++) ra[sf->nrow[v] + d] = 1;
+    }
+  PetscCall(VecRestoreArray(r, &ra));
   PetscCall(MBCBodyZeroHeldRows(body, r, NULL));
   PetscCall(VecGetArray(r, &ra));
   PetscCall(PetscMalloc1(n + 1, &idx));
@@ -654,16 +664,18 @@ static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
     if (ra[i] != 0.0) idx[nC++] = i;
   PetscCall(VecRestoreArray(r, &ra));
   PetscCall(VecDestroy(&r));
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, &isC));
-  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT ", %" PetscInt_FMT " multipliers\n", body->name, nC, n, ifc->nbcols[b]));
-  PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
-  PetscCall(MatFactorSetSchurIS(F, isC));
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
-  PetscCall(MatCholeskyFactorNumeric(F, A, &info));
-  PetscCall(MatFactorCreateSchurComplement(F, &S, NULL));
-  PetscCall(MatDestroy(&F)); /* the factor's memory goes; S is ours */
-  PetscCall(MatSetOption(S, MAT_SPD, PETSC_TRUE));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, &ifc->sinv_is[b]));
+  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT "\n", body->name, nC, n));
+  if (nC == n) PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S)); /* every DOF on a contact surface: S = A (MUMPS wants a Schur set smaller than the matrix) */
+  else {
+    PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+    PetscCall(MatFactorSetSchurIS(F, ifc->sinv_is[b]));
+    PetscCall(MatFactorInfoInitialize(&info));
+    PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
+    PetscCall(MatCholeskyFactorNumeric(F, A, &info));
+    PetscCall(MatFactorCreateSchurComplement(F, &S, NULL));
+    PetscCall(MatDestroy(&F)); /* the factor's memory goes; S is ours */
+  }
   { /* S^-1 in place: Cholesky of the dense SPD S, then its inverse (LAPACK potrf, potri) */
     PetscScalar *s;
     PetscBLASInt bn, lda, info2;
@@ -682,15 +694,25 @@ static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
     }
     PetscCall(MatDenseRestoreArray(S, &s));
   }
-  PetscCall(MatCreateSubMatrix(ifc->H[b], isC, NULL, MAT_INITIAL_MATRIX, &HC));
+  ifc->sinv[b]       = S;
+  ifc->sinv_id[b]    = id;
+  ifc->sinv_state[b] = state;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
+{
+  Mat HC, HCd, Y;
+
+  PetscFunctionBegin;
+  PetscCall(BodySchurInverse(ifc, b));
+  PetscCall(MatCreateSubMatrix(ifc->H[b], ifc->sinv_is[b], NULL, MAT_INITIAL_MATRIX, &HC));
   PetscCall(MatConvert(HC, MATDENSE, MAT_INITIAL_MATRIX, &HCd));
-  PetscCall(MatMatMult(S, HCd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(MatMatMult(ifc->sinv[b], HCd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
   PetscCall(MatTransposeMatMult(HC, Y, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Dout));
   PetscCall(MatDestroy(&Y));
   PetscCall(MatDestroy(&HCd));
   PetscCall(MatDestroy(&HC));
-  PetscCall(MatDestroy(&S));
-  PetscCall(ISDestroy(&isC));
   PetscFunctionReturn(0);
 }
 
@@ -930,6 +952,11 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(PetscFree(ifc->slip));
   PetscCall(PetscFree(ifc->stepslip));
   PetscCall(PetscFree(ifc->pairs_built));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscCall(MatDestroy(&ifc->sinv[b]));
+    PetscCall(ISDestroy(&ifc->sinv_is[b]));
+  }
+  PetscCall(PetscFree4(ifc->sinv, ifc->sinv_is, ifc->sinv_id, ifc->sinv_state));
   PetscCall(MBCMultiplierDestroy(&ifc->mult));
   PetscCall(PetscFree(*iface));
   PetscFunctionReturn(0);
