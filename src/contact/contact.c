@@ -443,9 +443,9 @@ PetscErrorCode MBCContactView(MBCContact c, PetscViewer viewer)
 /* The slave faces the local search prefers (-mbc_contact_stable_normal): per couple and master node
    the face of pairs (n points of `size` entries: couple, master node, slave face, ...; the pairs
    H and D were built for), -1 for the others. A master node whose projection sits on an edge
-   between two faces keeps its face while that face still takes the projection (within the inside
-   test's tolerance) and its normal agrees with the winner's, so a pairing does not flip with
-   motions far below the mesh size. The preference is a function of the pairs built alone: a
+   between two faces keeps its face while that face still takes the projection and its normal
+   agrees with the winner's (MBCCoupleKeepsFace), so a pairing does not flip with motions far
+   below the mesh size. The preference is a function of the pairs built alone: a
    restart that builds the same pairs searches with the same preference. */
 PetscErrorCode MBCContactSetPreferredFaces(MBCContact c, PetscInt n, const PetscInt pairs[], PetscInt size)
 {
