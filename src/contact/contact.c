@@ -15,6 +15,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->scene       = scene;
   c->cell_factor = 1.0;
   c->extension   = 0.1;
+  c->stable_normal = 1e-12;
   c->integrate   = PETSC_TRUE;
   c->nquad       = 4;
   c->ncouples    = scene->ncouples;
@@ -38,6 +39,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));
+  PetscCall(PetscOptionsReal("-mbc_contact_stable_normal", "A master node keeps the slave face of the pairs D was built for while the two faces' unit normals differ by at most this and the projection lies inside that face or within this fraction of an edge beyond it (0: the best face always)", "MBCContactSetFromOptions", c->stable_normal, &c->stable_normal, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_check_search", "After every search, pair every master node with every slave face by brute force and stop at a pair the search missed (debug)", "MBCContactSetFromOptions", c->check, &c->check, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
@@ -401,6 +403,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
     PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
     cp->extension = c->extension;
+    cp->stable    = c->stable_normal;
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
@@ -434,6 +437,32 @@ PetscErrorCode MBCContactView(MBCContact c, PetscViewer viewer)
     }
     PetscCall(PetscViewerASCIIPrintf(viewer, "  couple %" PetscInt_FMT ": %" PetscInt_FMT " master nodes, %" PetscInt_FMT " slave nodes, master/slave faces %" PetscInt_FMT "/%" PetscInt_FMT ", cell %g, margin %g\n", cp->k, cp->master.nnodes, cp->slave.nnodes, cp->master.nfaces, cp->slave.nfaces, (double)cp->h, (double)cp->margin));
     PetscCall(PetscViewerASCIIPrintf(viewer, "    test pairs %" PetscInt_FMT " (point-face tests %" PetscInt_FMT "), contact points %" PetscInt_FMT ", gap range [%g, %g]\n", cp->npairs, cp->ntests, cp->npoints, cp->npoints ? (double)gmin : 0.0, cp->npoints ? (double)gmax : 0.0));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The slave faces the local search prefers (-mbc_contact_stable_normal): per couple and master node
+   the face of pairs (n points of `size` entries: couple, master node, slave face, ...; the pairs
+   H and D were built for), -1 for the others. A master node whose projection sits on an edge
+   between two faces keeps its face while that face still takes the projection and its normal
+   agrees with the winner's (MBCCoupleKeepsFace), so a pairing does not flip with motions far
+   below the mesh size. The preference is a function of the pairs built alone: a
+   restart that builds the same pairs searches with the same preference. */
+PetscErrorCode MBCContactSetPreferredFaces(MBCContact c, PetscInt n, const PetscInt pairs[], PetscInt size)
+{
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    MBCCouple *cp = &c->couples[i];
+    if (cp->nprefer < cp->master.nnodes) {
+      PetscCall(PetscFree(cp->prefer));
+      PetscCall(PetscMalloc1(cp->master.nnodes + 1, &cp->prefer));
+      cp->nprefer = cp->master.nnodes;
+    }
+    for (PetscInt v = 0; v < cp->nprefer; v++) cp->prefer[v] = -1;
+  }
+  for (PetscInt k = 0; k < n; k++) {
+    const PetscInt *p = &pairs[size * k];
+    if (p[0] >= 0 && p[0] < c->ncouples && p[1] >= 0 && p[1] < c->couples[p[0]].nprefer) c->couples[p[0]].prefer[p[1]] = p[2];
   }
   PetscFunctionReturn(0);
 }
@@ -491,6 +520,7 @@ PetscErrorCode MBCContactDestroy(MBCContact *contact)
     PetscCall(MBCSurfaceReset(&c->couples[i].slave));
     PetscCall(PetscFree(c->couples[i].pairs));
     PetscCall(PetscFree(c->couples[i].points));
+    PetscCall(PetscFree(c->couples[i].prefer));
     PetscCall(MBCCoupleIntegrateReset(&c->couples[i]));
   }
   for (PetscInt b = 0; b < c->scene->nbodies; b++) PetscCall(VecDestroy(&c->usearch[b]));

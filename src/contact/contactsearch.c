@@ -333,6 +333,32 @@ PetscBool MBCBilinearInverse(const PetscReal Y[][2], const PetscReal y[], PetscR
   return PETSC_FALSE;
 }
 
+/* Does master node v (at xm, normal nm), whose best face is `face`, keep its preferred face
+   c->prefer[v] instead (MBCContactSetPreferredFaces)? Yes when that face is another one, the two
+   faces' unit normals differ by at most c->stable, and the preferred face still takes the
+   projection: by the inside test (its tolerance, 2e-6 of an edge) or within c->stable of an edge's
+   length beyond its boundary (the node sits on or near their common edge; on a warped quad the
+   projections onto the two faces' planes miss the common edge by the warp). Then the two pairings
+   put the point on the same plane to within that angle, with the same gap to within that angle
+   times the distance to the edge, and the integrated constraint's weights do not depend on the
+   face (they are integrated over the master node's share): H changes by the normal alone (and, at
+   a point kept at the node's collocation, by its clamped weights). cp: the kept point. */
+PetscBool MBCCoupleKeepsFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt v, PetscInt face, MBCContactPoint *cp)
+{
+  PetscInt         f;
+  const PetscReal *a, *b;
+  PetscReal        d[3], q;
+
+  if (!(c->stable > 0) || !c->prefer || v >= c->nprefer) return PETSC_FALSE;
+  f = c->prefer[v];
+  if (f < 0 || f == face || f >= c->slave.nfaces) return PETSC_FALSE;
+  a = &c->slave.fnormal[3 * f], b = &c->slave.fnormal[3 * face];
+  MBCSub(a, b, d);
+  if (!(PetscSqrtReal(MBCDot(d, d)) <= c->stable)) return PETSC_FALSE;
+  if (MBCCoupleProjectOnFace(c, xm, nm, f, PETSC_FALSE, cp, &q)) return PETSC_TRUE;
+  return (PetscBool)(MBCCoupleProjectOnFace(c, xm, nm, f, PETSC_TRUE, cp, &q) && q >= -c->stable);
+}
+
 /* Tangents: t1 = e x n with e the axis least aligned with n, t2 = n x t1. */
 static void Frame(MBCContactPoint *cp)
 {
@@ -419,6 +445,7 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
         }
     }
 #undef TRY
+    if (found && MBCCoupleKeepsFace(c, xm, nm, pair->master, best.face, &cp)) best = cp;
     if (!found || best.gap < -c->h) continue;
     best.master = pair->master;
     Frame(&best);
@@ -456,6 +483,7 @@ PetscErrorCode MBCCoupleCheckSearch(MBCCouple *c, PetscInt *missed, PetscInt *fa
       }
     if (!found) continue;
     if (pointOf[v] >= 0) (void)MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], c->points[pointOf[v]].face, PETSC_FALSE, &cp, &qs);
+    if (pointOf[v] >= 0 && c->points[pointOf[v]].face != best.face && MBCCoupleKeepsFace(c, &m->x[3 * v], &m->nnormal[3 * v], v, best.face, &cp) && cp.face == c->points[pointOf[v]].face) continue; /* its stable face */
     if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9)) {
       *missed = v;
       *face   = best.face;

@@ -20,6 +20,7 @@
    (lambda_n . g_n+1 - lambda_n+1 . g_n) / 2, an energy gain whenever a loaded contact opens (a
    bouncing block gains energy at every bounce). */
 #include <mbc/private/interfaceimpl.h>
+#include <petscblaslapack.h>
 #include <stdint.h>
 
 PetscLogEvent MBC_FlexibilityAssemble;
@@ -50,6 +51,7 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   PetscCall(MBCMultiplierSetFromOptions(ifc->mult));
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
+  PetscCall(PetscCalloc4(nbodies, &ifc->sinv, nbodies, &ifc->sinv_is, nbodies, &ifc->sinv_id, nbodies, &ifc->sinv_state));
   *iface = ifc;
   PetscFunctionReturn(0);
 }
@@ -71,6 +73,14 @@ PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface ifc, PetscInt dblock)
 {
   PetscFunctionBegin;
   ifc->dblock = dblock;
+  PetscFunctionReturn(0);
+}
+
+/* How D_i is built (-mbc_d_route): 0 multi-right-hand-side solves, 1 the Schur complement. */
+PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route)
+{
+  PetscFunctionBegin;
+  ifc->droute = route;
   PetscFunctionReturn(0);
 }
 
@@ -256,12 +266,40 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
 {
   MBCContact  c = ifc->contact;
   PetscMPIInt brank;
-  PetscInt    ndof, nloc, k = 0;
+  PetscInt    ndof, nloc, rstart, k = 0, *cnt, *onz;
 
   PetscFunctionBegin;
   PetscCall(VecGetSize(body->u, &ndof));
   PetscCall(VecGetLocalSize(body->u, &nloc));
-  PetscCall(MatCreateAIJ(body->comm, nloc, PETSC_DECIDE, ndof, ifc->nbcols[body->index], 24, NULL, 24, NULL, H));
+  PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
+  /* preallocation: per local row the entries inserted into it (an upper bound: a slave node's row
+     takes the columns of every point whose integrated constraint reaches it, often more than the
+     24 a row had; every row that overflowed copied the whole matrix, 12 % of the 20k dam's run) */
+  PetscCall(PetscCalloc2(nloc + 1, &cnt, nloc + 1, &onz));
+  for (PetscInt i = 0, kk = 0; i < c->ncouples; i++) {
+    MBCCouple *cp = &c->couples[i];
+    for (PetscInt j = 0; j < cp->npoints; j++, kk++) {
+      const PetscInt dim = ifc->coff[kk + 1] - ifc->coff[kk];
+      if (first[kk] < 0) continue;
+      for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
+        const PetscInt node = cp->mnode[l], r = cp->master.nrow[node] - rstart;
+        if (cp->master.nbody[node] != body->index || r < 0 || r >= nloc) continue;
+        for (PetscInt d = 0; d < 3; d++) cnt[r + d] += dim;
+      }
+      for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) {
+        const PetscInt node = cp->snode[l], r = cp->slave.nrow[node] - rstart;
+        if (cp->slave.nbody[node] != body->index || r < 0 || r >= nloc) continue;
+        for (PetscInt d = 0; d < 3; d++) cnt[r + d] += dim;
+      }
+    }
+  }
+  {
+    PetscInt nlc = PETSC_DECIDE, N = ifc->nbcols[body->index];
+    PetscCall(PetscSplitOwnership(body->comm, &nlc, &N));
+    for (PetscInt r = 0; r < nloc; r++) onz[r] = PetscMin(cnt[r], N - nlc), cnt[r] = PetscMin(cnt[r], nlc);
+    PetscCall(MatCreateAIJ(body->comm, nloc, nlc, ndof, N, 0, cnt, 0, onz, H));
+  }
+  PetscCall(PetscFree2(cnt, onz));
   PetscCall(MatSetOption(*H, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
   PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
   for (PetscInt i = 0; i < c->ncouples; i++) {
@@ -573,6 +611,128 @@ static PetscErrorCode InterfacePreallocation(MBCInterface ifc, PetscInt rstart, 
   PetscFunctionReturn(0);
 }
 
+/* W(rows[i], cols[j]) += a[(i - lo) + j lda] for i in [lo, hi), j < w, the entries that are not
+   zero, one MatSetValues per row instead of one MatSetValue per entry (a million calls per build at
+   49k DOFs; no measurable time either way); the same additions in the same order. */
+static PetscErrorCode AddDenseBlock(Mat W, const PetscInt rows[], PetscInt lo, PetscInt hi, const PetscInt cols[], PetscInt w, const PetscScalar a[], PetscInt lda)
+{
+  PetscInt    *c;
+  PetscScalar *v;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc2(w + 1, &c, w + 1, &v));
+  for (PetscInt i = lo; i < hi; i++) {
+    PetscInt n = 0;
+    for (PetscInt j = 0; j < w; j++)
+      if (a[(i - lo) + j * lda] != 0.0) c[n] = cols[j], v[n++] = a[(i - lo) + j * lda];
+    PetscCall(MatSetValues(W, 1, &rows[i], n, c, v, ADD_VALUES));
+  }
+  PetscCall(PetscFree2(c, v));
+  PetscFunctionReturn(0);
+}
+
+/* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
+   C the DOFs of the body's nodes on its contact surfaces (every couple, both sides) that are not
+   held (MBCBodyZeroHeldRows): a set fixed by the scene, which holds the rows of every H_b the search
+   can make. S = A_CC - A_CI A_II^-1 A_IC from a MUMPS factorization of the body's operator with C
+   as its Schur set, S^-1 by LAPACK, kept while the operator is the same object in the same state;
+   then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the multi-right-hand-side
+   route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
+   restart computes S^-1 from the same operator and the same C, so it builds the same D. *Dout:
+   the dense nb x nb D_b. */
+static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
+{
+  MBCBody        body = ifc->bodies[b];
+  MBCContact     c    = ifc->contact;
+  Mat            A, P, F, S;
+  Vec            r;
+  PetscInt       n, nC = 0, *idx;
+  PetscScalar   *ra;
+  PetscObjectState state;
+  PetscObjectId  id;
+  MatFactorInfo  info;
+
+  PetscFunctionBegin;
+  PetscCall(KSPGetOperators(body->ksp, &A, &P));
+  PetscCall(PetscObjectStateGet((PetscObject)A, &state));
+  PetscCall(PetscObjectGetId((PetscObject)A, &id));
+  if (ifc->sinv[b] && ifc->sinv_id[b] == id && ifc->sinv_state[b] == state) {
+    PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement, S^-1 reused\n", body->name));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(MatDestroy(&ifc->sinv[b]));
+  PetscCall(ISDestroy(&ifc->sinv_is[b]));
+  PetscCall(VecDuplicate(body->u, &r));
+  PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetArray(r, &ra));
+  for (PetscInt i = 0; i < n; i++) ra[i] = 0;
+  for (PetscInt k = 0; k < c->ncouples; k++)
+    for (PetscInt side = 0; side < 2; side++) {
+      const MBCSurface *sf = side ? &c->couples[k].slave : &c->couples[k].master;
+      for (PetscInt v = 0; v < sf->nnodes; v++)
+        if (sf->nbody[v] == b)
+          for (PetscInt d = 0; d < 3; d++) ra[sf->nrow[v] + d] = 1;
+    }
+  PetscCall(VecRestoreArray(r, &ra));
+  PetscCall(MBCBodyZeroHeldRows(body, r, NULL));
+  PetscCall(VecGetArray(r, &ra));
+  PetscCall(PetscMalloc1(n + 1, &idx));
+  for (PetscInt i = 0; i < n; i++)
+    if (ra[i] != 0.0) idx[nC++] = i;
+  PetscCall(VecRestoreArray(r, &ra));
+  PetscCall(VecDestroy(&r));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, &ifc->sinv_is[b]));
+  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT "\n", body->name, nC, n));
+  if (nC == n) PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S)); /* every DOF on a contact surface: S = A (MUMPS wants a Schur set smaller than the matrix) */
+  else {
+    PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+    PetscCall(MatFactorSetSchurIS(F, ifc->sinv_is[b]));
+    PetscCall(MatFactorInfoInitialize(&info));
+    PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
+    PetscCall(MatCholeskyFactorNumeric(F, A, &info));
+    PetscCall(MatFactorCreateSchurComplement(F, &S, NULL));
+    PetscCall(MatDestroy(&F)); /* the factor's memory goes; S is ours */
+  }
+  { /* S^-1 in place: Cholesky of the dense SPD S, then its inverse (LAPACK potrf, potri) */
+    PetscScalar *s;
+    PetscBLASInt bn, lda, info2;
+    PetscInt     ld;
+    PetscCall(MatDenseGetLDA(S, &ld));
+    PetscCall(PetscBLASIntCast(nC, &bn));
+    PetscCall(PetscBLASIntCast(ld, &lda));
+    PetscCall(MatDenseGetArray(S, &s));
+    if (bn) {
+      PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, s, &lda, &info2));
+      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': the Schur complement onto its contact DOFs is not positive definite (potrf %d)", body->name, (int)info2);
+      PetscCallBLAS("LAPACKpotri", LAPACKpotri_("L", &bn, s, &lda, &info2));
+      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': potri %d", body->name, (int)info2);
+      for (PetscInt j = 0; j < nC; j++) /* the upper triangle from the lower */
+        for (PetscInt i = 0; i < j; i++) s[i + j * ld] = s[j + i * ld];
+    }
+    PetscCall(MatDenseRestoreArray(S, &s));
+  }
+  ifc->sinv[b]       = S;
+  ifc->sinv_id[b]    = id;
+  ifc->sinv_state[b] = state;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
+{
+  Mat HC, HCd, Y;
+
+  PetscFunctionBegin;
+  PetscCall(BodySchurInverse(ifc, b));
+  PetscCall(MatCreateSubMatrix(ifc->H[b], ifc->sinv_is[b], NULL, MAT_INITIAL_MATRIX, &HC));
+  PetscCall(MatConvert(HC, MATDENSE, MAT_INITIAL_MATRIX, &HCd));
+  PetscCall(MatMatMult(ifc->sinv[b], HCd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(MatTransposeMatMult(HC, Y, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Dout));
+  PetscCall(MatDestroy(&Y));
+  PetscCall(MatDestroy(&HCd));
+  PetscCall(MatDestroy(&HC));
+  PetscFunctionReturn(0);
+}
+
 /* D_i = H_i^T A_i^-1 H_i of the bodies on this rank, by blocks of -mbc_contact_block columns
    (memory: DOFs x block, not DOFs x multipliers), added into W (rows where they live); then
    W = D / dscale with dscale the mean diagonal: r = dscale lambda has the units of u, so the
@@ -596,6 +756,22 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
     if (!body || !nb) continue;
     PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
     PetscCall(MatGetOwnershipRangeColumn(ifc->H[b], &clo, &chi));
+    if (ifc->droute == 1) {
+      PetscMPIInt bsize;
+      PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
+      if (bsize == 1) {
+        Mat                D;
+        const PetscScalar *a;
+        PetscInt           lda;
+        PetscCall(BodyDSchur(ifc, b, &D));
+        PetscCall(MatDenseGetArrayRead(D, &a));
+        PetscCall(MatDenseGetLDA(D, &lda));
+        PetscCall(AddDenseBlock(ifc->fp.W, ifc->bcols[b], 0, nb, ifc->bcols[b], nb, a, lda));
+        PetscCall(MatDenseRestoreArrayRead(D, &a));
+        PetscCall(MatDestroy(&D));
+        continue;
+      }
+    }
     for (PetscInt j0 = 0; j0 < nb; j0 += ifc->dblock) {
       const PetscInt     j1 = PetscMin(nb, j0 + ifc->dblock), w = j1 - j0;
       Mat                Hd, X, D;
@@ -625,9 +801,7 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
       PetscCall(MatDestroy(&X));
       PetscCall(MatDenseGetArrayRead(D, &a));
       PetscCall(MatDenseGetLDA(D, &lda));
-      for (PetscInt i = clo; i < chi; i++) /* this rank's rows of D_i (H's column layout) */
-        for (PetscInt j = 0; j < w; j++)
-          if (a[(i - clo) + j * lda] != 0.0) PetscCall(MatSetValue(ifc->fp.W, ifc->bcols[b][i], ifc->bcols[b][j0 + j], a[(i - clo) + j * lda], ADD_VALUES));
+      PetscCall(AddDenseBlock(ifc->fp.W, ifc->bcols[b], clo, chi, ifc->bcols[b] + j0, w, a, lda)); /* this rank's rows of D_i (H's column layout) */
       PetscCall(MatDenseRestoreArrayRead(D, &a));
       PetscCall(MatDestroy(&D));
     }
@@ -693,6 +867,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
   PetscCall(InterfaceReset(ifc));
   ifc->pairs_built  = pairs;
   ifc->npairs_built = n;
+  PetscCall(MBCContactSetPreferredFaces(c, n, pairs, MBC_PAIR_SIZE)); /* the next searches keep these faces where they tie */
   ifc->ncontact     = nc;
   PetscCall(PetscMalloc1(nc + 1, &dims));
   PetscCall(PetscMalloc2(nc + 1, &ifc->kcouple, nc + 1, &ifc->kpoint));
@@ -794,6 +969,11 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(PetscFree(ifc->slip));
   PetscCall(PetscFree(ifc->stepslip));
   PetscCall(PetscFree(ifc->pairs_built));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscCall(MatDestroy(&ifc->sinv[b]));
+    PetscCall(ISDestroy(&ifc->sinv_is[b]));
+  }
+  PetscCall(PetscFree4(ifc->sinv, ifc->sinv_is, ifc->sinv_id, ifc->sinv_state));
   PetscCall(MBCMultiplierDestroy(&ifc->mult));
   PetscCall(PetscFree(*iface));
   PetscFunctionReturn(0);

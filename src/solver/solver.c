@@ -74,6 +74,10 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
+  {
+    const char *routes[] = {"multirhs", "schur"};
+    PetscCall(PetscOptionsEList("-mbc_d_route", "How D_i = H_i^T A_i^-1 H_i is built: multi-right-hand-side solves with the body's factor, or the Schur complement of A_i onto its contact DOFs in a MUMPS factorization (bodies on one rank; experiment, docs/performance-d.md)", "MBCSolverSetFromOptions", routes, 2, routes[s->droute], &s->droute, NULL));
+  }
   PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
   PetscCall(PetscOptionsReal("-mbc_dt_min", "The smallest step (or load step) a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
   PetscCall(PetscOptionsInt("-mbc_checkpoint_every", "Write the whole state to <output>_checkpoint.h5 every this many steps (0: only at SIGINT/SIGTERM)", "MBCSolverSetFromOptions", s->checkpoint_every, &s->checkpoint_every, NULL));
@@ -189,6 +193,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCContactSetFromOptions(s->contact, ((PetscObject)s)->prefix));
     PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
+    PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute));
     PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }
   s->setupcalled = PETSC_TRUE;

@@ -315,8 +315,8 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
         PetscCall(CheckpointBodyVec(s, v, b, s->bodies[b] ? s->bodies[b]->u : NULL, step[k], PETSC_TRUE));
         PetscCall(PetscViewerHDF5PopGroup(v));
       }
-      PetscCall(MBCContactUpdate(c, s->nbodies, s->bodies, (PetscBool)(k != 1), NULL));
-      if (k == 1) { /* H's build */
+      if (k == 1) { /* H's build: its search kept the faces of the pairs it built where they tie (MBCContactSetPreferredFaces), and searching with those pairs' faces preferred finds them again */
+        PetscInt *ip;
         PetscCall(PetscMalloc4(m + 1, &lam, m + 1, &r, 3 * nc + 1, &slip, MBC_PAIR_SIZE * nc + 1, &pr));
         PetscCall(PetscViewerHDF5PushGroup(v, "/contact"));
         PetscCall(CheckpointArray(s, v, m, lam, "lambda", PETSC_TRUE));
@@ -324,6 +324,13 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
         PetscCall(CheckpointArray(s, v, 3 * nc, slip, "slip", PETSC_TRUE));
         PetscCall(CheckpointArray(s, v, MBC_PAIR_SIZE * nc, pr, "pairs", PETSC_TRUE));
         PetscCall(PetscViewerHDF5PopGroup(v));
+        PetscCall(PetscMalloc1(MBC_PAIR_SIZE * nc + 1, &ip));
+        for (PetscInt i = 0; i < MBC_PAIR_SIZE * nc; i++) ip[i] = (PetscInt)pr[i];
+        PetscCall(MBCContactSetPreferredFaces(c, nc, ip, MBC_PAIR_SIZE));
+        PetscCall(PetscFree(ip));
+      }
+      PetscCall(MBCContactUpdate(c, s->nbodies, s->bodies, (PetscBool)(k != 1), NULL));
+      if (k == 1) {
         PetscCall(MBCInterfaceGetPairs(s->iface, &n, &pairs, &changed));
         changed = (PetscBool)(n != nc);
         for (PetscInt i = 0; i < MBC_PAIR_SIZE * nc && !changed; i++) changed = (PetscBool)(pairs[i] != (PetscInt)pr[i]);

@@ -46,6 +46,9 @@ typedef struct {
   MBCSurface master, slave;
   PetscReal  h, margin, lo[3];
   PetscReal  extension;     /* slave faces reach this fraction of their edge beyond the slave surface's free boundary */
+  PetscReal  stable;        /* -mbc_contact_stable_normal: a master node keeps its face prefer[] while that face still takes its
+                               projection and its normal is within this of the winning face's (0: never) */
+  PetscInt   nprefer, *prefer; /* per master node: the slave face of the pairs D was built for, or -1 */
   PetscInt   npairs, ntests;
   MBCTestPair *pairs;
   PetscInt   npoints;
@@ -64,6 +67,7 @@ struct _n_MBCContact {
   MBCCouple *couples;
   PetscReal  cell_factor, margin;   /* margin <= 0: one cell edge */
   PetscReal  extension;     /* -mbc_contact_extension */
+  PetscReal  stable_normal; /* -mbc_contact_stable_normal */
   PetscBool  check;         /* -mbc_contact_check_search: brute-force cross-check of every search */
   PetscBool  integrate;     /* constraints averaged over each master node's share of the surface (else at the node) */
   PetscInt   nquad;         /* Gauss points per direction on a master face */
@@ -85,6 +89,7 @@ PETSC_INTERN PetscErrorCode MBCContactUpdate(MBCContact, PetscInt, MBCBody[], Pe
 PETSC_INTERN PetscErrorCode MBCContactView(MBCContact, PetscViewer);
 PETSC_INTERN PetscErrorCode MBCContactDump(MBCContact);
 PETSC_INTERN PetscErrorCode MBCContactDestroy(MBCContact *);
+PETSC_INTERN PetscErrorCode MBCContactSetPreferredFaces(MBCContact, PetscInt, const PetscInt[], PetscInt);
 
 /* the search on gathered surfaces (no MPI): contactsearch.c */
 PETSC_EXTERN PetscErrorCode MBCSurfaceSetUp(MBCSurface *);
@@ -96,6 +101,7 @@ PETSC_EXTERN PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *);
 PETSC_EXTERN PetscErrorCode MBCCoupleCheckSearch(MBCCouple *, PetscInt *, PetscInt *, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *, PetscInt, PetscInt *, PetscReal *, PetscReal *);
 PETSC_INTERN PetscBool      MBCBilinearInverse(const PetscReal[][2], const PetscReal[], PetscReal *, PetscReal *);
+PETSC_INTERN PetscBool      MBCCoupleKeepsFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, PetscInt, MBCContactPoint *);
 PETSC_INTERN PetscBool      MBCCoupleProjectOnFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, PetscBool, MBCContactPoint *, PetscReal *);
 
 static inline void MBCSub(const PetscReal a[], const PetscReal b[], PetscReal c[])

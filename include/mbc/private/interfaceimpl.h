@@ -43,6 +43,11 @@ struct _n_MBCInterface {
   Vec        gathered;
   PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
   PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
+  PetscInt   droute;      /* -mbc_d_route: 0 multi-right-hand-side solves, 1 Schur complement onto the contact DOFs (bodies on one rank) */
+  Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
+  IS        *sinv_is;
+  PetscObjectId *sinv_id;
+  PetscObjectState *sinv_state;
   MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
   MBCMultiplier mult;     /* the multiplier solve (-mbc_multiplier_type) */
   PetscReal  dscale;      /* D is scaled by 1/dscale for the PGS: lambda = r / dscale */
@@ -70,6 +75,7 @@ PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble;
 PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], const char[], MBCInterface *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);
