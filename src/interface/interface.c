@@ -76,11 +76,13 @@ PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface ifc, PetscInt dblock)
   PetscFunctionReturn(0);
 }
 
-/* How D_i is built (-mbc_d_route): 0 multi-right-hand-side solves, 1 the Schur complement. */
-PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route)
+/* How D_i is built (-mbc_d_route): 0 multi-right-hand-side solves, 1 the Schur complement, 2 the
+   Schur complement where S^-1 fits in max_mb (-mbc_d_schur_max_mb), else the solves. */
+PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal max_mb)
 {
   PetscFunctionBegin;
-  ifc->droute = route;
+  ifc->droute      = route;
+  ifc->schur_max_mb = max_mb;
   PetscFunctionReturn(0);
 }
 
@@ -640,10 +642,58 @@ static PetscErrorCode AddDenseBlock(Mat W, const PetscInt rows[], PetscInt lo, P
    route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
    restart computes S^-1 from the same operator and the same C, so it builds the same D. *Dout:
    the dense nb x nb D_b. */
+static PetscErrorCode BodyContactDofs(MBCInterface ifc, PetscInt b, Vec r)
+{
+  MBCContact   c = ifc->contact;
+  PetscScalar *ra;
+  PetscInt     n;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetArray(r, &ra));
+  for (PetscInt i = 0; i < n; i++) ra[i] = 0;
+  for (PetscInt k = 0; k < c->ncouples; k++)
+    for (PetscInt side = 0; side < 2; side++) {
+      const MBCSurface *sf = side ? &c->couples[k].slave : &c->couples[k].master;
+      for (PetscInt v = 0; v < sf->nnodes; v++)
+        if (sf->nbody[v] == b)
+          for (PetscInt d = 0; d < 3; d++) ra[sf->nrow[v] + d] = 1;
+    }
+  PetscCall(VecRestoreArray(r, &ra));
+  PetscCall(MBCBodyZeroHeldRows(ifc->bodies[b], r, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* -mbc_d_route auto: the Schur route for a body on one rank whose S^-1 (|C|^2 doubles) fits in
+   -mbc_d_schur_max_mb; measured faster than the solves at every size that fits (3.8k to 97k DOFs,
+   docs/performance.md), at |C|^2 more memory. */
+static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *schur)
+{
+  MBCBody     body = ifc->bodies[b];
+  PetscMPIInt bsize;
+  Vec         r;
+  PetscReal   nC;
+
+  PetscFunctionBegin;
+  *schur = PETSC_FALSE;
+  if (ifc->droute == 0) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
+  if (bsize > 1) PetscFunctionReturn(0); /* MUMPS's distributed Schur complement is not wired */
+  if (ifc->droute == 1) {
+    *schur = PETSC_TRUE;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(VecDuplicate(body->u, &r));
+  PetscCall(BodyContactDofs(ifc, b, r));
+  PetscCall(VecSum(r, &nC));
+  PetscCall(VecDestroy(&r));
+  *schur = (PetscBool)(8.0 * nC * nC <= ifc->schur_max_mb * 1048576.0);
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
 {
   MBCBody        body = ifc->bodies[b];
-  MBCContact     c    = ifc->contact;
   Mat            A, P, F, S;
   Vec            r;
   PetscInt       n, nC = 0, *idx;
@@ -664,17 +714,7 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
   PetscCall(ISDestroy(&ifc->sinv_is[b]));
   PetscCall(VecDuplicate(body->u, &r));
   PetscCall(VecGetLocalSize(r, &n));
-  PetscCall(VecGetArray(r, &ra));
-  for (PetscInt i = 0; i < n; i++) ra[i] = 0;
-  for (PetscInt k = 0; k < c->ncouples; k++)
-    for (PetscInt side = 0; side < 2; side++) {
-      const MBCSurface *sf = side ? &c->couples[k].slave : &c->couples[k].master;
-      for (PetscInt v = 0; v < sf->nnodes; v++)
-        if (sf->nbody[v] == b)
-          for (PetscInt d = 0; d < 3; d++) ra[sf->nrow[v] + d] = 1;
-    }
-  PetscCall(VecRestoreArray(r, &ra));
-  PetscCall(MBCBodyZeroHeldRows(body, r, NULL));
+  PetscCall(BodyContactDofs(ifc, b, r));
   PetscCall(VecGetArray(r, &ra));
   PetscCall(PetscMalloc1(n + 1, &idx));
   for (PetscInt i = 0; i < n; i++)
@@ -756,10 +796,10 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
     if (!body || !nb) continue;
     PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
     PetscCall(MatGetOwnershipRangeColumn(ifc->H[b], &clo, &chi));
-    if (ifc->droute == 1) {
-      PetscMPIInt bsize;
-      PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
-      if (bsize == 1) {
+    {
+      PetscBool schur;
+      PetscCall(BodyUsesSchur(ifc, b, &schur));
+      if (schur) {
         Mat                D;
         const PetscScalar *a;
         PetscInt           lda;

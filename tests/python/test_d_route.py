@@ -22,7 +22,7 @@ def final(h5file):
 @pytest.mark.parametrize("nproc", [1, 2])
 def test_schur_route_gives_the_same_answer(tmp_path, nproc):
     h5 = dam.build(tmp_path, **STATIC)
-    solve(h5, "-mbc_output", str(tmp_path / "rhs"), nproc=nproc)
+    solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_d_route", "multirhs", nproc=nproc)
     r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_d_route", "schur", "-info", nproc=nproc)
     assert r.stdout.count("D through the Schur complement onto") == 4, r.stdout[-2000:]  # 4 bodies, S^-1 once
     assert r.stdout.count("S^-1 reused") == 4  # the second build
@@ -37,7 +37,7 @@ def test_schur_inverse_serves_every_rebuild(tmp_path):
     body's contact-surface DOFs is computed once (the operator does not change) and every rebuild
     is two dense products: the answer is the multi-right-hand-side route's to 1e-9."""
     h5 = dam.build(tmp_path, "dynamic", dt=0.02, ramp=0.5, eq_start=1.0, eq_duration=0.5, record_from=3.0, h=15.0, monoliths=3)
-    ref = solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_monitor")
+    ref = solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_monitor", "-mbc_d_route", "multirhs")
     r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_monitor", "-mbc_d_route", "schur", "-info")
     n = ref.stdout.count("flexibility matrix rebuilt")
     assert n == r.stdout.count("flexibility matrix rebuilt") and n > 2
@@ -66,3 +66,22 @@ def test_schur_restart_equals_uninterrupted(tmp_path, save, load):
     ub, fb = final(part + "_restart.h5")
     assert np.abs(ua - ub).max() <= 1e-12 * np.abs(ua).max() and np.abs(ua).max() > 1e-3
     assert np.abs(fa - fb).max() <= 1e-12 * np.abs(fa).max()
+
+
+def test_auto_route_takes_schur_where_it_fits(tmp_path):
+    """-mbc_d_route auto (default): every body of the small static dam is on one rank and its S^-1
+    is a few MB, so all four take the Schur route and the answer is the solves' to 1e-9;
+    -mbc_d_schur_max_mb 0 sends every body to the solves (no Schur line); a negative budget is
+    refused naming the option."""
+    h5 = dam.build(tmp_path, **STATIC)
+    ref = solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_d_route", "multirhs", "-info")
+    auto = solve(h5, "-mbc_output", str(tmp_path / "auto"), "-info")
+    none = solve(h5, "-mbc_output", str(tmp_path / "none"), "-mbc_d_schur_max_mb", "0", "-info")
+    assert "Schur complement onto" not in ref.stdout and "Schur complement onto" not in none.stdout
+    assert auto.stdout.count("D through the Schur complement onto") == 4, auto.stdout[-2000:]
+    u0, f0 = final(str(tmp_path / "rhs.h5"))
+    u1, f1 = final(str(tmp_path / "auto.h5"))
+    assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
+    assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
+    bad = solve(h5, "-mbc_d_schur_max_mb", "-1", check=False)
+    assert bad.returncode != 0 and "-mbc_d_schur_max_mb" in bad.stdout + bad.stderr

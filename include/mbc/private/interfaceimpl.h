@@ -43,7 +43,8 @@ struct _n_MBCInterface {
   Vec        gathered;
   PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
   PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
-  PetscInt   droute;      /* -mbc_d_route: 0 multi-right-hand-side solves, 1 Schur complement onto the contact DOFs (bodies on one rank) */
+  PetscInt   droute;      /* -mbc_d_route: 0 multi-right-hand-side solves, 1 Schur complement onto the contact DOFs (bodies on one rank), 2 auto */
+  PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 fits in this */
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
   PetscObjectId *sinv_id;
@@ -75,7 +76,7 @@ PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble;
 PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], const char[], MBCInterface *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
-PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);
