@@ -1,4 +1,4 @@
-"""Stable contact pairing (-mbc_contact_stable_normal, docs/performance-d.md): a master node whose
+"""Stable contact pairing (-mbc_contact_stable_normal, docs/performance.md): a master node whose
 projection sits on the common edge of two slave faces keeps the face of the pairs D was built
 for while the two faces' normals agree within the tolerance, so D is not rebuilt for a face that
 flips with motions far below the mesh size. The default (1e-12) changes no answer beyond
