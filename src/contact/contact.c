@@ -2,6 +2,7 @@
 #include <mbc/private/contactimpl.h>
 #include <petscbt.h>
 #include <petscsf.h>
+#include <stdlib.h>
 
 PetscLogEvent MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch;
 
@@ -45,7 +46,16 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsReal("-mbc_contact_penetration_tol", "Largest initial penetration accepted (< 0: that fraction of the mean face edge)", "MBCContactSetFromOptions", c->penetration_tol, &c->penetration_tol, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_accept_penetration", "Warn about a larger initial penetration or interference instead of stopping", "MBCContactSetFromOptions", c->accept_penetration, &c->accept_penetration, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_interference_tol", "Largest initial interference of the faceted contact surfaces accepted (< 0: that fraction of the mean face edge)", "MBCContactSetFromOptions", c->interference_tol, &c->interference_tol, NULL));
-  PetscCall(PetscOptionsReal("-mbc_contact_adjust", "Strain-free adjustment: initial gaps and interferences within this distance are treated as zero for the whole run (0: off)", "MBCContactSetFromOptions", c->adjust, &c->adjust, NULL));
+  { /* read as a string: PETSc's "Input string abc has no numeric value" would not name the option */
+    char      str[64] = "";
+    PetscBool set;
+    PetscCall(PetscOptionsString("-mbc_contact_adjust", "Strain-free adjustment: initial gaps and interferences within this distance are treated as zero for the whole run (0: off)", "MBCContactSetFromOptions", str, str, sizeof(str), &set));
+    if (set) {
+      char *end = NULL;
+      c->adjust = (PetscReal)strtod(str, &end);
+      PetscCheck(str[0] && end && !*end, c->comm, PETSC_ERR_ARG_WRONG, "-mbc_contact_adjust '%s' is not a number (a distance: initial gaps within it are treated as zero)", str);
+    }
+  }
   PetscCall(PetscOptionsBool("-mbc_contact_keep_penetration", "Dynamic: a step starts from max(gap, 0), so a penetration it finds may only not grow (the contact forces never do work on the bodies) instead of being closed within the step", "MBCContactSetFromOptions", c->keep_penetration, &c->keep_penetration, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
   PetscCall(PetscOptionsString("-mbc_contact_dump", "Write PREFIX_pairs.csv and PREFIX_points.csv", "MBCContactSetFromOptions", c->dump, c->dump, sizeof(c->dump), NULL));
