@@ -413,6 +413,7 @@ static PetscErrorCode ContactReference(MBCContact c, PetscInt nbodies, MBCBody b
     MBCCouple *cp   = &c->couples[i];
     PetscReal *qmin, tol = c->interference_tol, worst = 0, need = 0;
     PetscInt   jw = -1, nbad = 0;
+    PetscBool  deep = PETSC_FALSE;
 
     PetscCall(SurfaceFromRecords(&cp->master, rec, nrec, i, 0));
     PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
@@ -428,6 +429,12 @@ static PetscErrorCode ContactReference(MBCContact c, PetscInt nbodies, MBCBody b
       PetscCall(PetscCalloc2(cp->master.nnodes, &cp->g0n, cp->master.nnodes, &cp->g0i));
     }
     if (tol < 0) tol = -tol * cp->h / c->cell_factor; /* h: the cell factor times at least the mean face edge */
+    { /* a penetration beyond -mbc_contact_penetration_tol is bodies overlapping: that check's
+         message (after the first update) speaks for the couple */
+      PetscReal ptol = c->penetration_tol < 0 ? -c->penetration_tol * cp->h / c->cell_factor : c->penetration_tol;
+      for (PetscInt k = 0; k < cp->npoints; k++)
+        if (-cp->points[k].gap > ptol && !(c->adjust > 0 && -cp->points[k].gap <= c->adjust)) deep = PETSC_TRUE;
+    }
     for (PetscInt k = 0; k < cp->npoints; k++) {
       const MBCContactPoint *p    = &cp->points[k];
       const PetscReal        size = PetscMax(PetscMax(PetscAbsReal(p->gap), PetscAbsReal(cp->igap[k])), -qmin[k]);
@@ -445,7 +452,7 @@ static PetscErrorCode ContactReference(MBCContact c, PetscInt nbodies, MBCBody b
         }
       }
     }
-    if (jw >= 0 && c->check_penetration) {
+    if (jw >= 0 && c->check_penetration && !deep) {
       const MBCContactPoint *p  = &cp->points[jw];
       const PetscInt         mb = cp->master.nbody[p->master], sb = cp->slave.nbody[cp->slave.fnode[MBC_MAX_FACE_NODES * p->face]];
       const PetscReal       *x  = &cp->master.x0[3 * p->master];
