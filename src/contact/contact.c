@@ -386,14 +386,15 @@ static PetscErrorCode ContactCheckInitialPenetration(MBCContact c)
   PetscFunctionReturn(0);
 }
 
-/* The reference-geometry pass, once per run before the first update (a restart too: the
-   adjustment is of the undeformed geometry): the couples searched and integrated on the
+/* The reference-geometry pass, once per run before the first update (the solver's first update
+   is on the undeformed state, a restart's too: a restart without the first run's adjustment is
+   refused as the first run would have been): the couples searched and integrated on the
    reference coordinates; then
    * -mbc_contact_adjust d: every point whose node-to-face gap, mortar gap and interference
      (MBCCoupleInterference) are all within d keeps its two initial gaps in g0n / g0i, subtracted
      from its gaps for the whole run: the geometry as the contact sees it is moved to touch, free
      of strain (Abaqus' ADJUST, ANSYS' ICONT);
-   * the interference check (not on a restart's replay, not for -mbc_contact_search_only): points
+   * the interference check (not for -mbc_contact_search_only): points
      whose faceted surfaces interpenetrate by more than -mbc_contact_interference_tol and that the
      adjustment did not take stop the run. Two independently meshed faceted versions of one
      curved surface interpenetrate and gape by their facets' sagitta: the lame scene's 12 against
