@@ -10,7 +10,7 @@ refuses it, naming the couple, the points, the depth and place, and the two ways
 answer: measured u_r(1) -0.290 % (convex slave), -0.288 % (concave slave), the matching 12/12
 meshes' -0.303 % (the faceted circles' discretization error). Tolerance: ep.LAME_TOL (0.75 %,
 about 2x hex8b's worst error over the Poisson sweep), a tenth of the smaller defect (5.2 %).
-About 20 s."""
+About 10 s."""
 import numpy as np
 import pytest
 
