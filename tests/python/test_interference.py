@@ -68,11 +68,15 @@ def test_independent_curved_meshes(tmp_path, slave):
     assert abs(err) < ep.LAME_TOL, err  # measured -0.290 % (convex slave), -0.288 % (concave); before +5.2 %, +44 %
     # an adjustment too small for the interference leaves it refused
     assert "interpenetrate" in refused(h5, "-mbc_contact_adjust", "1e-4")
+    # an interference fit meant as such: accepted with a warning (the faceted answer, u_r(1) +5 % / +44 %)
+    r = solve(h5, "-mbc_contact_accept_penetration")
+    assert "mbcontact: warning:" in r.stdout and "interpenetrate" in r.stdout, r.stdout
 
 
 @pytest.mark.parametrize("value,words", [("-1", ["-mbc_contact_adjust -1", "not negative"]),
                                          ("nan", ["-mbc_contact_adjust", "finite"]),
-                                         ("abc", ["-mbc_contact_adjust", "abc"])])
+                                         ("abc", ["-mbc_contact_adjust", "abc"]),
+                                         ("0.01 -mbc_contact_interference_tol nan", ["-mbc_contact_interference_tol", "finite"])])
 def test_adjust_option_is_checked(tmp_path, value, words):
     meshgen.boxes(tmp_path / "m.msh", [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(1, 1, 1), cell="hex8", name="lo"),
                                        dict(lo=(0, 0, 1), hi=(1, 1, 2), n=(1, 1, 1), cell="hex8", name="up")])
@@ -80,6 +84,6 @@ def test_adjust_option_is_checked(tmp_path, value, words):
              "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": 1e9, "nu": 0.2}} for b in ("lo", "up")},
              "couples": [{"master": "lo_zmax", "slave": "up_zmin"}],
              "dirichlet": [{"surface": "lo_zmin", "components": "all"}, {"surface": "up_zmax", "components": "all", "value": -1e-3}]}
-    text = refused(prep(tmp_path, scene), "-mbc_contact_adjust", value)
+    text = refused(prep(tmp_path, scene), "-mbc_contact_adjust", *value.split())
     for w in words:
         assert w in text, (w, text)
