@@ -2,6 +2,7 @@
 #include <mbc/private/contactimpl.h>
 #include <petscbt.h>
 #include <petscsf.h>
+#include <stdlib.h>
 
 PetscLogEvent MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch;
 
@@ -21,6 +22,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->ncouples    = scene->ncouples;
   c->penetration_tol   = -0.05;
   c->check_penetration = PETSC_TRUE;
+  c->interference_tol  = -1e-4;
   PetscCall(PetscCalloc1(c->ncouples, &c->couples));
   for (PetscInt i = 0; i < c->ncouples; i++) {
     c->couples[i].k  = scene->couples[i].k;
@@ -44,7 +46,18 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_penetration_tol", "Largest initial penetration accepted (< 0: that fraction of the mean face edge)", "MBCContactSetFromOptions", c->penetration_tol, &c->penetration_tol, NULL));
-  PetscCall(PetscOptionsBool("-mbc_contact_accept_penetration", "Warn about a larger initial penetration instead of stopping", "MBCContactSetFromOptions", c->accept_penetration, &c->accept_penetration, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_accept_penetration", "Warn about a larger initial penetration or interference instead of stopping", "MBCContactSetFromOptions", c->accept_penetration, &c->accept_penetration, NULL));
+  PetscCall(PetscOptionsReal("-mbc_contact_interference_tol", "Largest initial interference of the faceted contact surfaces accepted (< 0: that fraction of the mean face edge)", "MBCContactSetFromOptions", c->interference_tol, &c->interference_tol, NULL));
+  { /* read as a string: PETSc's "Input string abc has no numeric value" would not name the option */
+    char      str[64] = "";
+    PetscBool set;
+    PetscCall(PetscOptionsString("-mbc_contact_adjust", "Strain-free adjustment: initial gaps and interferences within this distance are treated as zero for the whole run (0: off)", "MBCContactSetFromOptions", str, str, sizeof(str), &set));
+    if (set) {
+      char *end = NULL;
+      c->adjust = (PetscReal)strtod(str, &end);
+      PetscCheck(str[0] && end && !*end, c->comm, PETSC_ERR_ARG_WRONG, "-mbc_contact_adjust '%s' is not a number (a distance: initial gaps within it are treated as zero)", str);
+    }
+  }
   PetscCall(PetscOptionsBool("-mbc_contact_keep_penetration", "Dynamic: a step starts from max(gap, 0), so a penetration it finds may only not grow (the contact forces never do work on the bodies) instead of being closed within the step", "MBCContactSetFromOptions", c->keep_penetration, &c->keep_penetration, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_view", "Print the search results per couple", "MBCContactSetFromOptions", c->view, &c->view, NULL));
   PetscCall(PetscOptionsString("-mbc_contact_dump", "Write PREFIX_pairs.csv and PREFIX_points.csv", "MBCContactSetFromOptions", c->dump, c->dump, sizeof(c->dump), NULL));
@@ -54,6 +67,8 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
      contact points go silently (1e-9: 9 points -> 0); above 1e3 every node shares one cell */
   PetscCheck(c->cell_factor >= 1 && c->cell_factor <= 1e3, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_cell_factor %g must lie in [1, 1000] (smaller cells miss contacts)", (double)c->cell_factor);
   PetscCheck(c->margin >= 0 && !PetscIsInfOrNanReal(c->margin), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_margin %g must be finite and not negative", (double)c->margin);
+  PetscCheck(c->adjust >= 0 && !PetscIsInfOrNanReal(c->adjust), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_adjust %g must be finite and not negative (a distance; 0: off)", (double)c->adjust);
+  PetscCheck(!PetscIsInfOrNanReal(c->interference_tol), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_interference_tol %g must be finite", (double)c->interference_tol);
   PetscCheck(c->extension >= 0 && c->extension <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_extension %g must lie in [0, 0.5]", (double)c->extension);
   PetscFunctionReturn(0);
 }
@@ -275,7 +290,7 @@ static int CompareFaceKey(const void *a, const void *b)
 }
 
 /* Gathers every couple's faces from all bodies to every rank, in canonical order. */
-static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodies[], PetscReal **all, PetscInt *nall)
+static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodies[], PetscBool reference, PetscReal **all, PetscInt *nall)
 {
   PetscReal   *mine = NULL, *sorted;
   PetscInt     nmine = 0, cap = 0;
@@ -285,7 +300,7 @@ static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodi
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_ContactGather, 0, 0, 0, 0));
   for (PetscInt b = 0; b < nbodies; b++)
-    if (bodies[b]) PetscCall(BodyContactFaces(c, bodies[b], bodies[b]->u, &mine, &nmine, &cap));
+    if (bodies[b]) PetscCall(BodyContactFaces(c, bodies[b], reference ? NULL : bodies[b]->u, &mine, &nmine, &cap));
   PetscCallMPI(MPI_Comm_size(c->comm, &size));
   PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
   PetscCall(PetscMPIIntCast(nmine * FACE_REC, &count));
@@ -373,6 +388,88 @@ static PetscErrorCode ContactCheckInitialPenetration(MBCContact c)
   PetscFunctionReturn(0);
 }
 
+/* The reference-geometry pass, once per run before the first update (the solver's first update
+   is on the undeformed state, a restart's too: a restart without the first run's adjustment is
+   refused as the first run would have been): the couples searched and integrated on the
+   reference coordinates; then
+   * -mbc_contact_adjust d: every point whose node-to-face gap, mortar gap and interference
+     (MBCCoupleInterference) are all within d keeps its two initial gaps in g0n / g0i, subtracted
+     from its gaps for the whole run: the geometry as the contact sees it is moved to touch, free
+     of strain (Abaqus' ADJUST, ANSYS' ICONT);
+   * the interference check (not for -mbc_contact_search_only): points
+     whose faceted surfaces interpenetrate by more than -mbc_contact_interference_tol and that the
+     adjustment did not take stop the run. Two independently meshed faceted versions of one
+     curved surface interpenetrate and gape by their facets' sagitta: the lame scene's 12 against
+     16 cells per quarter (3.2e-3, 30 times the load's displacement) ran to exit 0 with u_r(1)
+     +44 % (the concave side as slave: every mortar gap open while the nodes penetrate) or
+     +5 % / -380 ... -660 % (docs/stability.md). */
+static PetscErrorCode ContactReference(MBCContact c, PetscInt nbodies, MBCBody bodies[])
+{
+  PetscReal *rec = NULL;
+  PetscInt   nrec = 0;
+
+  PetscFunctionBegin;
+  c->reference_done = PETSC_TRUE;
+  if (!c->adjust && !c->check_penetration) PetscFunctionReturn(0);
+  PetscCall(ContactGather(c, nbodies, bodies, PETSC_TRUE, &rec, &nrec));
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    MBCCouple *cp   = &c->couples[i];
+    PetscReal *qmin, tol = c->interference_tol, worst = 0, need = 0;
+    PetscInt   jw = -1, nbad = 0;
+    PetscBool  deep = PETSC_FALSE;
+
+    PetscCall(SurfaceFromRecords(&cp->master, rec, nrec, i, 0));
+    PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
+    if (!(cp->master.nfaces > 0 && cp->slave.nfaces > 0)) continue; /* MBCContactUpdate says so */
+    cp->extension = c->extension;
+    PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
+    PetscCall(MBCCoupleLocalSearch(cp));
+    PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
+    PetscCall(PetscMalloc1(cp->npoints + 1, &qmin));
+    PetscCall(MBCCoupleInterference(cp, c->nquad, qmin));
+    if (c->adjust > 0) {
+      PetscCall(PetscFree2(cp->g0n, cp->g0i));
+      PetscCall(PetscCalloc2(cp->master.nnodes, &cp->g0n, cp->master.nnodes, &cp->g0i));
+    }
+    if (tol < 0) tol = -tol * cp->h / c->cell_factor; /* h: the cell factor times at least the mean face edge */
+    { /* a penetration beyond -mbc_contact_penetration_tol is bodies overlapping: that check's
+         message (after the first update) speaks for the couple */
+      PetscReal ptol = c->penetration_tol < 0 ? -c->penetration_tol * cp->h / c->cell_factor : c->penetration_tol;
+      for (PetscInt k = 0; k < cp->npoints; k++)
+        if (-cp->points[k].gap > ptol && !(c->adjust > 0 && -cp->points[k].gap <= c->adjust)) deep = PETSC_TRUE;
+    }
+    for (PetscInt k = 0; k < cp->npoints; k++) {
+      const MBCContactPoint *p    = &cp->points[k];
+      const PetscReal        size = PetscMax(PetscMax(PetscAbsReal(p->gap), PetscAbsReal(cp->igap[k])), -qmin[k]);
+      if (c->adjust > 0 && size <= c->adjust) {
+        cp->g0n[p->master] = p->gap;
+        cp->g0i[p->master] = cp->igap[k];
+        continue;
+      }
+      if (-qmin[k] > tol) {
+        nbad++;
+        need = PetscMax(need, size);
+        if (qmin[k] < worst) {
+          worst = qmin[k];
+          jw    = k;
+        }
+      }
+    }
+    if (jw >= 0 && c->check_penetration && !deep) {
+      const MBCContactPoint *p  = &cp->points[jw];
+      const PetscInt         mb = cp->master.nbody[p->master], sb = cp->slave.nbody[cp->slave.fnode[MBC_MAX_FACE_NODES * p->face]];
+      const PetscReal       *x  = &cp->master.x0[3 * p->master];
+      char                   msg[8 * MBC_NAME_LEN];
+      PetscCall(PetscSNPrintf(msg, sizeof(msg), "Scene file %s: couple k = %" PetscInt_FMT ": the contact surfaces of body '%s' (master) and body '%s' (slave) interpenetrate at the start at %" PetscInt_FMT " of its %" PetscInt_FMT " contact points, by up to %g around the master node at (%g, %g, %g) (its node-to-face gap %g, mortar gap %g), beyond the tolerance %g (-mbc_contact_interference_tol). Two faceted surfaces meshed independently on one curved surface interpenetrate and gape by their facets' sagitta, and the contact would carry that as geometry (an interference fit, or no contact at all): the answer would be wrong without a message", c->scene->filename, cp->k, c->scene->bodies[mb].name, c->scene->bodies[sb].name, nbad, cp->npoints, (double)-worst, (double)x[0], (double)x[1], (double)x[2], (double)p->gap, (double)cp->igap[jw], (double)tol));
+      PetscCheck(c->accept_penetration, c->comm, PETSC_ERR_USER_INPUT, "%s; treat the initial gaps as zero, free of strain, with -mbc_contact_adjust %.2g (a distance: at least %.2g here), or, for an intended interference fit, accept it with -mbc_contact_accept_penetration", msg, (double)(2 * need), (double)need);
+      PetscCall(PetscPrintf(c->comm, "mbcontact: warning: %s (accepted by -mbc_contact_accept_penetration)\n", msg));
+    }
+    PetscCall(PetscFree(qmin));
+  }
+  PetscCall(PetscFree(rec));
+  PetscFunctionReturn(0);
+}
+
 /* Gathers the couples' surfaces at the current displacements; a global search runs when asked,
    the first time, or when a body moved more than half the margin since the last one; the local
    search runs every time. */
@@ -383,7 +480,8 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
   PetscBool  global = (PetscBool)(force || c->nsearches == 0);
 
   PetscFunctionBegin;
-  PetscCall(ContactGather(c, nbodies, bodies, &rec, &nrec));
+  if (!c->reference_done) PetscCall(ContactReference(c, nbodies, bodies));
+  PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
   for (PetscInt b = 0; b < nbodies && !global; b++) { /* largest displacement since the last search */
     PetscReal d = 0;
     if (!bodies[b] || !bodies[b]->u || !c->usearch[b]) continue;
@@ -407,6 +505,11 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
+    if (cp->g0n)
+      for (PetscInt k = 0; k < cp->npoints; k++) { /* -mbc_contact_adjust: the initial gaps subtracted */
+        cp->points[k].gap -= cp->g0n[cp->points[k].master];
+        cp->igap[k] -= cp->g0i[cp->points[k].master];
+      }
     if (c->check) PetscCall(ContactCheck(c, cp));
   }
   PetscCall(PetscFree(rec));
@@ -522,6 +625,7 @@ PetscErrorCode MBCContactDestroy(MBCContact *contact)
     PetscCall(PetscFree(c->couples[i].points));
     PetscCall(PetscFree(c->couples[i].prefer));
     PetscCall(MBCCoupleIntegrateReset(&c->couples[i]));
+    PetscCall(PetscFree2(c->couples[i].g0n, c->couples[i].g0i));
   }
   for (PetscInt b = 0; b < c->scene->nbodies; b++) PetscCall(VecDestroy(&c->usearch[b]));
   PetscCall(PetscFree(c->usearch));

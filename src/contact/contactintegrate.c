@@ -326,7 +326,7 @@ static PetscErrorCode FaceListAdd(PetscInt **faces, PetscInt *n, PetscInt *cap, 
    The slave faces of a master face are found by a flood from the faces around its nodes' search
    candidates over the faces that share a vertex with a cut one, so none is missed however fine the
    slave mesh (brute: every slave face, for -mbc_contact_check_search). */
-static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, PetscBool brute, PetscReal area[], PetscReal covered[], PetscReal gsum[], PetscReal nsum[], EntryList *sl)
+static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, PetscBool brute, PetscReal area[], PetscReal covered[], PetscReal gsum[], PetscReal nsum[], EntryList *sl, PetscReal qmin[])
 {
   MBCSurface *m = &c->master, *s = &c->slave;
   PetscInt   *pointOf, *pairOf, *mark, nface = 0, *faces = NULL, maxfaces = 0;
@@ -435,6 +435,7 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
             for (PetscInt i = 0; i < nv; i++) {
               const PetscInt k = pointOf[fv[i]];
               if (k < 0) continue;
+              if (qmin && N[i] > 0) qmin[k] = PetscMin(qmin[k], cp.gap);
               nsum[k] += N[i] * dA * rf; /* reference area */
               covered[k] += psi[i] * dA;
               gsum[k] += psi[i] * dA * cp.gap;
@@ -460,7 +461,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   PetscFunctionBegin;
   PetscCall(MBCCoupleIntegrateReset(c));
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
-  PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl));
+  PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
   /* a point whose share is mostly uncovered (the dual weights lose their meaning there) keeps
      the collocation at its node: its integrated entries are dropped */
   for (size_t e = 0; e < sl.n; e++) {
@@ -499,8 +500,8 @@ PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *c, PetscInt nq, PetscInt *miss
   *missed = -1;
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
   PetscCall(PetscCalloc4(c->npoints + 1, &area2, c->npoints + 1, &covered2, c->npoints + 1, &gsum2, c->npoints + 1, &nsum2));
-  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl));
-  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_TRUE, area2, covered2, gsum2, nsum2, &sl2));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_TRUE, area2, covered2, gsum2, nsum2, &sl2, NULL));
   for (PetscInt k = 0; k < c->npoints && *missed < 0; k++)
     if (PetscAbsReal(covered[k] - covered2[k]) > 1e-9 * area[k]) {
       *missed = k;
@@ -511,5 +512,28 @@ PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *c, PetscInt nq, PetscInt *miss
   PetscCall(PetscFree(sl2.e));
   PetscCall(PetscFree4(area, covered, gsum, nsum));
   PetscCall(PetscFree4(area2, covered2, gsum2, nsum2));
+  PetscFunctionReturn(0);
+}
+
+/* The initial-interference check (contact.c): per point, the deepest interpenetration of the two
+   faceted surfaces over its master node's faces, *qmin[k] = min(node-to-face gap, mortar gap, the
+   gap at every mortar quadrature point of the faces around the node), whatever
+   -mbc_contact_integrate. Two independently meshed polygons inscribed in one circle cross each
+   other between their vertices: the node and mortar gaps may both read open (the convex side as
+   slave) while the facets interpenetrate by a fraction of their sagitta
+   (docs/stability.md). */
+PetscErrorCode MBCCoupleInterference(MBCCouple *c, PetscInt nq, PetscReal qmin[])
+{
+  PetscReal *area, *covered, *nsum, *gsum;
+  EntryList  sl = {NULL, 0, 0};
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
+  for (PetscInt k = 0; k < c->npoints; k++) qmin[k] = c->points[k].gap;
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, qmin));
+  for (PetscInt k = 0; k < c->npoints; k++)
+    if (covered[k] >= 0.25 * area[k] && area[k] > 0) qmin[k] = PetscMin(qmin[k], gsum[k] / covered[k]);
+  PetscCall(PetscFree(sl.e));
+  PetscCall(PetscFree4(area, covered, gsum, nsum));
   PetscFunctionReturn(0);
 }

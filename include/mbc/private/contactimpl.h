@@ -57,6 +57,10 @@ typedef struct {
      along n over master nodes mnode[moff[k]..] and slave nodes snode[soff[k]..]; igap its value */
   PetscInt  *moff, *mnode, *soff, *snode;
   PetscReal *mw, *sw, *igap;
+  /* -mbc_contact_adjust: per master node, its point's initial node-to-face and mortar gaps on the
+     reference geometry (0 beyond the distance, or without a point), subtracted from its gaps for
+     the whole run (a strain-free adjustment of the initial geometry); NULL without the option */
+  PetscReal *g0n, *g0i;
 } MBCCouple;
 
 typedef struct _n_MBCContact *MBCContact;
@@ -77,6 +81,9 @@ struct _n_MBCContact {
   PetscReal  penetration_tol;     /* initial penetration refused beyond this (< 0: this times -1 the mean face edge) */
   PetscBool  accept_penetration;  /* warn instead */
   PetscBool  check_penetration;   /* off for -mbc_contact_search_only: a report, no steps */
+  PetscReal  interference_tol;    /* initial interference of the faceted surfaces refused beyond this (< 0: this times -1 the mean face edge) */
+  PetscReal  adjust;              /* -mbc_contact_adjust: initial gaps within this distance treated as zero (strain-free); 0: off */
+  PetscBool  reference_done;      /* the reference-geometry pass (interference check, adjustment) is done */
   PetscBool  keep_penetration; /* -mbc_contact_keep_penetration: a dynamic step starts from max(gap, 0) */
   Vec       *usearch;       /* per body: displacement at the last global search (NULL off the body) */
 };
@@ -98,6 +105,7 @@ PETSC_EXTERN PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *, PetscReal, PetscR
 PETSC_EXTERN PetscErrorCode MBCCoupleLocalSearch(MBCCouple *);
 PETSC_EXTERN PetscErrorCode MBCCoupleIntegrate(MBCCouple *, PetscBool, PetscInt);
 PETSC_EXTERN PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *);
+PETSC_EXTERN PetscErrorCode MBCCoupleInterference(MBCCouple *, PetscInt, PetscReal[]);
 PETSC_EXTERN PetscErrorCode MBCCoupleCheckSearch(MBCCouple *, PetscInt *, PetscInt *, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *, PetscInt, PetscInt *, PetscReal *, PetscReal *);
 PETSC_INTERN PetscBool      MBCBilinearInverse(const PetscReal[][2], const PetscReal[], PetscReal *, PetscReal *);
