@@ -46,6 +46,16 @@ TOL = 1e-8  # exact answer: only rounding and the multiplier tolerance (1e-8 rel
 STATIC_RTOL = 1e-6  # the solver's default -mbc_static_rtol: what a step that iterates promises
 
 
+def run(work, name, scene, nproc=1):
+    """Prepares the scene and runs the solver with -mbc_monitor on nproc ranks: (h5, the
+    CompletedProcess, wall s)."""
+    h5 = prepare(work, name, scene)
+    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
+    t0 = time.perf_counter()
+    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
+    return h5, r, time.perf_counter() - t0
+
+
 def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0, block_master=True, nproc=1):
     """The block on the base; returns (u_z of the block's top centre, normal force, exact u_z,
     exact force, monitor output, wall s)."""
@@ -62,11 +72,7 @@ def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block
              + ([{"kind": "traction", "surface": "block_zmax", "vector": [tau, 0, 0]}] if tau else []),
              "analysis": {"type": "static"},
              "output": {"points": {"top": {"x": [L / 2, L / 2, 1.5 * L], "body": "block"}}}}
-    h5 = prepare(work, name, scene)
-    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
-    t0 = time.perf_counter()
-    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
-    wall = time.perf_counter() - t0
+    h5, r, wall = run(work, name, scene, nproc)
     if r.returncode:
         return None, None, -p * (L / E_base + 0.5 * L / E_block), p * L * L, r.stdout + r.stderr, wall
     pts = read_csv(h5[:-3] + "_result_points.csv")
@@ -93,11 +99,7 @@ def gap_case(work, name, gap, steps, hold=True, L=1.0, E=2e10, delta=1e-4, nproc
                             "time": {"table": [[0, 0], [1, 1]]}}]
              + ([{"surface": "block_xmin", "components": ["x"]}, {"surface": "block_ymin", "components": ["y"]}] if hold else []),
              "analysis": {"type": "static", "dt": 1.0 / steps, "final_time": 1.0}}
-    h5 = prepare(work, name, scene)
-    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
-    t0 = time.perf_counter()
-    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
-    wall = time.perf_counter() - t0
+    h5, r, wall = run(work, name, scene, nproc)
     f_ex = delta * E * L * L / (1.5 * L)
     if r.returncode:
         return None, None, 1.0, f_ex, r.stdout + r.stderr, wall
@@ -123,11 +125,7 @@ def stack3(work, name, E=(2e10, 2e10, 2e10), p=None, L=1.0, nproc=1):
              "loads": [{"kind": "pressure", "surface": "top_zmax", "value": p}],
              "analysis": {"type": "static"},
              "output": {"points": {"top": {"x": [L / 2, L / 2, 2 * L], "body": "top"}}}}
-    h5 = prepare(work, name, scene)
-    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
-    t0 = time.perf_counter()
-    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
-    wall = time.perf_counter() - t0
+    h5, r, wall = run(work, name, scene, nproc)
     uz_ex = -p * L * (1 / E[0] + 0.5 / E[1] + 0.5 / E[2])
     if r.returncode:
         return None, None, uz_ex, p * L * L, r.stdout + r.stderr, wall

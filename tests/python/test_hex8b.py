@@ -104,18 +104,6 @@ def test_stress_is_bbar(tmp_path):
     assert np.abs(kappa * dtheta).max() > 0.01 * smax, np.abs(kappa * dtheta).max() / smax
 
 
-@pytest.mark.parametrize("option", ["-body_element", "-body_cube_element"])
-def test_bad_element_option_names_hex8b(tmp_path, option):
-    """An unknown value names the option, the body and the three allowed values; exit status 1."""
-    meshgen.box(tmp_path / "cube.msh", (0, 0, 0), (1, 1, 1), n=(1, 1, 1), cell="hex8", volume_name="cube")
-    h5 = prep(tmp_path, patch_scene())
-    r = solve(h5, option, "hex8bb", check=False)
-    text = r.stdout + r.stderr
-    assert r.returncode == 1, text
-    for w in ("-body_cube_element hex8bb", "-body_element", "'cube'", "hex8, hex8i or hex8b"):
-        assert w in text, (w, text)
-
-
 def test_bad_element_scene_key_lists_hex8b(tmp_path):
     """The prep refuses an unknown element naming the key and the allowed values, hex8b among
     them, and refuses hex8b on a tet4 body."""
