@@ -96,13 +96,14 @@ def test_static_resultants(tmp_path, nproc):
 
 def test_static_sliding_fails(tmp_path):
     """mu = 0.2 < T / W = 0.338: no static equilibrium exists. The static analysis stops with
-    one error line naming the step (the contact multipliers do not converge), within seconds,
-    and writes no result beyond the start."""
+    one error line naming the step and saying so (a monolith's T / mu N = 1.69), within
+    seconds, and writes no result beyond the start."""
     h5 = dam.build(tmp_path, **dict(STATIC, mu_base=0.2))
     r = solve(h5, check=False, timeout=120)
     assert r.returncode != 0
     lines = [l for l in r.stderr.splitlines() if l.strip()]
     assert len(lines) == 1 and "mbcontact: error:" in lines[0] and re.search(r"step 1\b", lines[0]), r.stderr
+    assert "no static equilibrium" in lines[0] and "T / mu N" in lines[0], lines[0]
 
 
 def test_dynamic_record_no_sliding(tmp_path):
