@@ -244,44 +244,56 @@ PetscBool MBCElementHex8I(const PetscReal X[], PetscReal lambda, PetscReal mu, P
   return PETSC_TRUE;
 }
 
-/* Assembles K (and M, unit factors times density, when M != NULL) over the body's cells, with
-   the vertices of each cell in closure order for both coordinates and DOFs. */
-PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
+/* Cell c's vertices in closure order: their coordinates X (3 each, from the local coordinate
+   array x) and the local DOF offsets idx of the displacement (3 each); *nv their count. */
+PetscErrorCode MBCBodyCellVertices(MBCBody body, PetscInt c, const PetscScalar x[], PetscReal X[24], PetscInt idx[24], PetscInt *nv)
 {
   DM           cdm;
   PetscSection lsec, csec;
-  Vec          coords;
-  const PetscScalar *x;
-  PetscInt     cStart, cEnd, vStart, vEnd;
-  PetscReal    Ke[576], Me[576], X[24];
-  PetscInt     idx[24];
+  PetscInt    *closure = NULL, nclosure, vStart, vEnd;
 
   PetscFunctionBegin;
   PetscCall(DMGetLocalSection(body->dm, &lsec));
   PetscCall(DMGetCoordinateDM(body->dm, &cdm));
   PetscCall(DMGetLocalSection(cdm, &csec));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  *nv = 0;
+  PetscCall(DMPlexGetTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
+  for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+    PetscInt v = closure[p], off, coff;
+    if (v < vStart || v >= vEnd) continue;
+    PetscCheck(*nv < 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with more than 8 vertices", body->name);
+    PetscCall(PetscSectionGetOffset(lsec, v, &off));
+    PetscCall(PetscSectionGetOffset(csec, v, &coff));
+    for (PetscInt i = 0; i < 3; i++) {
+      idx[3 * *nv + i] = off + i;
+      X[3 * *nv + i]   = PetscRealPart(x[coff + i]);
+    }
+    (*nv)++;
+  }
+  PetscCall(DMPlexRestoreTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
+  PetscCheck(*nv == 4 || *nv == 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with %" PetscInt_FMT " vertices; only tet4 and hex8 are supported", body->name, *nv);
+  PetscFunctionReturn(0);
+}
+
+/* Assembles K (and M, unit factors times density, when M != NULL) over the body's cells, with
+   the vertices of each cell in closure order for both coordinates and DOFs. */
+PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
+{
+  Vec                coords;
+  const PetscScalar *x;
+  PetscInt           cStart, cEnd;
+  PetscReal          Ke[576], Me[576], X[24];
+  PetscInt           idx[24];
+
+  PetscFunctionBegin;
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(VecGetArrayRead(coords, &x));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
   for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscInt *closure = NULL, nclosure, nv = 0;
+    PetscInt nv;
 
-    PetscCall(DMPlexGetTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-      PetscInt v = closure[p], off, coff;
-      if (v < vStart || v >= vEnd) continue;
-      PetscCheck(nv < 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with more than 8 vertices", body->name);
-      PetscCall(PetscSectionGetOffset(lsec, v, &off));
-      PetscCall(PetscSectionGetOffset(csec, v, &coff));
-      for (PetscInt i = 0; i < 3; i++) {
-        idx[3 * nv + i] = off + i;
-        X[3 * nv + i]   = PetscRealPart(x[coff + i]);
-      }
-      nv++;
-    }
-    PetscCall(DMPlexRestoreTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-    PetscCheck(nv == 4 || nv == 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with %" PetscInt_FMT " vertices; only tet4 and hex8 are supported", body->name, nv);
+    PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
     PetscCall(PetscArrayzero(Ke, 9 * nv * nv));
     if (M) PetscCall(PetscArrayzero(Me, 9 * nv * nv));
     if (nv == 4) MBCElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);

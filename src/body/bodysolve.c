@@ -186,18 +186,13 @@ PetscErrorCode MBCBodyPrescribedIncrement(MBCBody body, PetscReal t, Vec g)
    value of kappa div u is pressure noise of the order of the stress itself. */
 static PetscErrorCode BodyStressHex8B(MBCBody body, Vec u, Vec stress)
 {
-  DM                 cdm;
-  PetscSection       lsec, csec;
   Vec                coords, ul;
   const PetscScalar *x, *uv;
   PetscScalar       *sv;
-  PetscInt           cStart, cEnd, vStart, vEnd;
+  PetscInt           cStart, cEnd;
   const PetscReal    kappa = body->lambda + 2.0 * body->mu / 3.0;
 
   PetscFunctionBegin;
-  PetscCall(DMGetLocalSection(body->dm, &lsec));
-  PetscCall(DMGetCoordinateDM(body->dm, &cdm));
-  PetscCall(DMGetLocalSection(cdm, &csec));
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(DMGetLocalVector(body->dm, &ul));
   PetscCall(DMGlobalToLocal(body->dm, u, INSERT_VALUES, ul));
@@ -205,28 +200,16 @@ static PetscErrorCode BodyStressHex8B(MBCBody body, Vec u, Vec stress)
   PetscCall(VecGetArrayRead(ul, &uv));
   PetscCall(VecGetArray(stress, &sv));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
   for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscInt   *closure = NULL, nclosure, nv = 0;
-    PetscReal   X[24], U[24], centre, mean;
+    PetscInt     idx[24], nv;
+    PetscReal    X[24], U[24], centre, mean;
     PetscScalar *s;
 
-    PetscCall(DMPlexGetTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-    for (PetscInt p = 0; p < 2 * nclosure && nv < 8; p += 2) {
-      PetscInt v = closure[p], off, coff;
-      if (v < vStart || v >= vEnd) continue;
-      PetscCall(PetscSectionGetOffset(lsec, v, &off));
-      PetscCall(PetscSectionGetOffset(csec, v, &coff));
-      for (PetscInt i = 0; i < 3; i++) {
-        X[3 * nv + i] = PetscRealPart(x[coff + i]);
-        U[3 * nv + i] = PetscRealPart(uv[off + i]);
-      }
-      nv++;
-    }
-    PetscCall(DMPlexRestoreTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-    PetscCheck(nv == 8, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': hex8b cell %" PetscInt_FMT " has %" PetscInt_FMT " vertices", body->name, c, nv);
     PetscCall(DMPlexPointGlobalRef(body->dmStress, c, sv, &s));
     if (!s) continue; /* not owned */
+    PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
+    PetscCheck(nv == 8, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': hex8b cell %" PetscInt_FMT " has %" PetscInt_FMT " vertices", body->name, c, nv);
+    for (PetscInt i = 0; i < 24; i++) U[i] = PetscRealPart(uv[idx[i]]);
     MBCElementHex8Dilatation(X, U, &centre, &mean);
     for (PetscInt i = 0; i < 3; i++) s[i] += kappa * (mean - centre); /* xx yy zz */
   }
