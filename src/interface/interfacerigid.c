@@ -102,32 +102,6 @@ static PetscErrorCode InterfaceRigidReduce(MBCInterface ifc)
    normals tilted by less than ~1e-3 rad are the deformation's, not a support's. */
 #define MBC_RIGID_RESIST 1e-3
 
-/* A copy of A with the magnitudes of its entries (PETSc 3.18 has no MatAbs). */
-static PetscErrorCode MatAbsCopy(Mat A, Mat *B)
-{
-  PetscInt rstart, rend;
-
-  PetscFunctionBegin;
-  PetscCall(MatDuplicate(A, MAT_DO_NOT_COPY_VALUES, B));
-  PetscCall(MatGetOwnershipRange(A, &rstart, &rend));
-  for (PetscInt r = rstart; r < rend; r++) {
-    PetscInt           nc;
-    const PetscInt    *cols;
-    const PetscScalar *vals;
-    PetscScalar        abs[64];
-    PetscCall(MatGetRow(A, r, &nc, &cols, &vals));
-    for (PetscInt c0 = 0; c0 < nc; c0 += 64) {
-      const PetscInt m = PetscMin(64, nc - c0);
-      for (PetscInt c = 0; c < m; c++) abs[c] = PetscAbsScalar(vals[c0 + c]);
-      PetscCall(MatSetValues(*B, 1, &r, m, cols + c0, abs, INSERT_VALUES));
-    }
-    PetscCall(MatRestoreRow(A, r, &nc, &cols, &vals));
-  }
-  PetscCall(MatAssemblyBegin(*B, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(*B, MAT_FINAL_ASSEMBLY));
-  PetscFunctionReturn(0);
-}
-
 /* Static analysis with bodies their supports leave free (FETI's natural coarse space): the
    equilibrium of body i, R_i^T (f_i + H_i lambda) = 0, is G lambda = e with G's rows
    (H_i^T R_ij)^T, one per free mode, in the multiplier layout (W's); the free motion
@@ -164,9 +138,11 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
   PetscCall(VecDuplicate(ifc->fp.q, &row));
   PetscCall(VecDuplicate(ifc->fp.q, &rowabs));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    Mat Habs = NULL;
-    Vec Rabs = NULL;
-    if (ifc->goff[b + 1] > ifc->goff[b] && ifc->H[b]) PetscCall(MatAbsCopy(ifc->H[b], &Habs));
+    PetscReal *hsum = NULL; /* |H_b|^T 1: per column of H_b, the sum of its magnitudes */
+    if (ifc->goff[b + 1] > ifc->goff[b] && ifc->H[b]) {
+      PetscCall(PetscMalloc1(ifc->nbcols[b] + 1, &hsum));
+      PetscCall(MatGetColumnNorms(ifc->H[b], NORM_1, hsum));
+    }
     for (PetscInt j = 0; j < ifc->goff[b + 1] - ifc->goff[b]; j++) {
       const PetscScalar *a, *aa;
       PetscInt           rstart, n, g = ifc->goff[b] + j;
@@ -176,13 +152,16 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
         else PetscCall(VecZeroEntries(ifc->Hu[o]));
       }
       PetscCall(MBCInterfaceFromBodies(ifc, row));
-      if (Habs) { /* |H_b|^T 1 max|R_bj|: the scale of each entry's rounding (the modes' entries
+      if (hsum) { /* |H_b|^T 1 max|R_bj|: the scale of each entry's rounding (the modes' entries
                      are known to a few eps of their largest: syev mixes the six modes) */
-        PetscReal rmax;
-        if (!Rabs) PetscCall(VecDuplicate(ifc->bodies[b]->rigid[j], &Rabs));
+        PetscReal    rmax;
+        PetscScalar *hu;
+        PetscInt     cstart, cend;
         PetscCall(VecNorm(ifc->bodies[b]->rigid[j], NORM_INFINITY, &rmax));
-        PetscCall(VecSet(Rabs, rmax));
-        PetscCall(MatMultTranspose(Habs, Rabs, ifc->Hu[b]));
+        PetscCall(VecGetOwnershipRange(ifc->Hu[b], &cstart, &cend));
+        PetscCall(VecGetArray(ifc->Hu[b], &hu));
+        for (PetscInt i = cstart; i < cend; i++) hu[i - cstart] = rmax * hsum[i];
+        PetscCall(VecRestoreArray(ifc->Hu[b], &hu));
       }
       PetscCall(MBCInterfaceFromBodies(ifc, rowabs));
       PetscCall(VecGetOwnershipRange(row, &rstart, NULL));
@@ -208,8 +187,7 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
       PetscCall(VecRestoreArrayRead(rowabs, &aa));
       PetscCall(VecRestoreArrayRead(row, &a));
     }
-    PetscCall(VecDestroy(&Rabs));
-    PetscCall(MatDestroy(&Habs));
+    PetscCall(PetscFree(hsum));
   }
   PetscCall(VecDestroy(&rowabs));
   PetscCall(VecDestroy(&row));
