@@ -452,6 +452,13 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
   PetscFunctionReturn(0);
 }
 
+/* A point whose share of the surface is mostly uncovered (the dual weights lose their meaning
+   there) keeps the collocation at its node. */
+static inline PetscBool PointIntegrated(PetscReal covered, PetscReal area)
+{
+  return (PetscBool)(covered >= 0.25 * area && area > 0);
+}
+
 PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq)
 {
   MBCSurface *m = &c->master, *s = &c->slave;
@@ -462,15 +469,14 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   PetscCall(MBCCoupleIntegrateReset(c));
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
   PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
-  /* a point whose share is mostly uncovered (the dual weights lose their meaning there) keeps
-     the collocation at its node: its integrated entries are dropped */
+  /* a point kept at its node (PointIntegrated): its integrated entries are dropped */
   for (size_t e = 0; e < sl.n; e++) {
     const PetscInt k = (PetscInt)(sl.e[e].key / s->nnodes);
-    if (!(covered[k] >= 0.25 * area[k] && area[k] > 0)) sl.e[e].w = 0;
+    if (!PointIntegrated(covered[k], area[k])) sl.e[e].w = 0;
   }
   for (PetscInt k = 0; k < c->npoints; k++) { /* master side: the node alone (dual basis) */
     MBCContactPoint *p = &c->points[k];
-    const PetscBool  integrated = (PetscBool)(covered[k] >= 0.25 * area[k] && area[k] > 0);
+    const PetscBool  integrated = PointIntegrated(covered[k], area[k]);
     p->area                     = nsum[k] > 0 ? nsum[k] : area[k];
     PetscCall(EntryAdd(&ml, (PetscInt64)k * m->nnodes + p->master, integrated ? covered[k] : area[k]));
     if (integrated) continue;
@@ -532,7 +538,7 @@ PetscErrorCode MBCCoupleInterference(MBCCouple *c, PetscInt nq, PetscReal qmin[]
   for (PetscInt k = 0; k < c->npoints; k++) qmin[k] = c->points[k].gap;
   PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, qmin));
   for (PetscInt k = 0; k < c->npoints; k++)
-    if (covered[k] >= 0.25 * area[k] && area[k] > 0) qmin[k] = PetscMin(qmin[k], gsum[k] / covered[k]);
+    if (PointIntegrated(covered[k], area[k])) qmin[k] = PetscMin(qmin[k], gsum[k] / covered[k]);
   PetscCall(PetscFree(sl.e));
   PetscCall(PetscFree4(area, covered, gsum, nsum));
   PetscFunctionReturn(0);

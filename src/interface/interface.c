@@ -633,15 +633,8 @@ static PetscErrorCode AddDenseBlock(Mat W, const PetscInt rows[], PetscInt lo, P
   PetscFunctionReturn(0);
 }
 
-/* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
-   C the DOFs of the body's nodes on its contact surfaces (every couple, both sides) that are not
-   held (MBCBodyZeroHeldRows): a set fixed by the scene, which holds the rows of every H_b the search
-   can make. S = A_CC - A_CI A_II^-1 A_IC from a MUMPS factorization of the body's operator with C
-   as its Schur set, S^-1 by LAPACK, kept while the operator is the same object in the same state;
-   then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the multi-right-hand-side
-   route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
-   restart computes S^-1 from the same operator and the same C, so it builds the same D. *Dout:
-   the dense nb x nb D_b. */
+/* r = 1 on the DOFs of body b's nodes on its contact surfaces (every couple, both sides) that
+   K^+ does not hold, 0 elsewhere: C of the Schur route, fixed by the scene. */
 static PetscErrorCode BodyContactDofs(MBCInterface ifc, PetscInt b, Vec r)
 {
   MBCContact   c = ifc->contact;
@@ -683,14 +676,28 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
-  PetscCall(VecDuplicate(body->u, &r));
-  PetscCall(BodyContactDofs(ifc, b, r));
-  PetscCall(VecSum(r, &nC));
-  PetscCall(VecDestroy(&r));
+  if (ifc->sinv_is[b]) { /* C is fixed by the scene: counted once */
+    PetscInt n;
+    PetscCall(ISGetSize(ifc->sinv_is[b], &n));
+    nC = n;
+  } else {
+    PetscCall(VecDuplicate(body->u, &r));
+    PetscCall(BodyContactDofs(ifc, b, r));
+    PetscCall(VecSum(r, &nC));
+    PetscCall(VecDestroy(&r));
+  }
   *schur = (PetscBool)(8.0 * nC * nC <= ifc->schur_max_mb * 1048576.0);
   PetscFunctionReturn(0);
 }
 
+/* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
+   C the DOFs of the body's nodes on its contact surfaces (every couple, both sides) that are not
+   held (MBCBodyZeroHeldRows): a set fixed by the scene, which holds the rows of every H_b the search
+   can make. S = A_CC - A_CI A_II^-1 A_IC from a MUMPS factorization of the body's operator with C
+   as its Schur set, S^-1 by LAPACK, kept while the operator is the same object in the same state;
+   then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the multi-right-hand-side
+   route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
+   restart computes S^-1 from the same operator and the same C, so it builds the same D. */
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
 {
   MBCBody        body = ifc->bodies[b];
@@ -757,6 +764,7 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
   PetscFunctionReturn(0);
 }
 
+/* *Dout: the dense nb x nb D_b = H_C^T S^-1 H_C (BodySchurInverse). */
 static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
 {
   Mat HC, HCd, Y;

@@ -92,7 +92,7 @@ static PetscErrorCode InterfaceOverturning(MBCInterface ifc, PetscInt b, const P
     const MBCCouple *cpl = &c->couples[ifc->kcouple[k]];
     const PetscInt   j   = ifc->kpoint[k];
     nmax += cpl->moff[j + 1] - cpl->moff[j] + cpl->soff[j + 1] - cpl->soff[j];
-    if (MBCInterfacePointTouches(cpl, j, b) && PetscAbsReal(ifc->frames[9 * k] * nu[0] + ifc->frames[9 * k + 1] * nu[1] + ifc->frames[9 * k + 2] * nu[2]) < 1 - 1e-8) PetscFunctionReturn(0); /* curved */
+    if (MBCInterfacePointTouches(cpl, j, b) && PetscAbsReal(MBCDot(&ifc->frames[9 * k], nu)) < 1 - 1e-8) PetscFunctionReturn(0); /* curved */
   }
   PetscCall(PetscMalloc3(3 * nmax + 3, &x, 2 * nmax + 2, &p2, 2 * nmax + 4, &h));
   for (PetscInt k = 0; k < ifc->ncontact; k++) { /* the body's nodes of its contact points, reference coordinates */
@@ -105,32 +105,37 @@ static PetscErrorCode InterfaceOverturning(MBCInterface ifc, PetscInt b, const P
   }
   for (PetscInt i = 0; i < n; i++)
     for (PetscInt d = 0; d < 3; d++) O[d] += x[3 * i + d] / n;
-  for (PetscInt i = 0; i < n; i++) diam = PetscMax(diam, PetscSqrtReal(PetscSqr(x[3 * i] - O[0]) + PetscSqr(x[3 * i + 1] - O[1]) + PetscSqr(x[3 * i + 2] - O[2])));
+  for (PetscInt i = 0; i < n; i++) {
+    PetscReal r[3];
+    MBCSub(x + 3 * i, O, r);
+    diam = PetscMax(diam, PetscSqrtReal(MBCDot(r, r)));
+  }
   { /* t1, t2: a basis of the plane */
-    const PetscInt a = PetscAbsReal(nu[0]) < 0.6 ? 0 : 1;
-    PetscReal      e[3] = {0, 0, 0}, l;
-    e[a]  = 1;
-    t1[0] = nu[1] * e[2] - nu[2] * e[1], t1[1] = nu[2] * e[0] - nu[0] * e[2], t1[2] = nu[0] * e[1] - nu[1] * e[0];
-    l     = PetscSqrtReal(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
-    for (PetscInt d = 0; d < 3; d++) t1[d] /= l;
-    t2[0] = nu[1] * t1[2] - nu[2] * t1[1], t2[1] = nu[2] * t1[0] - nu[0] * t1[2], t2[2] = nu[0] * t1[1] - nu[1] * t1[0];
+    PetscReal e[3] = {0, 0, 0};
+    e[PetscAbsReal(nu[0]) < 0.6 ? 0 : 1] = 1;
+    MBCCross(nu, e, t1);
+    MBCNormalize(t1);
+    MBCCross(nu, t1, t2);
   }
   for (PetscInt i = 0; i < n; i++) {
-    PetscReal r[3] = {x[3 * i] - O[0], x[3 * i + 1] - O[1], x[3 * i + 2] - O[2]};
-    if (PetscAbsReal(r[0] * nu[0] + r[1] * nu[1] + r[2] * nu[2]) > 1e-6 * diam) { /* not one plane */
+    PetscReal r[3];
+    MBCSub(x + 3 * i, O, r);
+    if (PetscAbsReal(MBCDot(r, nu)) > 1e-6 * diam) { /* not one plane */
       PetscCall(PetscFree3(x, p2, h));
       PetscFunctionReturn(0);
     }
-    p2[2 * i] = r[0] * t1[0] + r[1] * t1[1] + r[2] * t1[2], p2[2 * i + 1] = r[0] * t2[0] + r[1] * t2[1] + r[2] * t2[2];
+    p2[2 * i] = MBCDot(r, t1), p2[2 * i + 1] = MBCDot(r, t2);
   }
   nh = Hull2D(n, p2, h);
-  fn = F[0] * nu[0] + F[1] * nu[1] + F[2] * nu[2];
-  MO[0] = M[0] - (O[1] * F[2] - O[2] * F[1]), MO[1] = M[1] - (O[2] * F[0] - O[0] * F[2]), MO[2] = M[2] - (O[0] * F[1] - O[1] * F[0]);
+  fn = MBCDot(F, nu);
+  MBCCross(O, F, MO); /* the load's moment about O: M - O x F */
+  for (PetscInt d = 0; d < 3; d++) MO[d] = M[d] - MO[d];
   if (nh >= 3 && fn != 0) {
-    PetscReal q[2], nxm[3] = {nu[1] * MO[2] - nu[2] * MO[1], nu[2] * MO[0] - nu[0] * MO[2], nu[0] * MO[1] - nu[1] * MO[0]};
+    PetscReal q[2], nxm[3], r[3];
+    MBCCross(nu, MO, nxm);
     for (PetscInt d = 0; d < 3; d++) cp[d] = O[d] + nxm[d] / fn;
-    q[0] = (cp[0] - O[0]) * t1[0] + (cp[1] - O[1]) * t1[1] + (cp[2] - O[2]) * t1[2];
-    q[1] = (cp[0] - O[0]) * t2[0] + (cp[1] - O[1]) * t2[1] + (cp[2] - O[2]) * t2[2];
+    MBCSub(cp, O, r);
+    q[0] = MBCDot(r, t1), q[1] = MBCDot(r, t2);
     for (PetscInt i = 0; i < nh; i++) { /* distance outside the edge i -> i + 1 (counter-clockwise) */
       const PetscReal *a = h + 2 * i, *e = h + 2 * ((i + 1) % nh);
       const PetscReal  l = PetscSqrtReal(PetscSqr(e[0] - a[0]) + PetscSqr(e[1] - a[1]));
