@@ -23,21 +23,18 @@ Writes docs/extremes.png (error against the swept parameter).
 import argparse
 import os
 import re
-import subprocess
 import sys
 import tempfile
-import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import monitor  # noqa: E402  (bench/monitor.py)
 import plot  # noqa: E402  (bench/plot.py)
 from mbcontact import meshgen  # noqa: E402
 from mbcontact.prep import prepare  # noqa: E402
 from mbcontact.results import read_csv  # noqa: E402
 
-SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 import extremes_dynamic  # noqa: E402  (bench/extremes_dynamic.py)
 import extremes_poisson  # noqa: E402  (bench/extremes_poisson.py)
 
@@ -50,10 +47,7 @@ def run(work, name, scene, nproc=1):
     """Prepares the scene and runs the solver with -mbc_monitor on nproc ranks: (h5, the
     CompletedProcess, wall s)."""
     h5 = prepare(work, name, scene)
-    mpi = ["mpirun", "-n", str(nproc), "--oversubscribe"] if nproc > 1 else []
-    t0 = time.perf_counter()
-    r = subprocess.run(mpi + [SOLVER, "-scene", h5, "-mbc_monitor"], capture_output=True, text=True, env=ENV)
-    return h5, r, time.perf_counter() - t0
+    return (h5, *monitor.run(h5, nproc=nproc))
 
 
 def stack(work, name, L=1.0, E_base=2e10, E_block=2e10, p=1e6, n_base=2, n_block=3, mu=0.0, tau=0.0, block_master=True, nproc=1):
@@ -140,12 +134,7 @@ def stack3(work, name, E=(2e10, 2e10, 2e10), p=None, L=1.0, nproc=1):
 HEADER = f"{'category':>9} {'value':>20} {'reasons':>16} {'mult':>6} {'static':>6} {'error':>9} {'drift':>9} {'wall':>7} {'':>5}"
 
 
-def solve_stats(out):
-    """The multiplier solves' converged reasons, their iterations and the static iterations, from
-    -mbc_monitor's output."""
-    reasons = sorted(set(re.findall(r"contact: \w+ (\w+) in", out))) or ["(none)"]
-    its = [int(i) for i in re.findall(r" in (\d+) iterations", out)]
-    return reasons, sum(its), len(re.findall(r"static iteration", out))
+solve_stats = monitor.stats
 
 
 def show(r):
@@ -171,7 +160,7 @@ def row(category, value, res, x=None, count=True, series=""):
     # (docs/stability.md) and the answer is as exact as that tolerance
     iterated = max([int(i) for i in re.findall(r"static iteration (\d+):", out)] or [0]) > 2
     tol = STATIC_RTOL if iterated else TOL
-    ok = e_u < tol and e_f < tol and all(r.startswith("CONVERGED") for r in reasons)
+    ok = e_u < tol and e_f < tol and monitor.converged(reasons)
     return show(dict(category=category, value=value, x=x, reasons=reasons, mult_its=mult_its, static_its=static_its,
                      error=max(e_u, e_f), e_u=e_u, e_f=e_f, drift=None, wall=wall, ok=ok, count=count, series=series))
 

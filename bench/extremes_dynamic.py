@@ -43,23 +43,19 @@ Every case returns a dict (cases()); main() prints the table and writes docs/ext
 import argparse
 import math
 import os
-import re
-import subprocess
 import sys
 import tempfile
-import time
 
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import monitor  # noqa: E402  (bench/monitor.py)
 from mbcontact import meshgen  # noqa: E402
 from mbcontact.prep import prepare  # noqa: E402
 from mbcontact.results import read_csv  # noqa: E402
 
-SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 G = 9.81
 RHO = 2000.0
 TRAPEZOIDAL = {"beta": 0.25, "gamma": 0.5}
@@ -79,25 +75,11 @@ PERIODS = [10, 100, 1000]
 
 
 def run(h5, *options):
-    """The solver with -mbc_monitor; returns (returncode, stdout + stderr, wall s)."""
-    t0 = time.perf_counter()
-    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor", *options], capture_output=True, text=True, env=ENV)
-    return r.returncode, r.stdout + r.stderr, time.perf_counter() - t0
-
-
-def monitor(out):
-    """Converged reasons of the multiplier solves, their iterations, static iterations, step cuts
-    (the dynamic monitor prints "contact: newton CONVERGED_RTOL in 2 iterations (merit ...)" per
-    solve, a failed one "contact: newton solve DIVERGED_ITS ...", bench/extremes.py's row())."""
-    reasons = sorted(set(re.findall(r"contact: \w+ (\w+) in", out)) | set(re.findall(r"contact: \w+ solve (\w+)", out))) or ["(none)"]
-    its = sum(int(i) for i in re.findall(r" in (\d+) iterations", out))
-    static_its = len(re.findall(r"static iteration", out))
-    cuts = out.count("the step is cut to two")
-    return reasons, its, static_its, cuts
-
-
-def converged(reasons):
-    return bool(reasons) and all(r.startswith("CONVERGED") for r in reasons)
+    """The solver with -mbc_monitor: (returncode, stdout + stderr, wall s, monitor.stats + the step
+    cuts)."""
+    r, wall = monitor.run(h5, options)
+    out = r.stdout + r.stderr
+    return r.returncode, out, wall, (*monitor.stats(out), out.count("the step is cut to two"))
 
 
 def slide_case(work, dt, T=T_SLIDE):
@@ -124,8 +106,7 @@ def slide_case(work, dt, T=T_SLIDE):
                    "points": {"mid": {"x": [0.5, 0.5, 0.25], "body": "block"}}},
     }
     h5 = prepare(work, name, scene)
-    rc, out, wall = run(h5)
-    reasons, its, static_its, cuts = monitor(out)
+    rc, out, wall, (reasons, its, static_its, cuts) = run(h5)
     x_ref = J * T**3 / 6
     expected = dt**2 / (2 * T**2)
     e_ref = 0.5 * RHO * 0.5 * (J * T**2 / 2) ** 2
@@ -136,7 +117,7 @@ def slide_case(work, dt, T=T_SLIDE):
         error = abs(p["mid_ux"][-1] / x_ref - 1)
         gain = en["kinetic"] + en["strain"] - en["external_work"] + en["damping_dissipation"] + en["friction_dissipation"]
         drift = max(float(gain.max()), 0.0) / e_ref
-    ok = rc == 0 and converged(reasons) and abs(error - expected) < FLOOR and drift < DRIFT_TOL
+    ok = rc == 0 and monitor.converged(reasons) and abs(error - expected) < FLOOR and drift < DRIFT_TOL
     return dict(category="timestep", value=f"dt {dt:g} s", x=dt, reasons=reasons, mult_its=its, static_its=static_its,
                 error=error, drift=drift, wall=wall, ok=ok, cuts=cuts, expected=expected,
                 ref=f"rigid Coulomb slide x = j T^3/6 = {x_ref:.4g} m; trapezoidal error dt^2/(2T^2) = {expected:.2g}",
@@ -179,8 +160,7 @@ def bounce_case(work, periods, dt=DT_BOUNCE, keep=False):
                               "support": {"x": [0, 0, 1], "body": "pad"}}},
     }
     h5 = prepare(work, name, scene)
-    rc, out, wall = run(h5, *(["-mbc_contact_keep_penetration"] if keep else []))
-    reasons, its, static_its, cuts = monitor(out)
+    rc, out, wall, (reasons, its, static_its, cuts) = run(h5, *(["-mbc_contact_keep_penetration"] if keep else []))
     error = drift = loss = float("inf")
     impacts, penetration, rest = 0, float("nan"), float("nan")
     if rc == 0:
@@ -198,7 +178,7 @@ def bounce_case(work, periods, dt=DT_BOUNCE, keep=False):
         penetration = max(0.0, -float(gap.min()))
         if impacts >= 2:  # the pad's deepest compression between the first two landings
             error = abs(-p["support_uz"][landings[0]:landings[1]].min() / peak - 1)
-    ok = rc == 0 and converged(reasons) and drift < DRIFT_TOL
+    ok = rc == 0 and monitor.converged(reasons) and drift < DRIFT_TOL
     return dict(category="bounce", value=f"{periods} periods" + (" keep_pen" if keep else ""), x=float(periods),
                 reasons=reasons, mult_its=its, static_its=static_its, error=error, drift=drift, wall=wall, ok=ok,
                 cuts=cuts, impacts=impacts, rest=rest, loss=loss, penetration=penetration, steps=steps,

@@ -30,8 +30,6 @@ Other benches import cases(work, smoke) (a list of dicts, one per case).
 """
 import argparse
 import os
-import re
-import subprocess
 import sys
 import tempfile
 import time
@@ -41,12 +39,11 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import monitor  # noqa: E402  (bench/monitor.py)
 from mbcontact import meshgen  # noqa: E402
 from mbcontact.prep import prepare  # noqa: E402
 from mbcontact.results import read_body, read_csv  # noqa: E402
 
-SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 NUS = (0.0, 0.3, 0.45, 0.49, 0.499)
 ELEMENTS = ("hex8", "hex8i", "hex8b", "tet4")
 E, P = 2.0e10, 1.0e6
@@ -54,20 +51,6 @@ EXACT_TOL = 1e-8  # confined: exact fields, only rounding and the multiplier tol
 LAME_TOL = 0.0075  # lame: about 2x hex8b's worst error over the sweep (0.34 %, the mesh's); docs/stability.md
 RA, RB, RC, LZ = 1.0, 1.5, 2.0, 0.25  # inner, contact and outer radii; axial length
 N_LAME = (3, 12, 1)  # cells per tube: radial, per quarter, axial
-
-
-def run(h5, options=()):
-    t0 = time.perf_counter()
-    r = subprocess.run([SOLVER, "-scene", h5, "-mbc_monitor", *options], capture_output=True, text=True, env=ENV)
-    return r, time.perf_counter() - t0
-
-
-def parse(out):
-    """The multiplier solves' converged reasons, their total iterations, the static iterations
-    (as bench/extremes.py's row())."""
-    reasons = sorted(set(re.findall(r"contact: \w+ (\w+) in", out))) or ["(none)"]
-    its = sum(int(i) for i in re.findall(r" in (\d+) iterations", out))
-    return reasons, its, len(re.findall(r"static iteration", out))
 
 
 def options(element):
@@ -93,7 +76,7 @@ def confined(work, name, element, nu, L=1.0):
     h5 = prepare(work, name, scene)
     M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
     exact = -1.5 * P * L / M
-    r, wall = run(h5, options(element))
+    r, wall = monitor.run(h5, options(element))
     if r.returncode:
         return None, exact, r.stdout + r.stderr, wall
     return read_csv(h5[:-3] + "_result_points.csv")["top_uz"][-1], exact, r.stdout, wall
@@ -140,7 +123,7 @@ def lame(work, name, element, nu, n=N_LAME):
     lame_mesh(os.path.join(work, f"{name}.msh"), element, n)
     h5 = prepare(work, name, lame_scene(f"{name}.msh", nu))
     exact = lame_exact(RA, nu)
-    r, wall = run(h5, options(element))
+    r, wall = monitor.run(h5, options(element))
     if r.returncode:
         return None, exact, r.stdout + r.stderr, wall
     return inner_radial(h5)[0], exact, r.stdout, wall
@@ -148,14 +131,14 @@ def lame(work, name, element, nu, n=N_LAME):
 
 def case(scene, element, nu, res):
     value, exact, out, wall = res
-    reasons, mult_its, static_its = parse(out)
+    reasons, mult_its, static_its = monitor.stats(out)
     error = float("inf") if value is None else abs(value / exact - 1)
     tol = EXACT_TOL if scene == "confined" else LAME_TOL
-    ok = bool(error < tol and all(r.startswith("CONVERGED") for r in reasons))
+    ok = bool(error < tol and monitor.converged(reasons))
     ref = ("oedometric modulus M = E(1-nu)/((1+nu)(1-2nu)), exact for every element" if scene == "confined"
            else "Lame thick cylinder 1..2, plane strain, u_r at r = 1")
     note = ""
-    if not ok and scene == "lame" and error < float("inf") and all(r.startswith("CONVERGED") for r in reasons):
+    if not ok and scene == "lame" and error < float("inf") and monitor.converged(reasons):
         # an error that grows with nu is volumetric locking; tet4's at nu = 0 is its coarser mesh (Kuhn tets)
         note = "locking (use hex8b)" if nu > 0 else "discretization (coarse tets)"
     return dict(category="poisson", value=f"{element} {nu:g} {scene}", x=nu, reasons=reasons, mult_its=mult_its,

@@ -33,7 +33,7 @@ SMOKE = {
     "hertz_convergence.py": (["--smoke"], r"^\s+0\.400\s+\d+", True),
     "search.py": (["--sizes", "1000"], r"^\s+1060\s", True),
 }
-HELPERS = {"plot.py", "extremes_poisson.py", "extremes_dynamic.py"}  # imported by the benches (extremes.py --smoke runs extremes_*.py's smallest cases)
+HELPERS = {"plot.py", "monitor.py", "extremes_poisson.py", "extremes_dynamic.py"}  # imported by the benches (extremes.py --smoke runs extremes_*.py's smallest cases)
 
 
 def test_every_bench_has_a_smoke_run():
