@@ -104,22 +104,6 @@ def test_stress_is_bbar(tmp_path):
     assert np.abs(kappa * dtheta).max() > 0.01 * smax, np.abs(kappa * dtheta).max() / smax
 
 
-def test_bad_element_scene_key_lists_hex8b(tmp_path):
-    """The prep refuses an unknown element naming the key and the allowed values, hex8b among
-    them, and refuses hex8b on a tet4 body."""
-    import subprocess
-    import yaml
-    from conftest import PREP, env
-    for cell, element, words in (("hex8", "hex8c", ("bodies.cube.element", "hex8c", "hex8, hex8i, hex8b")),
-                                 ("tet4", "hex8b", ("bodies.cube.element", "tet4"))):
-        meshgen.box(tmp_path / "cube.msh", (0, 0, 0), (1, 1, 1), n=(1, 1, 1), cell=cell, volume_name="cube")
-        (tmp_path / "s.yaml").write_text(yaml.safe_dump(patch_scene(element)))
-        r = subprocess.run([PREP, str(tmp_path / "s.yaml"), "--check"], capture_output=True, text=True, env=env())
-        assert r.returncode != 0
-        for w in words:
-            assert w in r.stderr, (w, r.stderr)
-
-
 def test_bench_extremes_poisson_smoke(tmp_path):
     """bench/extremes_poisson.py's cases(work, smoke=True), as bench/extremes.py will import it:
     one dict per element and scene at nu = 0.499 with the agreed keys; every multiplier solve

@@ -225,12 +225,16 @@ def test_bad_element_option(tmp_path, option):
 
 
 def test_bad_element_scene_key(tmp_path):
-    """The prep refuses an unknown element and an element on a tet body, naming the key."""
+    """The prep refuses an unknown element (naming the key and the allowed values, hex8b among
+    them) and a hex element on a tet body (hex8i and hex8b), naming the key."""
     import subprocess
     from conftest import PREP, env
     import yaml
-    meshgen.box(tmp_path / "cube.msh", (0, 0, 0), (1, 1, 1), n=(1, 1, 1), cell="tet4", volume_name="cube")
-    for element, words in (("hex20", ("bodies.cube.element", "hex20", "hex8, hex8i")), ("hex8i", ("bodies.cube.element", "tet4"))):
+    for cell, element, words in (("tet4", "hex20", ("bodies.cube.element", "hex20", "hex8, hex8i")),
+                                 ("tet4", "hex8i", ("bodies.cube.element", "tet4")),
+                                 ("hex8", "hex8c", ("bodies.cube.element", "hex8c", "hex8, hex8i, hex8b")),
+                                 ("tet4", "hex8b", ("bodies.cube.element", "tet4"))):
+        meshgen.box(tmp_path / "cube.msh", (0, 0, 0), (1, 1, 1), n=(1, 1, 1), cell=cell, volume_name="cube")
         (tmp_path / "s.yaml").write_text(yaml.safe_dump(patch_scene(element)))
         r = subprocess.run([PREP, str(tmp_path / "s.yaml"), "--check"], capture_output=True, text=True, env=env())
         assert r.returncode != 0
