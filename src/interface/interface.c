@@ -76,13 +76,14 @@ PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface ifc, PetscInt dblock)
   PetscFunctionReturn(0);
 }
 
-/* How D_i is built (-mbc_d_route): 0 multi-right-hand-side solves, 1 the Schur complement, 2 the
-   Schur complement where S^-1 fits in max_mb (-mbc_d_schur_max_mb), else the solves. */
-PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal max_mb)
+/* How D_i is had (-mbc_d_route, MBCDRoute); auto's limits: the largest S^-1 per body
+   (-mbc_d_schur_max_mb) and the largest dense D with the Newton matrix (-mbc_d_dense_max_mb). */
+PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal schur_max_mb, PetscReal dense_max_mb)
 {
   PetscFunctionBegin;
-  ifc->droute      = route;
-  ifc->schur_max_mb = max_mb;
+  ifc->droute       = route;
+  ifc->schur_max_mb = schur_max_mb;
+  ifc->dense_max_mb = dense_max_mb;
   PetscFunctionReturn(0);
 }
 
@@ -434,8 +435,8 @@ static PetscErrorCode InterfaceForest(MBCInterface ifc)
   PetscFunctionReturn(0);
 }
 
-/* v (rows of W) into every body's lam[b] on this rank. */
-PetscErrorCode MBCInterfaceToBodies(MBCInterface ifc, Vec v)
+/* v (rows of W) into lam[b], every body's on this rank (H's column layout). */
+PetscErrorCode MBCInterfaceScatterToBodies(MBCInterface ifc, Vec v, Vec lam[])
 {
   const PetscScalar *a;
   PetscInt           l = 0;
@@ -449,17 +450,17 @@ PetscErrorCode MBCInterfaceToBodies(MBCInterface ifc, Vec v)
     PetscScalar *la;
     PetscInt     n;
     if (!ifc->lam[b]) continue;
-    PetscCall(VecGetLocalSize(ifc->lam[b], &n));
-    PetscCall(VecGetArray(ifc->lam[b], &la));
+    PetscCall(VecGetLocalSize(lam[b], &n));
+    PetscCall(VecGetArray(lam[b], &la));
     PetscCall(PetscArraycpy(la, ifc->leaf + l, n));
-    PetscCall(VecRestoreArray(ifc->lam[b], &la));
+    PetscCall(VecRestoreArray(lam[b], &la));
     l += n;
   }
   PetscFunctionReturn(0);
 }
 
-/* v (rows of W) = the sum over bodies of Hu[b]. */
-PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
+/* v (rows of W) = the sum over bodies of hu[b] (H's column layout). */
+PetscErrorCode MBCInterfaceGatherFromBodies(MBCInterface ifc, Vec hu[], Vec v)
 {
   PetscScalar *a;
   PetscInt     l = 0;
@@ -469,10 +470,10 @@ PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
     const PetscScalar *ha;
     PetscInt           n;
     if (!ifc->Hu[b]) continue;
-    PetscCall(VecGetLocalSize(ifc->Hu[b], &n));
-    PetscCall(VecGetArrayRead(ifc->Hu[b], &ha));
+    PetscCall(VecGetLocalSize(hu[b], &n));
+    PetscCall(VecGetArrayRead(hu[b], &ha));
     PetscCall(PetscArraycpy(ifc->leaf + l, ha, n));
-    PetscCall(VecRestoreArrayRead(ifc->Hu[b], &ha));
+    PetscCall(VecRestoreArrayRead(hu[b], &ha));
     l += n;
   }
   PetscCall(VecZeroEntries(v));
@@ -480,6 +481,22 @@ PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
   PetscCall(PetscSFReduceBegin(ifc->csf, MPIU_SCALAR, ifc->leaf, a, MPIU_SUM));
   PetscCall(PetscSFReduceEnd(ifc->csf, MPIU_SCALAR, ifc->leaf, a, MPIU_SUM));
   PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) into every body's lam[b] on this rank. */
+PetscErrorCode MBCInterfaceToBodies(MBCInterface ifc, Vec v)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCInterfaceScatterToBodies(ifc, v, ifc->lam));
+  PetscFunctionReturn(0);
+}
+
+/* v (rows of W) = the sum over bodies of Hu[b]. */
+PetscErrorCode MBCInterfaceFromBodies(MBCInterface ifc, Vec v)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCInterfaceGatherFromBodies(ifc, ifc->Hu, v));
   PetscFunctionReturn(0);
 }
 
@@ -669,10 +686,10 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
 
   PetscFunctionBegin;
   *schur = PETSC_FALSE;
-  if (ifc->droute == 0) PetscFunctionReturn(0);
+  if (ifc->droute == MBC_D_ROUTE_MULTIRHS) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
   if (bsize > 1) PetscFunctionReturn(0); /* MUMPS's distributed Schur complement is not wired */
-  if (ifc->droute == 1) {
+  if (ifc->droute == MBC_D_ROUTE_SCHUR) {
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
@@ -781,6 +798,28 @@ static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
   PetscFunctionReturn(0);
 }
 
+/* Whether D is matrix-free: -mbc_d_route matfree, or auto where the dense D would not fit in
+   -mbc_d_dense_max_mb: W holds every body's dense D_b (sum nb^2 entries, 12 bytes each as AIJ) and
+   the Newton type factors its active part (up to m^2 doubles dense). The pgs type and
+   -mbc_fclib_write need W's entries, so auto keeps them whatever they cost. The same on every
+   rank (nbcols is). */
+static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool *shell)
+{
+  PetscReal bytes = 8.0 * m * m;
+  PetscBool newton;
+
+  PetscFunctionBegin;
+  *shell = (PetscBool)(ifc->droute == MBC_D_ROUTE_MATFREE);
+  if (ifc->droute != MBC_D_ROUTE_AUTO) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < ifc->nbodies; b++) bytes += 12.0 * ifc->nbcols[b] * ifc->nbcols[b];
+  if (!(bytes > ifc->dense_max_mb * 1048576.0)) PetscFunctionReturn(0);
+  PetscCall(PetscObjectTypeCompare((PetscObject)ifc->mult, MBCMULTIPLIERNEWTON, &newton));
+  if (!((PetscObject)ifc->mult)->type_name) newton = PETSC_TRUE; /* the default type */
+  *shell = (PetscBool)(newton && !ifc->fclib_file[0]);
+  PetscCall(PetscInfo(NULL, "D dense would take %g MB, beyond -mbc_d_dense_max_mb: %s\n", bytes / 1048576.0, *shell ? "matrix-free" : "dense all the same (the pgs type or -mbc_fclib_write needs its entries)"));
+  PetscFunctionReturn(0);
+}
+
 /* D_i = H_i^T A_i^-1 H_i of the bodies on this rank, by blocks of -mbc_contact_block columns
    (memory: DOFs x block, not DOFs x multipliers), added into W (rows where they live); then
    W = D / dscale with dscale the mean diagonal: r = dscale lambda has the units of u, so the
@@ -791,6 +830,14 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
   Vec       diag;
 
   PetscFunctionBegin;
+  {
+    PetscBool shell;
+    PetscCall(InterfaceUsesShell(ifc, m, &shell));
+    if (shell) {
+      PetscCall(MBCInterfaceBuildDShell(ifc, m, mloc));
+      PetscFunctionReturn(0);
+    }
+  }
   PetscCallMPI(MPI_Scan(&mloc, &rstart, 1, MPIU_INT, MPI_SUM, ifc->comm));
   rstart -= mloc;
   PetscCall(PetscMalloc2(mloc + 1, &dnz, mloc + 1, &onz));
@@ -861,6 +908,7 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
   PetscCall(VecSum(diag, &ifc->dscale));
   PetscCall(VecDestroy(&diag));
   ifc->dscale /= m;
+  PetscCall(PetscInfo(NULL, "D: dscale (the mean of D_dd) %g\n", (double)ifc->dscale));
   PetscCheck(ifc->dscale > 0, ifc->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
   PetscCall(MatScale(ifc->fp.W, 1.0 / ifc->dscale));
   PetscFunctionReturn(0);
@@ -876,6 +924,7 @@ PetscErrorCode MBCInterfaceRebuildD(MBCInterface ifc)
   if (!ifc->ncontact || !ifc->fp.W) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
   PetscCall(MatDestroy(&ifc->fp.W));
+  PetscCall(MatDestroy(&ifc->fp.Winv));
   PetscCall(MatDestroy(&ifc->fp.G));
   PetscCall(VecDestroy(&ifc->fp.e));
   PetscCall(VecDestroy(&ifc->fp.alpha));
@@ -965,9 +1014,11 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
       PetscCall(VecDuplicate(ifc->Hl[b], &ifc->Xl[b]));
     }
     PetscCall(PetscFree(first));
+    PetscCall(VecCreate(ifc->comm, &ifc->fp.q));
+    PetscCall(VecSetSizes(ifc->fp.q, mloc, m));
+    PetscCall(VecSetType(ifc->fp.q, VECSTANDARD));
+    PetscCall(InterfaceForest(ifc)); /* before D: the matrix-free D's products go through it */
     PetscCall(InterfaceBuildD(ifc, m, mloc));
-    PetscCall(MatCreateVecs(ifc->fp.W, &ifc->fp.q, NULL));
-    PetscCall(InterfaceForest(ifc));
     PetscCall(MBCInterfaceRigidModes(ifc));
     PetscCall(VecDuplicate(ifc->fp.q, &ifc->lambda));
     PetscCall(VecDuplicate(ifc->fp.q, &ifc->ucontact));

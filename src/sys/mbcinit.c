@@ -28,6 +28,7 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
   PetscCall(PetscLogEventRegister("MBCFlexibilityAssemble", classid, &MBC_FlexibilityAssemble));
+  PetscCall(PetscLogEventRegister("MBCFlexibilityMult", classid, &MBC_FlexibilityMult));
   PetscCall(MBCMultiplierInitializePackage());
   PetscFunctionReturn(0);
 }

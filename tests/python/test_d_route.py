@@ -1,7 +1,8 @@
 """-mbc_d_route schur (docs/performance.md): D_i = H_C^T S^-1 H_C with S the Schur complement of
 the body's operator onto its contact DOFs (MUMPS), against the multi-right-hand-side solves: the
 same D, so the same answer to rounding, on the small static dam (3 free monoliths: their operators
-are K with the fixing rows of K^+) and on the two-rank run (a body on one rank each)."""
+are K with the fixing rows of K^+) and on the two-rank run (a body on one rank each). The
+matrix-free route: test_matfree.py."""
 import numpy as np
 import pytest
 
@@ -85,3 +86,4 @@ def test_auto_route_takes_schur_where_it_fits(tmp_path):
     assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
     bad = solve(h5, "-mbc_d_schur_max_mb", "-1", check=False)
     assert bad.returncode != 0 and "-mbc_d_schur_max_mb" in bad.stdout + bad.stderr
+

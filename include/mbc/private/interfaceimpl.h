@@ -17,6 +17,14 @@ typedef enum {
 
 typedef struct _n_MBCInterface *MBCInterface;
 
+/* -mbc_d_route: how D_b = H_b^T A_b^-1 H_b is had */
+typedef enum {
+  MBC_D_ROUTE_MULTIRHS = 0, /* dense D_b from multi-right-hand-side solves with the body's factor */
+  MBC_D_ROUTE_SCHUR    = 1, /* dense D_b through the Schur complement onto the contact DOFs (bodies on one rank) */
+  MBC_D_ROUTE_AUTO     = 2, /* matrix-free where the dense D does not fit, else per body Schur where S^-1 fits, else the solves */
+  MBC_D_ROUTE_MATFREE  = 3  /* no D: W a shell, a solve per body per product (interfacematfree.c) */
+} MBCDRoute;
+
 struct _n_MBCInterface {
   MPI_Comm    comm;       /* the solver's (world) communicator */
   MBCScene    scene;      /* borrowed: names in messages */
@@ -43,8 +51,9 @@ struct _n_MBCInterface {
   Vec        gathered;
   PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
   PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
-  PetscInt   droute;      /* -mbc_d_route: 0 multi-right-hand-side solves, 1 Schur complement onto the contact DOFs (bodies on one rank), 2 auto */
+  PetscInt   droute;      /* -mbc_d_route: MBCDRoute */
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 fits in this */
+  PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb: auto takes the matrix-free D where the dense one does not fit in this */
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
   PetscObjectId *sinv_id;
@@ -70,13 +79,13 @@ struct _n_MBCInterface {
   PetscReal *gscale;      /* the scale of each row of the problem's G */
 };
 
-PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble;
+PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble, MBC_FlexibilityMult;
 
 /* interface.c: the object, the rank order, H and D */
 PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], const char[], MBCInterface *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
-PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);
@@ -91,6 +100,10 @@ PETSC_INTERN PetscErrorCode MBCInterfaceBodyForce(MBCInterface, PetscInt, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceDestroy(MBCInterface *);
 PETSC_INTERN PetscBool      MBCInterfacePointTouches(const MBCCouple *, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceToBodies(MBCInterface, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceScatterToBodies(MBCInterface, Vec, Vec[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceGatherFromBodies(MBCInterface, Vec[], Vec);
+/* interfacematfree.c: the matrix-free D */
+PETSC_INTERN PetscErrorCode MBCInterfaceBuildDShell(MBCInterface, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceFromBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceGapRate(MBCInterface, Vec);
 PETSC_INTERN PetscReal      MBCInterfaceStartGap(MBCInterface, PetscInt);

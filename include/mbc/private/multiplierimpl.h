@@ -16,6 +16,8 @@ struct _n_MBCFrictionProblem {
   PetscInt   nc;   /* contacts on this rank */
   PetscInt  *off;  /* nc + 1: first local row of each contact; off[i+1] - off[i] is 3, or 1 (frictionless) */
   Mat        W;
+  Mat        Winv; /* with W a shell (the matrix-free D): a sparse approximation of W^-1, FETI's lumped
+                      preconditioner; W has no rows then, so only the newton type solves (NULL otherwise) */
   Vec        q;
   PetscReal *mu;
   Mat        G;     /* rigid modes x multipliers, or NULL */

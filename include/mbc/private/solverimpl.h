@@ -82,8 +82,9 @@ struct _n_MBCSolver {
   MBCInterface iface;     /* H, D, q, the multipliers and the per-point bookkeeping; NULL when the scene has no couples */
   PetscBool  search_only;
   PetscInt   dblock;      /* -mbc_contact_block, for the interface */
-  PetscInt   droute;      /* -mbc_d_route: 0 multi-right-hand-side solves, 1 Schur complement, 2 auto (default) */
+  PetscInt   droute;      /* -mbc_d_route: MBCDRoute (interfaceimpl.h), auto by default */
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb */
+  PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 

@@ -210,6 +210,7 @@ PetscErrorCode MBCFrictionProblemDestroy(MBCFrictionProblem *fp)
   PetscFunctionBegin;
   PetscCall(PetscFree(fp->off));
   PetscCall(MatDestroy(&fp->W));
+  PetscCall(MatDestroy(&fp->Winv));
   PetscCall(VecDestroy(&fp->q));
   PetscCall(PetscFree(fp->mu));
   PetscCall(MatDestroy(&fp->G));

@@ -14,32 +14,7 @@
    multiplier: phi_d = r_d. With equilibrium constraints G r = e (bodies free in a static
    analysis), alpha joins the unknowns and the step solves the saddle point system
    [A + B W, B G^T; G, 0]. The merit that stops the iteration is FCLIB's. */
-#include <mbc/private/multiplierimpl.h>
-
-typedef struct {
-  PetscReal     rho_scale;    /* rho = rho_scale / W_dd */
-  PetscInt      pgs_warm;     /* Gauss-Seidel sweeps before the first step */
-  PetscInt      pgs_fallback; /* sweeps when the line search fails */
-  PetscReal     sigma;        /* Armijo's constant */
-  PetscInt      ls_max, nonmonotone;
-  PetscInt      watchdog;     /* iterations without halving the best merit before going back to it */
-  PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
-  PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
-  MBCMultiplier pgs;
-  KSP           ksp;
-  /* per W */
-  PetscReal *diag, *rho; /* 9, 2 per contact */
-  PetscBool *frozen;     /* per local row: a direction without flexibility */
-  PetscReal *A, *B;      /* 9 per contact: the Jacobian blocks at the current iterate */
-  PetscBool *active;     /* per contact: in the Newton system (not separated) */
-  Vec        phi, dr, wdr, rt, ut, dalpha, alphat;
-  PetscReal *work;       /* 3 x (reduced size): one contact's rows of the Newton matrix */
-  PetscInt  *mark, *cols;
-  PetscInt   nbuilt;     /* the kept factor's active rows (-1: none kept) */
-  IS         isbuilt;    /* and their indices: an all-stick system is the same while they are */
-  PetscBool  keptslip;   /* the kept factor has slipping contacts: never reused */
-  PetscInt   lsfail, pgssweeps, factors;
-} MBC_Newton;
+#include "newton.h"
 
 /* Alart-Curnier residual of this rank's contacts at (r, u) into phi; with jac, also the Jacobian
    blocks and the active flags; stick: every contact in contact is taken as sticking (the
@@ -213,6 +188,10 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     PetscCall(VecDestroy(&g));
     PetscCall(VecDestroy(&t));
   }
+  if (fp->Winv) { /* W a shell: GMRES (newtonkrylov.c); a step it did not finish is still judged by the line search */
+    PetscCall(MBCNewtonKrylovSolve(m, isA, nA, b, x, &reason));
+    if (reason == KSP_DIVERGED_ITS) reason = KSP_CONVERGED_ITS;
+  } else {
   /* an all-stick system on the same rows is the kept one (J = B W_AA: B depends on rho only) */
   if (!slips && !fp->G && nt->isbuilt && !nt->keptslip) {
     PetscBool same;
@@ -371,6 +350,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     PetscCall(VecDestroy(&res));
     PetscCall(VecDestroy(&dx));
   }
+  }
   if (reason < 0) { /* a failed factorization: steepest descent on 1/2|phi|^2 instead (dr = -phi) */
     PetscCall(PetscInfo(m, "Newton matrix: %s; falling back to dr = -phi\n", KSPConvergedReasons[reason]));
     PetscCall(VecCopy(nt->phi, nt->dr));
@@ -424,6 +404,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
   PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
   PetscCall(KSPSetFromOptions(nt->ksp));
+  PetscCall(KSPSetFromOptions(nt->kmf));
   /* the Gauss-Seidel sweeps take the pgs type's options too (-mbc_pgs_omega, ...), never its
      active-set step */
   PetscCall((*nt->pgs->ops->setfromoptions)(nt->pgs, PetscOptionsObject));
@@ -443,9 +424,25 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
 
   PetscFunctionBegin;
   PetscCall(PetscObjectBaseTypeCompare((PetscObject)fp->W, MATMPIAIJ, &mpi));
-  if (mpi) PetscCall(MatMPIAIJGetSeqAIJ(fp->W, &Wd, NULL, NULL));
-  else Wd = fp->W;
-  PetscCall(MBCMultiplierDiagonalBlocks(fp, Wd, &nt->diag));
+  if (fp->Winv) { /* W a shell: W_dd ~ 1 / Winv_dd (FETI's lumped estimate; 0 stays 0, no flexibility) */
+    Vec                d;
+    const PetscScalar *da;
+    PetscCall(PetscCalloc1(9 * fp->nc + 1, &nt->diag));
+    PetscCall(MatCreateVecs(fp->Winv, &d, NULL));
+    PetscCall(MatGetDiagonal(fp->Winv, d));
+    PetscCall(VecGetArrayRead(d, &da));
+    for (PetscInt i = 0; i < fp->nc; i++)
+      for (PetscInt k = 0, dim = fp->off[i + 1] - fp->off[i]; k < dim; k++) {
+        const PetscReal w = PetscRealPart(da[fp->off[i] + k]);
+        nt->diag[9 * i + (dim + 1) * k] = w > 0 ? 1.0 / w : 0;
+      }
+    PetscCall(VecRestoreArrayRead(d, &da));
+    PetscCall(VecDestroy(&d));
+  } else {
+    if (mpi) PetscCall(MatMPIAIJGetSeqAIJ(fp->W, &Wd, NULL, NULL));
+    else Wd = fp->W;
+    PetscCall(MBCMultiplierDiagonalBlocks(fp, Wd, &nt->diag));
+  }
   PetscCall(PetscMalloc5(2 * fp->nc + 1, &nt->rho, nrows + 1, &nt->frozen, 9 * fp->nc + 1, &nt->A, 9 * fp->nc + 1, &nt->B, fp->nc + 1, &nt->active));
   for (PetscInt i = 0; i < fp->nc; i++)
     for (PetscInt d = 0, dim = fp->off[i + 1] - fp->off[i]; d < dim; d++) dmax = PetscMax(dmax, nt->diag[9 * i + (dim + 1) * d]);
@@ -479,7 +476,7 @@ static PetscErrorCode NewtonSweeps(MBCMultiplier m, PetscInt n, Vec r, Vec u)
   MBC_Newton *nt = (MBC_Newton *)m->data;
 
   PetscFunctionBegin;
-  if (!n || m->fp->G) PetscFunctionReturn(0);
+  if (!n || m->fp->G || m->fp->Winv) PetscFunctionReturn(0); /* with constraints, or W without rows (a shell): none */
   PetscCall(MBCMultiplierSetTolerances(nt->pgs, m->rtol, n));
   PetscCall(MBCMultiplierSolve(nt->pgs, r, u));
   nt->pgssweeps += nt->pgs->its;
@@ -498,7 +495,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
   char                line[128] = "";
 
   PetscFunctionBegin;
-  nt->lsfail = nt->pgssweeps = nt->factors = 0;
+  nt->lsfail = nt->pgssweeps = nt->factors = nt->kits = 0;
   PetscCall(PetscMalloc1(nt->nonmonotone, &hist));
   PetscCall(VecDuplicate(r, &rbest));
   if (fp->G) PetscCall(VecDuplicate(fp->alpha, &abest));
@@ -552,7 +549,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(ACResidual(m, nt->rt, nt->ut, PETSC_FALSE, PETSC_FALSE, &psit, NULL));
       if (psit <= ref - nt->sigma * t * 2 * psi) break;
     }
-    if (ls < nt->ls_max || fp->G) { /* accepted (with constraints the last, shortest step is taken anyway) */
+    if (ls < nt->ls_max || fp->G || fp->Winv) { /* accepted (with constraints, or no sweeps to fall back on, the last, shortest step is taken anyway) */
       PetscCall(VecCopy(nt->rt, r));
       if (fp->G) PetscCall(VecCopy(nt->alphat, fp->alpha));
       if (ls == nt->ls_max) fails++, nt->lsfail++;
@@ -586,7 +583,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     if (stall == 0 && restarts && m->merit == best) for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
     for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
     hist[0] = psi;
-    if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (fp->G ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
+    if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (fp->G || fp->Winv ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
   }
   if (m->reason > 0) { /* the iterate into the cones (Newton's iterates are not in them), kept if it
                           still meets the tolerance: with a rank-deficient W a projection can move u
@@ -642,6 +639,7 @@ static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
   PetscCall(VecDestroy(&nt->alphat));
   PetscCall(ISDestroy(&nt->isbuilt));
   PetscCall(KSPReset(nt->ksp));
+  PetscCall(KSPReset(nt->kmf));
   PetscCall(MBCMultiplierReset(nt->pgs));
   PetscFunctionReturn(0);
 }
@@ -653,6 +651,7 @@ static PetscErrorCode MBCMultiplierDestroy_Newton(MBCMultiplier m)
   PetscFunctionBegin;
   PetscCall(MBCMultiplierReset_Newton(m));
   PetscCall(KSPDestroy(&nt->ksp));
+  PetscCall(KSPDestroy(&nt->kmf));
   PetscCall(MBCMultiplierDestroy(&nt->pgs));
   PetscCall(PetscFree(m->data));
   PetscFunctionReturn(0);
@@ -664,7 +663,7 @@ static PetscErrorCode MBCMultiplierView_Newton(MBCMultiplier m, PetscViewer view
 
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(viewer, "Alart-Curnier, rho %g / diag(W), non-monotone Armijo (memory %" PetscInt_FMT ", %" PetscInt_FMT " halvings), shift %g; Gauss-Seidel: %" PetscInt_FMT " warm-start sweeps, %" PetscInt_FMT " on a failed line search\n", (double)nt->rho_scale, nt->nonmonotone, nt->ls_max, (double)nt->shift, nt->pgs_warm, nt->pgs_fallback));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "last solve: %" PetscInt_FMT " factorizations, %" PetscInt_FMT " failed line searches, %" PetscInt_FMT " Gauss-Seidel sweeps\n", nt->factors, nt->lsfail, nt->pgssweeps));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "last solve: %" PetscInt_FMT " factorizations, %" PetscInt_FMT " failed line searches, %" PetscInt_FMT " Gauss-Seidel sweeps, %" PetscInt_FMT " Krylov iterations (matrix-free W)\n", nt->factors, nt->lsfail, nt->pgssweeps, nt->kits));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscCall(PetscViewerASCIIPopTab(viewer));
@@ -714,6 +713,17 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   PetscCall(PCSetType(pc, PCLU));
   if (mumps) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
+  { /* the steps with a matrix-free W: right-preconditioned GMRES, so its residual is J's own; 1e-4
+       leaves the outer iteration linear convergence at that rate near the solution */
+    PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_mf_", prefix ? prefix : ""));
+    PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), &nt->kmf));
+    PetscCall(KSPSetOptionsPrefix(nt->kmf, p));
+    PetscCall(KSPSetType(nt->kmf, KSPGMRES));
+    PetscCall(KSPGMRESSetRestart(nt->kmf, 100));
+    PetscCall(KSPSetPCSide(nt->kmf, PC_RIGHT));
+    PetscCall(KSPSetTolerances(nt->kmf, 1e-4, 0.0, PETSC_DEFAULT, 500));
+    PetscCall(KSPSetErrorIfNotConverged(nt->kmf, PETSC_FALSE));
+  }
   PetscCall(MBCMultiplierCreate(PetscObjectComm((PetscObject)m), &nt->pgs));
   PetscCall(MBCMultiplierSetOptionsPrefix(nt->pgs, prefix));
   PetscCall(MBCMultiplierSetType(nt->pgs, MBCMULTIPLIERPGS));

@@ -52,6 +52,7 @@ static PetscErrorCode MBCMultiplierSetUp_PGS(MBCMultiplier m)
 
   PetscFunctionBegin;
   PetscCheck(!fp->G, PetscObjectComm((PetscObject)m), PETSC_ERR_SUP, "The projected Gauss-Seidel cannot impose the equilibrium of bodies free in a static analysis; use -mbc_multiplier_type newton");
+  PetscCheck(!fp->Winv, PetscObjectComm((PetscObject)m), PETSC_ERR_SUP, "The projected Gauss-Seidel needs the rows of D, which -mbc_d_route matfree does not store; use -mbc_multiplier_type newton, or another -mbc_d_route");
   PetscCall(PetscObjectBaseTypeCompare((PetscObject)fp->W, MATMPIAIJ, &mpi));
   if (mpi) {
     const PetscInt *garray;

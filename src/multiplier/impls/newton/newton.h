@@ -1,0 +1,35 @@
+/* Private to the newton type: its data, shared by the step's direct (newton.c) and Krylov
+   (newtonkrylov.c) solves. */
+#pragma once
+
+#include <mbc/private/multiplierimpl.h>
+
+typedef struct {
+  PetscReal     rho_scale;    /* rho = rho_scale / W_dd */
+  PetscInt      pgs_warm;     /* Gauss-Seidel sweeps before the first step */
+  PetscInt      pgs_fallback; /* sweeps when the line search fails */
+  PetscReal     sigma;        /* Armijo's constant */
+  PetscInt      ls_max, nonmonotone;
+  PetscInt      watchdog;     /* iterations without halving the best merit before going back to it */
+  PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
+  PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
+  MBCMultiplier pgs;
+  KSP           ksp;
+  /* per W */
+  PetscReal *diag, *rho; /* 9, 2 per contact */
+  PetscBool *frozen;     /* per local row: a direction without flexibility */
+  PetscReal *A, *B;      /* 9 per contact: the Jacobian blocks at the current iterate */
+  PetscBool *active;     /* per contact: in the Newton system (not separated) */
+  Vec        phi, dr, wdr, rt, ut, dalpha, alphat;
+  PetscReal *work;       /* 3 x (reduced size): one contact's rows of the Newton matrix */
+  PetscInt  *mark, *cols;
+  PetscInt   nbuilt;     /* the kept factor's active rows (-1: none kept) */
+  IS         isbuilt;    /* and their indices: an all-stick system is the same while they are */
+  PetscBool  keptslip;   /* the kept factor has slipping contacts: never reused */
+  PetscInt   lsfail, pgssweeps, factors, kits; /* kits: Krylov iterations (matrix-free W) */
+  KSP        kmf;        /* the Krylov solve of a step when W is a shell (prefix -mbc_newton_mf_) */
+} MBC_Newton;
+
+/* The Newton system on the active rows isA (nA on this rank, then the ng rigid modes on the last
+   rank) solved by GMRES with a preconditioner from W^-1's approximation (W a shell). */
+PETSC_INTERN PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier, IS, PetscInt, Vec, Vec, KSPConvergedReason *);
