@@ -820,6 +820,39 @@ static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool
   PetscFunctionReturn(0);
 }
 
+/* Columns hcols[0..n) (ascending) of body b's H, dense, with the rows K^+ holds zeroed (*Hd), and
+   X = A_b^-1 Hd by one multi-right-hand-side solve with the body's factor. Collective on the body. */
+PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface ifc, PetscInt b, PetscInt n, const PetscInt hcols[], Mat *Hd, Mat *X)
+{
+  MBCBody      body = ifc->bodies[b];
+  PetscScalar *h;
+  PetscInt     lda, rlo, rhi;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
+  PetscCall(MatCreateDense(body->comm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, n, NULL, Hd));
+  PetscCall(MatDenseGetArrayWrite(*Hd, &h));
+  PetscCall(MatDenseGetLDA(*Hd, &lda));
+  PetscCall(PetscArrayzero(h, lda * n));
+  for (PetscInt row = rlo; row < rhi; row++) {
+    PetscInt           ncols, at;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscCall(MatGetRow(ifc->H[b], row, &ncols, &cols, &vals));
+    for (PetscInt k = 0; k < ncols; k++) {
+      if (cols[k] < hcols[0] || cols[k] > hcols[n - 1]) continue;
+      PetscCall(PetscFindInt(cols[k], n, hcols, &at));
+      if (at >= 0) h[(row - rlo) + at * lda] = vals[k];
+    }
+    PetscCall(MatRestoreRow(ifc->H[b], row, &ncols, &cols, &vals));
+  }
+  PetscCall(MatDenseRestoreArrayWrite(*Hd, &h));
+  PetscCall(MatDuplicate(*Hd, MAT_DO_NOT_COPY_VALUES, X));
+  PetscCall(MBCBodyZeroHeldRows(body, NULL, *Hd));
+  PetscCall(KSPMatSolve(body->ksp, *Hd, *X));
+  PetscFunctionReturn(0);
+}
+
 /* D_i = H_i^T A_i^-1 H_i of the bodies on this rank, by blocks of -mbc_contact_block columns
    (memory: DOFs x block, not DOFs x multipliers), added into W (rows where they live); then
    W = D / dscale with dscale the mean diagonal: r = dscale lambda has the units of u, so the
@@ -847,9 +880,8 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
   PetscCall(PetscFree2(dnz, onz));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     MBCBody   body = ifc->bodies[b];
-    PetscInt  nb = ifc->nbcols[b], rlo, rhi, clo, chi;
+    PetscInt  nb = ifc->nbcols[b], clo, chi, *hcols;
     if (!body || !nb) continue;
-    PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
     PetscCall(MatGetOwnershipRangeColumn(ifc->H[b], &clo, &chi));
     {
       PetscBool schur;
@@ -867,29 +899,14 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
         continue;
       }
     }
+    PetscCall(PetscMalloc1(ifc->dblock, &hcols));
     for (PetscInt j0 = 0; j0 < nb; j0 += ifc->dblock) {
       const PetscInt     j1 = PetscMin(nb, j0 + ifc->dblock), w = j1 - j0;
       Mat                Hd, X, D;
-      PetscScalar       *h;
       const PetscScalar *a;
       PetscInt           lda;
-      PetscCall(MatCreateDense(body->comm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, w, NULL, &Hd));
-      PetscCall(MatDenseGetArrayWrite(Hd, &h));
-      PetscCall(MatDenseGetLDA(Hd, &lda));
-      PetscCall(PetscArrayzero(h, lda * w));
-      for (PetscInt row = rlo; row < rhi; row++) { /* columns j0..j1 of H, dense */
-        PetscInt           ncols;
-        const PetscInt    *cols;
-        const PetscScalar *vals;
-        PetscCall(MatGetRow(ifc->H[b], row, &ncols, &cols, &vals));
-        for (PetscInt k = 0; k < ncols; k++)
-          if (cols[k] >= j0 && cols[k] < j1) h[(row - rlo) + (cols[k] - j0) * lda] = vals[k];
-        PetscCall(MatRestoreRow(ifc->H[b], row, &ncols, &cols, &vals));
-      }
-      PetscCall(MatDenseRestoreArrayWrite(Hd, &h));
-      PetscCall(MatDuplicate(Hd, MAT_DO_NOT_COPY_VALUES, &X));
-      PetscCall(MBCBodyZeroHeldRows(body, NULL, Hd));
-      PetscCall(KSPMatSolve(body->ksp, Hd, X));
+      for (PetscInt j = 0; j < w; j++) hcols[j] = j0 + j;
+      PetscCall(MBCInterfaceBodySolveColumns(ifc, b, w, hcols, &Hd, &X));
       PetscCall(MatDestroy(&Hd));
       /* H^T X with H sparse (a dozen entries per column): 2 nnz(H) w flops, not 2 N m w */
       PetscCall(MatTransposeMatMult(ifc->H[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &D));
@@ -900,6 +917,7 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
       PetscCall(MatDenseRestoreArrayRead(D, &a));
       PetscCall(MatDestroy(&D));
     }
+    PetscCall(PetscFree(hcols));
   }
   PetscCall(MatAssemblyBegin(ifc->fp.W, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(ifc->fp.W, MAT_FINAL_ASSEMBLY));

@@ -163,53 +163,62 @@ PetscErrorCode MBCInterfaceBuildDShell(MBCInterface ifc, PetscInt m, PetscInt ml
   PetscCall(MatSetOption(ifc->fp.W, MAT_SYMMETRIC, PETSC_TRUE));
   { /* 1 / Kl_dd underestimates D_dd, by 5 to 66 times on the small static dam (measured: the free
        monoliths' K^+ adds their rigid-like flexibility), and not uniformly. The factor c, D_dd ~
-       c / Kl_dd, by the ratio estimator over MBC_D_SAMPLES columns of D (exact, one product each,
-       evenly spaced: the same on any number of ranks); then dscale = the mean of c / Kl_dd and
+       c / Kl_dd, by the ratio estimator over MBC_D_SAMPLES diagonal entries of D (exact: per body one
+       multi-right-hand-side solve with the sampled columns it has; points evenly spaced in couple
+       order, so the same on any number of ranks); then dscale = the mean of c / Kl_dd and
        Winv = (dscale / c) Kl, so 1 / Winv_dd estimates W_dd and Winv_AA W_AA's inverse in scale,
        as the Newton type's augmentation and the balance of its preconditioner need. */
-    const PetscInt     ns = PetscMin(m, MBC_D_SAMPLES);
-    PetscReal          sd = 0, sk = 0, sum = 0, c;
-    Vec                e, De, diag;
+    const PetscInt     ns = PetscMin(ifc->ncontact, MBC_D_SAMPLES);
+    PetscReal          sd = 0, sk = 0, sum = 0, c, samp[2 * MBC_D_SAMPLES];
+    PetscInt           js[MBC_D_SAMPLES], rs, re;
+    Vec                diag;
     const PetscScalar *d;
-    PetscInt           rs, re;
-    PetscCall(MatCreateVecs(ifc->fp.Winv, &e, &De));
-    PetscCall(VecDuplicate(e, &diag));
+    PetscCall(MatCreateVecs(ifc->fp.Winv, &diag, NULL));
     PetscCall(MatGetDiagonal(ifc->fp.Winv, diag));
-    PetscCall(VecGetOwnershipRange(e, &rs, &re));
+    PetscCall(VecGetOwnershipRange(diag, &rs, &re));
     PetscCall(VecGetArrayRead(diag, &d));
-    ifc->dscale = 1;
-    for (PetscInt k = 0; k < ns; k++) {
-      const PetscInt j = (PetscInt)(((PetscInt64)k * m) / ns);
-      PetscReal      djj = 0, kjj = 0;
-      PetscCall(VecZeroEntries(e));
-      if (j >= rs && j < re) PetscCall(VecSetValue(e, j, 1.0, INSERT_VALUES));
-      PetscCall(VecAssemblyBegin(e));
-      PetscCall(VecAssemblyEnd(e));
-      PetscCall(MatMult(ifc->fp.W, e, De));
-      if (j >= rs && j < re) {
-        const PetscScalar *da;
-        PetscCall(VecGetArrayRead(De, &da));
-        kjj = PetscRealPart(d[j - rs]);
-        if (kjj > 0) djj = PetscRealPart(da[j - rs]), kjj = 1.0 / kjj;
-        else kjj = 0;
-        PetscCall(VecRestoreArrayRead(De, &da));
-      }
-      sd += djj, sk += kjj;
+    PetscCall(PetscArrayzero(samp, 2 * ns));
+    for (PetscInt k = 0; k < ns; k++) { /* samp: D_jj (its parts, body after body), then 1 / Kl_jj (its owner) */
+      const PetscInt kc = (PetscInt)(((PetscInt64)k * ifc->ncontact) / ns), dim = ifc->coff[kc + 1] - ifc->coff[kc];
+      js[k] = ifc->poff[ifc->perm[kc]] + k % dim; /* point kc in couple order (as on any number of ranks), a direction in turn */
+      if (js[k] >= rs && js[k] < re && PetscRealPart(d[js[k] - rs]) > 0) samp[ns + k] = 1.0 / PetscRealPart(d[js[k] - rs]);
     }
     for (PetscInt i = 0; i < re - rs; i++)
       if (PetscRealPart(d[i]) > 0) sum += 1.0 / PetscRealPart(d[i]);
     PetscCall(VecRestoreArrayRead(diag, &d));
-    {
-      PetscReal s3[3] = {sd, sk, sum};
-      PetscCall(MPIU_Allreduce(MPI_IN_PLACE, s3, 3, MPIU_REAL, MPIU_SUM, ifc->comm));
-      sd = s3[0], sk = s3[1], sum = s3[2];
+    PetscCall(VecDestroy(&diag));
+    for (PetscInt b = 0; b < ifc->nbodies; b++) { /* D_jj = sum_b h_bj^T A_b^-1 h_bj: per body one solve with the sampled columns it has */
+      PetscInt hc[MBC_D_SAMPLES], kk[MBC_D_SAMPLES], n = 0, nloc, lh, lx;
+      Mat      Hd, X;
+      const PetscScalar *h, *x;
+      if (!ifc->bodies[b] || !ifc->nbcols[b]) continue;
+      for (PetscInt k = 0; k < ns; k++) {
+        PetscInt at;
+        PetscCall(PetscFindInt(js[k], ifc->nbcols[b], ifc->bcols[b], &at));
+        if (at >= 0) hc[n] = at, kk[n++] = k;
+      }
+      if (!n) continue;
+      PetscCall(PetscSortIntWithArray(n, hc, kk)); /* the samples are in couple order, H's columns in rank order */
+      PetscCall(MBCInterfaceBodySolveColumns(ifc, b, n, hc, &Hd, &X));
+      PetscCall(MatGetLocalSize(Hd, &nloc, NULL));
+      PetscCall(MatDenseGetLDA(Hd, &lh));
+      PetscCall(MatDenseGetLDA(X, &lx));
+      PetscCall(MatDenseGetArrayRead(Hd, &h));
+      PetscCall(MatDenseGetArrayRead(X, &x));
+      for (PetscInt i = 0; i < n; i++) /* this rank's part of the dot product h^T x */
+        for (PetscInt r = 0; r < nloc; r++) samp[kk[i]] += PetscRealPart(h[r + i * lh] * x[r + i * lx]);
+      PetscCall(MatDenseRestoreArrayRead(X, &x));
+      PetscCall(MatDenseRestoreArrayRead(Hd, &h));
+      PetscCall(MatDestroy(&Hd));
+      PetscCall(MatDestroy(&X));
     }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, samp, 2 * ns, MPIU_REAL, MPIU_SUM, ifc->comm));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, ifc->comm));
+    for (PetscInt k = 0; k < ns; k++)
+      if (samp[ns + k] > 0) sd += samp[k], sk += samp[ns + k]; /* directions without flexibility left out */
     c           = sk > 0 && sd > 0 ? sd / sk : 1;
     ifc->dscale = c * sum / m;
     PetscCall(PetscInfo(NULL, "Matrix-free D: %" PetscInt_FMT " sampled columns, D_dd ~ %g / Kl_dd, dscale %g\n", ns, (double)c, (double)ifc->dscale));
-    PetscCall(VecDestroy(&e));
-    PetscCall(VecDestroy(&De));
-    PetscCall(VecDestroy(&diag));
     PetscCheck(ifc->dscale > 0, ifc->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
     PetscCall(MatScale(ifc->fp.Winv, ifc->dscale / c));
   }

@@ -102,6 +102,7 @@ PETSC_INTERN PetscBool      MBCInterfacePointTouches(const MBCCouple *, PetscInt
 PETSC_INTERN PetscErrorCode MBCInterfaceToBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceScatterToBodies(MBCInterface, Vec, Vec[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceGatherFromBodies(MBCInterface, Vec[], Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface, PetscInt, PetscInt, const PetscInt[], Mat *, Mat *);
 /* interfacematfree.c: the matrix-free D */
 PETSC_INTERN PetscErrorCode MBCInterfaceBuildDShell(MBCInterface, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceFromBodies(MBCInterface, Vec);
