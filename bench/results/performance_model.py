@@ -119,10 +119,10 @@ def schur_ratio(frac):
 
 
 # ---------------------------------------------------------------------------------------------
-def one_million(joints=True, schur_max_mb=2048):
-    """The 1M-DOF dam on this machine, one rank, the current routes (-mbc_d_route auto)."""
-    s = dam_sizes.sizes(1e6, joints)
-    print(f"\n## 1M-DOF dam, {'joints' if joints else 'no joints'}: N {s['N']}, m {s['m']}, nnz(W) {s['nnzW']:.3e}")
+def one_million(joints=True, schur_max_mb=2048, target=1e6):
+    """The dam of `target` DOFs (1M) on this machine, one rank, the current routes (-mbc_d_route auto)."""
+    s = dam_sizes.sizes(target, joints)
+    print(f"\n## {target:.0e}-DOF dam, {'joints' if joints else 'no joints'}: N {s['N']}, m {s['m']}, nnz(W) {s['nnzW']:.3e}")
     t = {}
     mem = {}
     t["assemble"] = (ASM[0] * s["N"], ASM[1] * s["N"])
@@ -182,7 +182,7 @@ def one_million(joints=True, schur_max_mb=2048):
     static = [once[i] + 2 * build[i] + lus[i] * t["Newton LU, each"][i] + 3 * t["output, each"][i] + 15 * t["body solves, each (all bodies)"][i] for i in (0, 1)]
     dyn = [once[i] + DYN["builds"][i] * build[i] + DYN["lus"][i] * t["Newton LU, each"][i] + DYN["solves"] / 5 * t["body solves, each (all bodies)"][i]
            + 11 * t["output, each"][i] for i in (0, 1)]
-    print(f"  static solve (2 D builds, {lus[0]}-{lus[1]} Newton LUs, 15 body solves, 3 outputs): {static[0] / 3600:.1f} .. {static[1] / 3600:.1f} h")
+    print(f"  static solve (2 D builds, {lus[0]}-{lus[1]} Newton LUs, 15 body solves, 3 outputs): {static[0] / 3600:.1f} .. {static[1] / 3600:.1f} h ({static[0]:.0f} .. {static[1]:.0f} s)")
     print(f"  100 dynamic steps ({DYN['builds'][0]}-{DYN['builds'][1]} D builds, {DYN['lus'][0]}-{DYN['lus'][1]} Newton LUs as at 20k-50k, {DYN['solves']} body solves): {dyn[0] / 3600:.1f} .. {dyn[1] / 3600:.1f} h")
     for k, v in mem.items():
         print(f"  mem   {k:40s} {v[0] / GB:9.1f} .. {v[1] / GB:9.1f} GB")
@@ -246,6 +246,9 @@ def hundred_million(joints=True, P=1000, per_rank=1e5, flops=10e9, bw=10e9):
 
 
 if __name__ == "__main__":
+    if len(sys.argv) > 1:  # a prediction at another size: performance_model.py 2e5 [joints]
+        one_million(joints="joints" in sys.argv[2:], target=float(sys.argv[1]))
+        sys.exit(0)
     show_constants()
     one_million(joints=True)
     one_million(joints=False)
