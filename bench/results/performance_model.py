@@ -51,6 +51,12 @@ GEMM = [(1.53e11, 2.875), (6.03e11, 16.855), (5.93e11, 12.129)]  # S^-1 H_C prod
 # static with joints (2e4, 5e4, 1e5): Newton factorizations
 DYN = dict(builds=(83, 94), lus=(384, 462), solves=500, solve_s=1.784, nnzl=4496037 + 2 * 240159 + 2 * 314253)
 STATIC_LUS_J = (8, 9)
+# adding the dense D_i into the AIJ W (MatSetValues, preallocated), s per entry of sum_b m_b^2 per build:
+# the rest of MBCFlexibilityAssemble after the Schur factorizations (MUMPS's times), the products
+# (MatMatMultNum, MatTrnMatMultNum), potrf/potri (sum |C|^3 at 28-38 GFlop/s) and the symbolic
+# factorizations: 400k no joints 13.7 - 5.9 - 1.2 s over 2 x 2.53e7 entries = 130 ns;
+# 200k joints 61.1 - 23 - 1 s over 2 x 1.06e8 entries = 175 ns (+- the potrf/potri rate: 160-190)
+W_ADD = (130e-9, 190e-9)
 SOLVE_RATE = 4 * DYN["nnzl"] * DYN["solves"] / DYN["solve_s"]  # one-right-side solves: 4 nnz(L) flops each
 # flops/s of KSPMatSolve (4 nnz(L) flops a column): the 97 440-DOF static dam with -mbc_d_route multirhs,
 # 2 builds of the foundation's 1 620 columns and the monoliths' 396 / 414, KSPMatSolve 30.53 s
@@ -158,6 +164,8 @@ def one_million(joints=True, schur_max_mb=2048, target=1e6):
     t["D: S^-1 (potrf+potri, once)"] = tuple(sinv_t)
     t["D: products per build"] = tuple(prod_t)
     t["D: multi-RHS solves per build"] = tuple(mrhs_t)
+    mb2 = sum((3 * b["p"]) ** 2 for b in s["bodies"].values())
+    t["D: D_i into W per build"] = (W_ADD[0] * mb2, W_ADD[1] * mb2)
     n = s["m"] + 24
     lu = (LU_DENS[0] * 2 / 3 * (0.6 * n) ** 3, LU_DENS[1] * 2 / 3 * (0.85 * n) ** 3) if joints else (2 / 3 * n ** 3,) * 2
     t["Newton LU, each"] = (lu[0] / R_LU[1], lu[1] / R_LU[0])
@@ -177,7 +185,7 @@ def one_million(joints=True, schur_max_mb=2048, target=1e6):
     for k, v in t.items():
         print(f"  time  {k:40s} {v[0]:9.0f} .. {v[1]:9.0f} s")
     once = [t["assemble"][i] + t["factor"][i] + t["D: Schur factorizations (once)"][i] + t["D: S^-1 (potrf+potri, once)"][i] for i in (0, 1)]
-    build = [t["D: products per build"][i] + t["D: multi-RHS solves per build"][i] for i in (0, 1)]
+    build = [t["D: products per build"][i] + t["D: multi-RHS solves per build"][i] + t["D: D_i into W per build"][i] for i in (0, 1)]
     lus = STATIC_LUS_J if joints else (2, 2)
     static = [once[i] + 2 * build[i] + lus[i] * t["Newton LU, each"][i] + 3 * t["output, each"][i] + 15 * t["body solves, each (all bodies)"][i] for i in (0, 1)]
     dyn = [once[i] + DYN["builds"][i] * build[i] + DYN["lus"][i] * t["Newton LU, each"][i] + DYN["solves"] / 5 * t["body solves, each (all bodies)"][i]
