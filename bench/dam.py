@@ -12,7 +12,13 @@ mu 0.8), which ended in DIVERGED_ITS before the Newton type and the exact free b
 converge since (docs/dam.md, "Analyses"; measured at 5k and 20k DOFs: exit 0, 2 D builds in 3
 iterations). A run that fails still reports its phases up to the failure when -log_view prints.
 
-  bench/dam.py [--dofs 5e3 2e4 5e4 1e5] [--scaling 5e4] [--ranks 2] [--defaults] [--timeout 300]
+  bench/dam.py [--dofs 5e3 2e4 5e4 1e5] [--scaling 5e4] [--ranks 2] [--defaults] [--joints] [--timeout 300]
+               [--info] [--keep DIR]
+
+--info adds -info :sys to each run and reports the Schur route's contact DOFs |C| of the largest
+body (BodySchurInverse's "Schur complement onto |C| contact DOFs of N_b"; "-" where no body took
+the Schur route) and the multiplier solves' Newton iterations (from -mbc_monitor); --keep writes
+each run's whole output to DIR (docs/performance-model.md reads the MUMPS statistics from it).
 """
 import argparse
 import json
@@ -66,6 +72,10 @@ def solve(h5, ranks=1, timeout=300, *options):
     r["mult"] = int(m[-1]) if m else -1
     r["err"] = [l for l in out.splitlines() if re.search(r"DIVERGED|[Ee]rror|not converge", l) and "CONVERGED" not in l][:3]
     r["rebuilds"] = out.count("flexibility matrix rebuilt")
+    schur = [(int(c), int(n)) for c, n in re.findall(r"Schur complement onto (\d+) contact DOFs of (\d+)", out)]
+    r["C"], r["C_body"] = max(schur) if schur else (0, 0)  # the largest body's |C| and its DOFs
+    its = [int(i) for i in re.findall(r"contact: newton \S+ in (\d+) iterations", out)]
+    r["solves_newton"], r["newton_its"] = len(its), sum(its)
     r["iters"] = len(re.findall(r"static iteration \d+:", out))
     return r
 
@@ -82,6 +92,8 @@ PH = ("assemble", "factor", "search", "D", "PGS", "solves", "output")
 
 
 def row(label, r, extra=""):
+    if r.get("C") or r.get("solves_newton"):
+        extra = f"  |C| {r.get('C') or '-'} (of {r.get('C_body', 0)})  newton {r.get('newton_its', 0)} its in {r.get('solves_newton', 0)} solves" + extra
     return (f"{label:>8} {r.get('dofs', 0):8d} {r.get('points', 0):6d} {r.get('mult', 0):6d} "
             + " ".join(f"{r.get(k, float('nan')):8.3f}" for k in PH)
             + f" {r['wall']:8.2f} {r['rss']:8.0f} {r['load']:5.2f} {str(r['rc']):>4} {r.get('rebuilds', 0):3d}/{r.get('iters', 0):<3d}{extra}")
@@ -97,14 +109,21 @@ def main():
     ap.add_argument("--scaling", type=float, default=5e4, help="size of the 1 -> P ranks table (0: none)")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--defaults", action="store_true", help="the builder's defaults (water 0.95 H, mu 0.8)")
+    ap.add_argument("--joints", action="store_true", help="the contraction joints as contact couples too (the 1M-DOF dam's 37 620 multipliers)")
     ap.add_argument("--timeout", type=float, default=300)
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "dam_bench.png"))
     ap.add_argument("--json", default=None, help="also write the rows here")
     ap.add_argument("--options", default="", help="extra solver options, e.g. '-mbc_multiplier_rtol 1e-4'")
+    ap.add_argument("--info", action="store_true", help="-info :sys: the Schur route's |C| of the largest body; Newton iterations")
+    ap.add_argument("--keep", default=None, help="write each run's whole output to this directory")
     a = ap.parse_args()
-    params = {} if a.defaults else STATIC_OK
+    if a.info:
+        a.options = (a.options + " -info :sys").strip()
+    if a.keep:
+        os.makedirs(a.keep, exist_ok=True)
+    params = dict({} if a.defaults else STATIC_OK, **({"joints": True} if a.joints else {}))
     work = tempfile.mkdtemp(prefix="mbc_dam_")
-    print(f"dam, static, {'builder defaults' if a.defaults else 'water 0.8 H, mu_base 1.0'}, no joints; one rank; times [s] from -log_view; "
+    print(f"dam, static, {'builder defaults' if a.defaults else 'water 0.8 H, mu_base 1.0'}, {'joints' if a.joints else 'no joints'}; one rank; times [s] from -log_view; "
           f"RSS: peak of the solver process; load: 1-min load average at the start")
     print(f"{'target':>8}" + HEAD[8:], flush=True)
     rows = []
@@ -115,6 +134,7 @@ def main():
         r = child(h5, 1, a.timeout, a.options.split())
         r["target"] = n
         r["build_dofs"] = build.build.info["dofs"]
+        keep(a.keep, f"dam_{n:.0e}_np1.txt", r)
         rows.append(r)
         print(row(f"{n:.0e}", r), flush=True)
         if r["rc"] != 0:
@@ -140,6 +160,9 @@ def main():
     scal = []
     if a.options:
         print(f"solver options: {a.options}")
+    if any(r.get("C") for r in rows):
+        print("  |C| (largest body): " + ", ".join(f"{r['dofs']}: {r['C']}" for r in rows if r.get("C"))
+              + f"   |C|: N^{fit([r['dofs'] for r in rows if r.get('C')], [r['C'] for r in rows if r.get('C')]):.2f}")
     if a.scaling:
         d = os.path.join(work, "scaling")
         h5 = build.build(d, "static", target_dofs=int(a.scaling), **params)
@@ -147,6 +170,7 @@ def main():
         print(f"{'ranks':>8}" + HEAD[8:], flush=True)
         for p in (1, a.ranks):
             r = child(h5, p, a.timeout, a.options.split())
+            keep(a.keep, f"dam_scaling_{a.scaling:.0e}_np{p}.txt", r)
             scal.append(r)
             print(row(str(p), r), flush=True)
             if r["rc"] != 0:
@@ -159,6 +183,12 @@ def main():
         with open(a.json, "w") as f:
             json.dump(dict(sizes=[{k: v for k, v in r.items() if k != "out"} for r in rows],
                            scaling=[{k: v for k, v in r.items() if k != "out"} for r in scal]), f, indent=1)
+
+
+def keep(directory, name, r):
+    if directory:
+        with open(os.path.join(directory, name), "w") as f:
+            f.write(r.get("out", ""))
 
 
 def child(h5, ranks, timeout, options=()):

@@ -104,13 +104,13 @@ def read_contact(path, step=-1):
 
 def log_view_times(text, events):
     """Seconds per phase from a -log_view report: events maps a phase name to a PETSc event
-    name or a tuple of names (summed); absent events count 0."""
+    name or a tuple of names (summed); absent events count 0. An event logged in several stages
+    (the search and the output run in the main stage and in the analysis's) is summed over them."""
     import re
     times = {}
     for name, ev in events.items():
         total = 0.0
         for e in ev if isinstance(ev, tuple) else (ev,):
-            m = re.search(rf"^{e}\s+\d+\s+\S+\s+(\S+)", text, re.M)
-            total += float(m.group(1)) if m else 0.0
+            total += sum(float(t) for t in re.findall(rf"^{e}\s+\d+\s+\S+\s+(\S+)", text, re.M))
         times[name] = total
     return times
