@@ -52,6 +52,8 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
   PetscCall(PetscCalloc4(nbodies, &ifc->sinv, nbodies, &ifc->sinv_is, nbodies, &ifc->sinv_id, nbodies, &ifc->sinv_state));
+  PetscCall(PetscMalloc1(nbodies, &ifc->schur_fits));
+  for (PetscInt b = 0; b < nbodies; b++) ifc->schur_fits[b] = -1;
   *iface = ifc;
   PetscFunctionReturn(0);
 }
@@ -76,14 +78,16 @@ PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface ifc, PetscInt dblock)
   PetscFunctionReturn(0);
 }
 
-/* How D_i is had (-mbc_d_route, MBCDRoute); auto's limits: the largest S^-1 per body
-   (-mbc_d_schur_max_mb) and the largest dense D with the Newton matrix (-mbc_d_dense_max_mb). */
-PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal schur_max_mb, PetscReal dense_max_mb)
+/* How D_i is had (-mbc_d_route, MBCDRoute); auto's limits: the memory of a body's Schur route
+   (-mbc_d_schur_max_mb), of the dense D with the Newton matrix (-mbc_d_dense_max_mb), and the
+   solves to build D where the Schur route does not fit (-mbc_d_solves_max). */
+PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal schur_max_mb, PetscReal dense_max_mb, PetscReal solves_max)
 {
   PetscFunctionBegin;
   ifc->droute       = route;
   ifc->schur_max_mb = schur_max_mb;
   ifc->dense_max_mb = dense_max_mb;
+  ifc->solves_max   = solves_max;
   PetscFunctionReturn(0);
 }
 
@@ -674,36 +678,72 @@ static PetscErrorCode BodyContactDofs(MBCInterface ifc, PetscInt b, Vec r)
   PetscFunctionReturn(0);
 }
 
-/* -mbc_d_route auto: the Schur route for a body on one rank whose S^-1 (|C|^2 doubles) fits in
-   -mbc_d_schur_max_mb; measured faster than the solves at every size that fits (3.8k to 97k DOFs,
-   docs/performance.md), at |C|^2 more memory. */
+/* The IS of BodyContactDofs (sequential: a body on one rank). */
+static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is)
+{
+  Vec          r;
+  PetscInt     n, nC = 0, *idx;
+  PetscScalar *ra;
+
+  PetscFunctionBegin;
+  PetscCall(VecDuplicate(ifc->bodies[b]->u, &r));
+  PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(BodyContactDofs(ifc, b, r));
+  PetscCall(VecGetArray(r, &ra));
+  PetscCall(PetscMalloc1(n + 1, &idx));
+  for (PetscInt i = 0; i < n; i++)
+    if (ra[i] != 0.0) idx[nC++] = i;
+  PetscCall(VecRestoreArray(r, &ra));
+  PetscCall(VecDestroy(&r));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, is));
+  PetscFunctionReturn(0);
+}
+
+/* -mbc_d_route auto: the Schur route for a body on one rank whose Schur factorization fits in
+   -mbc_d_schur_max_mb: S^-1 (|C|^2 doubles) and MUMPS's own estimate of the factorization with C as
+   its Schur set (INFOG(17) after the analysis: its fronts hold S dense, so its workspace grows
+   faster than S^-1; 4 GB at 400k DOFs, ~16 times S^-1 for the 1M dam's foundation by the model,
+   docs/performance-model.md). Measured faster than the solves at every size that fits (3.8k to
+   400k DOFs, docs/performance.md). Decided once per body: C is fixed by the scene and the analysis
+   depends on the operator's pattern only. */
 static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *schur)
 {
   MBCBody     body = ifc->bodies[b];
   PetscMPIInt bsize;
-  Vec         r;
-  PetscReal   nC;
 
   PetscFunctionBegin;
   *schur = PETSC_FALSE;
-  if (ifc->droute == MBC_D_ROUTE_MULTIRHS) PetscFunctionReturn(0);
+  if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
   if (bsize > 1) PetscFunctionReturn(0); /* MUMPS's distributed Schur complement is not wired */
   if (ifc->droute == MBC_D_ROUTE_SCHUR) {
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
-  if (ifc->sinv_is[b]) { /* C is fixed by the scene: counted once */
-    PetscInt n;
-    PetscCall(ISGetSize(ifc->sinv_is[b], &n));
-    nC = n;
-  } else {
-    PetscCall(VecDuplicate(body->u, &r));
-    PetscCall(BodyContactDofs(ifc, b, r));
-    PetscCall(VecSum(r, &nC));
-    PetscCall(VecDestroy(&r));
+  if (ifc->schur_fits[b] < 0) {
+    IS        is;
+    PetscInt  nC, n, est = 0;
+    PetscReal mb;
+    PetscCall(BodyContactIS(ifc, b, &is));
+    PetscCall(ISGetSize(is, &nC));
+    PetscCall(VecGetSize(body->u, &n));
+    mb = 8.0 * nC * nC / 1048576.0;
+    if (mb <= ifc->schur_max_mb && nC < n) { /* the analysis (symbolic, cheap against the factorization) */
+      Mat           A, F;
+      MatFactorInfo info;
+      PetscCall(KSPGetOperators(body->ksp, &A, NULL));
+      PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+      PetscCall(MatFactorSetSchurIS(F, is));
+      PetscCall(MatFactorInfoInitialize(&info));
+      PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
+      PetscCall(MatMumpsGetInfog(F, 17, &est));
+      PetscCall(MatDestroy(&F));
+    }
+    ifc->schur_fits[b] = mb + est <= ifc->schur_max_mb;
+    PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, MUMPS's estimate %" PetscInt_FMT "): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + est, mb, est, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
+    PetscCall(ISDestroy(&is));
   }
-  *schur = (PetscBool)(8.0 * nC * nC <= ifc->schur_max_mb * 1048576.0);
+  *schur = (PetscBool)ifc->schur_fits[b];
   PetscFunctionReturn(0);
 }
 
@@ -719,9 +759,7 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
 {
   MBCBody        body = ifc->bodies[b];
   Mat            A, P, F, S;
-  Vec            r;
-  PetscInt       n, nC = 0, *idx;
-  PetscScalar   *ra;
+  PetscInt       n, nC;
   PetscObjectState state;
   PetscObjectId  id;
   MatFactorInfo  info;
@@ -736,16 +774,9 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
   }
   PetscCall(MatDestroy(&ifc->sinv[b]));
   PetscCall(ISDestroy(&ifc->sinv_is[b]));
-  PetscCall(VecDuplicate(body->u, &r));
-  PetscCall(VecGetLocalSize(r, &n));
-  PetscCall(BodyContactDofs(ifc, b, r));
-  PetscCall(VecGetArray(r, &ra));
-  PetscCall(PetscMalloc1(n + 1, &idx));
-  for (PetscInt i = 0; i < n; i++)
-    if (ra[i] != 0.0) idx[nC++] = i;
-  PetscCall(VecRestoreArray(r, &ra));
-  PetscCall(VecDestroy(&r));
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, &ifc->sinv_is[b]));
+  PetscCall(VecGetLocalSize(body->u, &n));
+  PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b]));
+  PetscCall(ISGetSize(ifc->sinv_is[b], &nC));
   PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT "\n", body->name, nC, n));
   if (nC == n) PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S)); /* every DOF on a contact surface: S = A (MUMPS wants a Schur set smaller than the matrix) */
   else {
@@ -799,24 +830,35 @@ static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
 }
 
 /* Whether D is matrix-free: -mbc_d_route matfree, or auto where the dense D would not fit in
-   -mbc_d_dense_max_mb: W holds every body's dense D_b (sum nb^2 entries, 12 bytes each as AIJ) and
-   the Newton type factors its active part (up to m^2 doubles dense). The pgs type and
-   -mbc_fclib_write need W's entries, so auto keeps them whatever they cost. The same on every
-   rank (nbcols is). */
+   -mbc_d_dense_max_mb (W holds every body's dense D_b, sum nb^2 entries at 12 bytes as AIJ, and the
+   Newton type factors its active part, up to m^2 doubles dense), or would cost more than
+   -mbc_d_solves_max solves to build (the bodies the Schur route does not fit: a solve per column;
+   a multiplier solve on the matrix-free D took 60 to 100 products per static iteration on the dams
+   of 50k to 400k DOFs, each a solve per body). The pgs type and -mbc_fclib_write need W's entries,
+   so auto keeps them whatever they cost. The same on every rank. Collective. */
 static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool *shell)
 {
-  PetscReal bytes = 8.0 * m * m;
+  PetscReal bytes = 8.0 * m * m, solves = 0;
   PetscBool newton;
 
   PetscFunctionBegin;
   *shell = (PetscBool)(ifc->droute == MBC_D_ROUTE_MATFREE);
   if (ifc->droute != MBC_D_ROUTE_AUTO) PetscFunctionReturn(0);
-  for (PetscInt b = 0; b < ifc->nbodies; b++) bytes += 12.0 * ifc->nbcols[b] * ifc->nbcols[b];
-  if (!(bytes > ifc->dense_max_mb * 1048576.0)) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    PetscBool   schur = PETSC_TRUE;
+    PetscMPIInt brank = 1;
+    bytes += 12.0 * ifc->nbcols[b] * ifc->nbcols[b];
+    if (!ifc->bodies[b] || !ifc->nbcols[b]) continue;
+    PetscCall(BodyUsesSchur(ifc, b, &schur));
+    PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
+    if (!schur && !brank) solves += ifc->nbcols[b];
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &solves, 1, MPIU_REAL, MPIU_SUM, ifc->comm));
+  if (!(bytes > ifc->dense_max_mb * 1048576.0) && !(solves > ifc->solves_max)) PetscFunctionReturn(0);
   PetscCall(PetscObjectTypeCompare((PetscObject)ifc->mult, MBCMULTIPLIERNEWTON, &newton));
   if (!((PetscObject)ifc->mult)->type_name) newton = PETSC_TRUE; /* the default type */
   *shell = (PetscBool)(newton && !ifc->fclib_file[0]);
-  PetscCall(PetscInfo(NULL, "D dense would take %g MB, beyond -mbc_d_dense_max_mb: %s\n", bytes / 1048576.0, *shell ? "matrix-free" : "dense all the same (the pgs type or -mbc_fclib_write needs its entries)"));
+  PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g) and %g solves to build (-mbc_d_solves_max %g): %s\n", bytes / 1048576.0, (double)ifc->dense_max_mb, solves, (double)ifc->solves_max, *shell ? "matrix-free" : "dense all the same (the pgs type or -mbc_fclib_write needs its entries)"));
   PetscFunctionReturn(0);
 }
 
@@ -1091,6 +1133,7 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
     PetscCall(ISDestroy(&ifc->sinv_is[b]));
   }
   PetscCall(PetscFree4(ifc->sinv, ifc->sinv_is, ifc->sinv_id, ifc->sinv_state));
+  PetscCall(PetscFree(ifc->schur_fits));
   PetscCall(MBCMultiplierDestroy(&ifc->mult));
   PetscCall(PetscFree(*iface));
   PetscFunctionReturn(0);

@@ -21,8 +21,9 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->dt_min           = -1;
   s->dblock           = 256;
   s->droute           = MBC_D_ROUTE_AUTO; /* auto: the Schur complement where S^-1 fits (docs/performance.md) */
-  s->schur_max_mb     = 2048; /* |C| up to 16k contact DOFs per body */
+  s->schur_max_mb     = 8192; /* S^-1 and MUMPS's factorization with the Schur set: 4.3 GB at the 400k-DOF dam's foundation */
   s->dense_max_mb     = 4096; /* up to ~15 000 multipliers (docs/performance.md) */
+  s->solves_max       = 4096; /* a matrix-free multiplier solve took 60 to 100 products per static iteration (docs/performance.md) */
   *solver = s;
   PetscFunctionReturn(0);
 }
@@ -80,10 +81,12 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   {
     const char *routes[] = {"multirhs", "schur", "auto", "matfree"};
     PetscCall(PetscOptionsEList("-mbc_d_route", "How D_i = H_i^T A_i^-1 H_i is had: dense from multi-right-hand-side solves with the body's factor, dense through the Schur complement of A_i onto its contact DOFs in a MUMPS factorization (bodies on one rank), auto: matrix-free where the dense D does not fit in -mbc_d_dense_max_mb, else per body the Schur complement where its inverse fits in -mbc_d_schur_max_mb, else the solves; or matfree: never stored, a solve per body per product (newton type only; docs/performance.md)", "MBCSolverSetFromOptions", routes, 4, routes[s->droute], &s->droute, NULL));
-    PetscCall(PetscOptionsReal("-mbc_d_schur_max_mb", "-mbc_d_route auto: the largest dense S^-1 (|contact DOFs|^2 doubles) per body, in MB", "MBCSolverSetFromOptions", s->schur_max_mb, &s->schur_max_mb, NULL));
+    PetscCall(PetscOptionsReal("-mbc_d_schur_max_mb", "-mbc_d_route auto: the most memory, in MB, a body's Schur route may take (S^-1, |contact DOFs|^2 doubles, and MUMPS's estimate for the factorization with the Schur set)", "MBCSolverSetFromOptions", s->schur_max_mb, &s->schur_max_mb, NULL));
     PetscCall(PetscOptionsReal("-mbc_d_dense_max_mb", "-mbc_d_route auto: beyond this many MB for the dense D and the Newton matrix, D is matrix-free", "MBCSolverSetFromOptions", s->dense_max_mb, &s->dense_max_mb, NULL));
     PetscCheck(s->schur_max_mb >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_schur_max_mb %g: must be >= 0", (double)s->schur_max_mb);
+    PetscCall(PetscOptionsReal("-mbc_d_solves_max", "-mbc_d_route auto: beyond this many solves to build the dense D (bodies the Schur route does not fit), D is matrix-free", "MBCSolverSetFromOptions", s->solves_max, &s->solves_max, NULL));
     PetscCheck(s->dense_max_mb >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_dense_max_mb %g: must be >= 0", (double)s->dense_max_mb);
+    PetscCheck(s->solves_max >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_solves_max %g: must be >= 0", (double)s->solves_max);
     PetscCheck(!(s->droute == MBC_D_ROUTE_MATFREE && s->fclib_file[0]), s->comm, PETSC_ERR_ARG_INCOMP, "-mbc_fclib_write writes the entries of D, which -mbc_d_route matfree never forms: use another -mbc_d_route");
   }
   PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
@@ -201,7 +204,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCContactSetFromOptions(s->contact, ((PetscObject)s)->prefix));
     PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
-    PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb));
+    PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb, s->solves_max));
     PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }
   s->setupcalled = PETSC_TRUE;

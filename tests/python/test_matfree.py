@@ -117,7 +117,7 @@ def test_auto_route_goes_matrix_free_beyond_the_dense_budget(tmp_path):
     h5 = dam.build(tmp_path, **STATIC)
     solve(h5, "-mbc_output", str(tmp_path / "ref"), "-mbc_d_route", "multirhs", *TIGHT)
     r = solve(h5, "-mbc_output", str(tmp_path / "auto"), "-mbc_d_dense_max_mb", "0.01", "-info", *TIGHT)
-    assert "beyond -mbc_d_dense_max_mb: matrix-free" in r.stdout
+    assert re.search(r"D dense would take [\d.]+ MB \(-mbc_d_dense_max_mb 0.01\).*: matrix-free", r.stdout)
     dflt = solve(h5, "-mbc_output", str(tmp_path / "dflt"), "-info")
     assert "Matrix-free D" not in dflt.stdout
     u0, f0 = final(str(tmp_path / "ref.h5"))
@@ -127,6 +127,28 @@ def test_auto_route_goes_matrix_free_beyond_the_dense_budget(tmp_path):
     assert "dense all the same" in pgs.stdout
     bad = solve(h5, "-mbc_d_dense_max_mb", "-1", check=False)
     assert bad.returncode != 0 and "-mbc_d_dense_max_mb" in bad.stdout + bad.stderr
+
+
+def test_auto_route_counts_the_schur_workspace_and_the_solves(tmp_path):
+    """auto's Schur route must fit in -mbc_d_schur_max_mb with MUMPS's own estimate of the
+    factorization with the Schur set, not S^-1 alone (the 1M dam's foundation: S^-1 0.9 GB, the
+    factorization ~14 GB by the model): at 1 MB the foundation (S^-1 1 MB, estimate 10 MB) takes
+    the solves and a 36-DOF monolith keeps the Schur route; the dense D then needs 156 solves, and
+    beyond -mbc_d_solves_max 100 auto goes matrix-free. The answers stay the solves' ones."""
+    h5 = dam.build(tmp_path, **STATIC)
+    solve(h5, "-mbc_output", str(tmp_path / "ref"), "-mbc_d_route", "multirhs", *TIGHT)
+    r = solve(h5, "-mbc_output", str(tmp_path / "a"), "-mbc_d_schur_max_mb", "1", "-info", ":sys", *TIGHT)
+    assert re.search(r"Body foundation: the Schur route onto \d+ contact DOFs would take [\d.]+ MB \(S\^-1 [\d.]+, MUMPS's estimate [1-9]\d*\): beyond", r.stdout)
+    assert re.search(r"Body m1: the Schur route .*: within", r.stdout)
+    assert "Matrix-free D" not in r.stdout and "D through the Schur complement onto" in r.stdout
+    r = solve(h5, "-mbc_output", str(tmp_path / "b"), "-mbc_d_schur_max_mb", "1", "-mbc_d_solves_max", "100", "-info", ":sys", *TIGHT)
+    assert "solves to build (-mbc_d_solves_max 100.): matrix-free" in r.stdout and "Matrix-free D" in r.stdout
+    u0, f0 = final(str(tmp_path / "ref.h5"))
+    for out in ("a", "b"):
+        u1, f1 = final(str(tmp_path / f"{out}.h5"))
+        assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max(), out
+    bad = solve(h5, "-mbc_d_solves_max", "-1", check=False)
+    assert bad.returncode != 0 and "-mbc_d_solves_max" in bad.stdout + bad.stderr
 
 
 def test_matfree_route_refuses_what_needs_d_entries(tmp_path):

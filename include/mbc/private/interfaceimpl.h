@@ -54,8 +54,10 @@ struct _n_MBCInterface {
   PetscInt   droute;      /* -mbc_d_route: MBCDRoute */
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 fits in this */
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb: auto takes the matrix-free D where the dense one does not fit in this */
+  PetscReal  solves_max;   /* -mbc_d_solves_max: auto takes the matrix-free D where building the dense one takes more solves */
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
+  PetscInt  *schur_fits;  /* per body, auto: whether its Schur factorization fits in -mbc_d_schur_max_mb (-1: not yet known) */
   PetscObjectId *sinv_id;
   PetscObjectState *sinv_state;
   MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
@@ -85,7 +87,7 @@ PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble, MBC_FlexibilityMult;
 PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], const char[], MBCInterface *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
-PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal, PetscReal, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);

@@ -85,6 +85,7 @@ struct _n_MBCSolver {
   PetscInt   droute;      /* -mbc_d_route: MBCDRoute (interfaceimpl.h), auto by default */
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb */
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb */
+  PetscReal  solves_max;   /* -mbc_d_solves_max */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
