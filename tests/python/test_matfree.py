@@ -10,18 +10,10 @@ import numpy as np
 import pytest
 
 from conftest import load_script, solve
-from mbcontact.results import read_body, read_contact
+from mbcontact.results import read_contact
+from test_d_route import STATIC, dam, final  # the small static dam and its final state, as the Schur route's tests
 
-dam = load_script("meshes/dam/build.py", "dam_build")
 blocks = load_script("meshes/blocks/build.py", "blocks_build")
-
-STATIC = dict(h=15.0, monoliths=3, level=80.0, mu_base=1.0, joints=False)
-BODIES = ("foundation", "m1", "m2", "m3")
-
-
-def final(h5file):
-    u = np.concatenate([read_body(h5file, b, step=-1)["displacement"].ravel() for b in BODIES])
-    return u, read_contact(h5file, step=-1)["force"]
 
 
 # Tight tolerances for the route comparisons: the routes solve the same problem, so their answers
