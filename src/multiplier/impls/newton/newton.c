@@ -188,9 +188,8 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     PetscCall(VecDestroy(&g));
     PetscCall(VecDestroy(&t));
   }
-  if (fp->Winv) { /* W a shell: GMRES (newtonkrylov.c); a step it did not finish is still judged by the line search */
+  if (fp->Winv) { /* W a shell: GMRES (newtonkrylov.c) */
     PetscCall(MBCNewtonKrylovSolve(m, isA, nA, b, x, &reason));
-    if (reason == KSP_DIVERGED_ITS) reason = KSP_CONVERGED_ITS;
   } else {
   /* an all-stick system on the same rows is the kept one (J = B W_AA: B depends on rho only) */
   if (!slips && !fp->G && nt->isbuilt && !nt->keptslip) {
