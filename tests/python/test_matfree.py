@@ -71,10 +71,10 @@ def test_matfree_route_default_tolerance(tmp_path):
 
 @pytest.mark.parametrize("nproc", [1, 2, 4])
 def test_every_route_gives_the_same_multipliers_two_blocks(tmp_path, nproc):
-    """The paper's two blocks (dynamic, 441 contact points, mu 0.6), 3 steps: multi-right-hand-side,
+    """The paper's two blocks (dynamic, 441 contact points, mu 0.6), 1 step: multi-right-hand-side,
     Schur (bodies on one rank) and matrix-free give the same contact forces, to 1e-8 of the largest
-    (measured 2e-9 after 5 steps at a merit of 1e-12 each, on 1, 2 and 4 ranks)."""
-    h5 = blocks.build(str(tmp_path), final_time=0.03)
+    (measured 2e-9 after 5 steps at a merit of 1e-12 each, on 1, 2 and 4 ranks; one step here)."""
+    h5 = blocks.build(str(tmp_path), final_time=0.01)
     out = {}
     for route in ("multirhs", "schur", "matfree"):
         if route == "schur" and nproc > 2:
@@ -156,11 +156,11 @@ def test_matfree_route_refuses_what_needs_d_entries(tmp_path):
 def test_matfree_restart_equals_uninterrupted(tmp_path):
     """dscale's sample is fixed by the pairs (evenly spaced columns), so a restart rebuilds the same
     shell and the same preconditioner: the last step as the uninterrupted run's."""
-    h5 = blocks.build(str(tmp_path), final_time=0.04)
+    h5 = blocks.build(str(tmp_path), final_time=0.02)
     opt = ("-mbc_d_route", "matfree")
     solve(h5, *opt, "-mbc_output", str(tmp_path / "full"))
     part = str(tmp_path / "part")
-    solve(h5, *opt, "-mbc_output", part, "-mbc_checkpoint_every", "2", "-mbc_final_time", "0.02")
+    solve(h5, *opt, "-mbc_output", part, "-mbc_checkpoint_every", "1", "-mbc_final_time", "0.01")
     r = solve(h5, *opt, "-mbc_output", part, "-mbc_restart", part + "_checkpoint.h5", "-mbc_monitor")
     assert "restarted from" in r.stdout
     fa = read_contact(str(tmp_path / "full.h5"), step=-1)["force"]
