@@ -2,12 +2,12 @@
      D v = sum_b H_b^T A_b^-1 H_b v,
    one forward and back substitution with each body's factor per product, never stored: no m^2
    memory and no m solves per build, where the dense D_b of the other routes do not fit (the
-   1M-DOF dam's foundation: 38 000 multipliers, 11 GB dense). With it goes a sparse approximation
-   of W^-1 from FETI's lumped preconditioner Kl = sum_b W_b H~_b^T A_b H~_b W_b (H~: H with the
-   rows K^+ holds zeroed, W_b the compliance scaling below), which gives the Newton type its augmentation (rho ~ 1 / W_dd), its directions
-   without flexibility (Kl_dd = 0 exactly where D_dd = 0: both vanish with the column of H~) and
-   the preconditioner of its Krylov steps. dscale, the mean of D_dd on the other routes, is
-   estimated from a sample of D's columns (below): only the scaling of r = dscale lambda, which
+   1M-DOF dam with its joints: 37 620 multipliers, W 11.7 GB assembled). With it goes a sparse
+   approximation of W^-1 from FETI's lumped preconditioner Kl = sum_b W_b H~_b^T A_b H~_b W_b (H~: H
+   with the rows K^+ holds zeroed, W_b the compliance scaling below), which gives the Newton type its
+   augmentation (rho ~ 1 / W_dd), its directions without flexibility (Kl_dd = 0 exactly where
+   D_dd = 0: both vanish with the column of H~) and the preconditioner of its Krylov steps. dscale,
+   the mean of D_dd on the other routes, is estimated from a sample of D's diagonal (below): only the scaling of r = dscale lambda, which
    weighs forces against displacements in the FCLIB merit, can differ by the sample's error. */
 #include <mbc/private/interfaceimpl.h>
 
@@ -200,8 +200,7 @@ PetscErrorCode MBCInterfaceBuildDShell(MBCInterface ifc, PetscInt m, PetscInt ml
   { /* 1 / Kl_dd underestimates D_dd, and not uniformly: by 4.6 times on average on the small
        static dam with the compliance scaling (17 without it, 5 to 66 over the points; measured:
        the free monoliths' K^+ adds their rigid-like flexibility, and a local stiffness's inverse
-       is not the inverse's diagonal). The
-       factor c, D_dd ~ c / Kl_dd, by the ratio estimator over MBC_D_SAMPLES diagonal entries of D
+       is not the inverse's diagonal). The factor c, D_dd ~ c / Kl_dd, by the ratio estimator over MBC_D_SAMPLES diagonal entries of D
        (exact: per body one multi-right-hand-side solve with the sampled columns it has; points
        evenly spaced in couple order, so the same on any number of ranks); then dscale = the mean
        of c / Kl_dd and Winv = (dscale / c) Kl, so 1 / Winv_dd estimates W_dd and Winv_AA W_AA's

@@ -20,7 +20,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->dt_cut           = PETSC_TRUE;
   s->dt_min           = -1;
   s->dblock           = 256;
-  s->droute           = MBC_D_ROUTE_AUTO; /* auto: the Schur complement where S^-1 fits (docs/performance.md) */
+  s->droute           = MBC_D_ROUTE_AUTO; /* auto: matrix-free, Schur or solves by size (docs/performance.md) */
   s->schur_max_mb     = 8192; /* S^-1 and MUMPS's factorization with the Schur set: 4.3 GB at the 400k-DOF dam's foundation */
   s->dense_max_mb     = 4096; /* up to ~15 000 multipliers (docs/performance.md) */
   s->solves_max       = 4096; /* a matrix-free multiplier solve took 60 to 100 products per static iteration (docs/performance.md) */
@@ -80,7 +80,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   {
     const char *routes[] = {"multirhs", "schur", "auto", "matfree"};
-    PetscCall(PetscOptionsEList("-mbc_d_route", "How D_i = H_i^T A_i^-1 H_i is had: dense from multi-right-hand-side solves with the body's factor, dense through the Schur complement of A_i onto its contact DOFs in a MUMPS factorization (bodies on one rank), auto: matrix-free where the dense D does not fit in -mbc_d_dense_max_mb, else per body the Schur complement where its inverse fits in -mbc_d_schur_max_mb, else the solves; or matfree: never stored, a solve per body per product (newton type only; docs/performance.md)", "MBCSolverSetFromOptions", routes, 4, routes[s->droute], &s->droute, NULL));
+    PetscCall(PetscOptionsEList("-mbc_d_route", "How D_i = H_i^T A_i^-1 H_i is had: dense from multi-right-hand-side solves with the body's factor, dense through the Schur complement of A_i onto its contact DOFs in a MUMPS factorization (bodies on one rank), auto: matrix-free where the dense D does not fit in -mbc_d_dense_max_mb or would take more than -mbc_d_solves_max solves to build, else per body the Schur complement where it fits in -mbc_d_schur_max_mb, else the solves; or matfree: never stored, a solve per body per product (newton type only; docs/performance.md)", "MBCSolverSetFromOptions", routes, 4, routes[s->droute], &s->droute, NULL));
     PetscCall(PetscOptionsReal("-mbc_d_schur_max_mb", "-mbc_d_route auto: the most memory, in MB, a body's Schur route may take (S^-1, |contact DOFs|^2 doubles, and MUMPS's estimate for the factorization with the Schur set)", "MBCSolverSetFromOptions", s->schur_max_mb, &s->schur_max_mb, NULL));
     PetscCall(PetscOptionsReal("-mbc_d_dense_max_mb", "-mbc_d_route auto: beyond this many MB for the dense D and the Newton matrix, D is matrix-free", "MBCSolverSetFromOptions", s->dense_max_mb, &s->dense_max_mb, NULL));
     PetscCheck(s->schur_max_mb >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_schur_max_mb %g: must be >= 0", (double)s->schur_max_mb);

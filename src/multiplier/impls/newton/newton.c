@@ -191,164 +191,164 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
   if (fp->Winv) { /* W a shell: GMRES (newtonkrylov.c) */
     PetscCall(MBCNewtonKrylovSolve(m, isA, nA, b, x, &reason));
   } else {
-  /* an all-stick system on the same rows is the kept one (J = B W_AA: B depends on rho only) */
-  if (!slips && !fp->G && nt->isbuilt && !nt->keptslip) {
-    PetscBool same;
-    PetscCall(ISEqualUnsorted(isA, nt->isbuilt, &same));
-    reuse = same;
-  }
-  if (!reuse) {
-    Mat          J, Ws, GTs = NULL, Gs = NULL;
-    PetscInt    *dnz, *onz, jstart, jend, nmark;
-    PetscReal    dmax = 0;
-    PetscScalar *vals;
-    PetscCall(MatCreateSubMatrix(fp->W, isA, isA, MAT_INITIAL_MATRIX, &Ws));
-    if (fp->G) {
-      Mat GT;
-      IS  isall, isgrows;
-      PetscCall(MatTranspose(fp->G, MAT_INITIAL_MATRIX, &GT));
-      PetscCall(ISCreateStride(comm, rank == size - 1 ? ng : 0, 0, 1, &isall));
-      PetscCall(MatCreateSubMatrix(GT, isA, isall, MAT_INITIAL_MATRIX, &GTs));
-      PetscCall(ISCreateStride(comm, nglocal, gstart, 1, &isgrows));
-      PetscCall(MatCreateSubMatrix(fp->G, isgrows, isA, MAT_INITIAL_MATRIX, &Gs));
-      PetscCall(ISDestroy(&isall));
-      PetscCall(ISDestroy(&isgrows));
-      PetscCall(MatDestroy(&GT));
+    /* an all-stick system on the same rows is the kept one (J = B W_AA: B depends on rho only) */
+    if (!slips && !fp->G && nt->isbuilt && !nt->keptslip) {
+      PetscBool same;
+      PetscCall(ISEqualUnsorted(isA, nt->isbuilt, &same));
+      reuse = same;
     }
-    jstart = rstart; /* J's rows and columns on this rank */
-    jend   = rstart + nloc;
-    if (!nt->work) PetscCall(PetscMalloc3(3 * (Nloc + 1), &nt->work, Nloc + 1, &nt->mark, Nloc + 1, &nt->cols));
-    else {
-      PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));
-      PetscCall(PetscMalloc3(3 * (Nloc + 1), &nt->work, Nloc + 1, &nt->mark, Nloc + 1, &nt->cols));
-    }
-    for (PetscInt k = 0; k <= Nloc; k++) nt->mark[k] = -1;
-    for (PetscInt k = 0; k < 3 * (Nloc + 1); k++) nt->work[k] = 0;
-    PetscCall(PetscMalloc3(nloc + 1, &dnz, nloc + 1, &onz, Nloc + 1, &vals));
-    /* two passes over the active contacts: the row patterns (preallocation), then the values */
-    for (PetscInt pass = 0; pass < 2; pass++) {
-      if (pass == 1) {
-        PetscCall(MatCreate(comm, &J));
-        PetscCall(MatSetSizes(J, nloc, nloc, Nloc, Nloc));
-        PetscCall(MatSetType(J, MATAIJ));
-        PetscCall(MatSeqAIJSetPreallocation(J, 0, dnz));
-        PetscCall(MatMPIAIJSetPreallocation(J, 0, dnz, 0, onz));
-        PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+    if (!reuse) {
+      Mat          J, Ws, GTs = NULL, Gs = NULL;
+      PetscInt    *dnz, *onz, jstart, jend, nmark;
+      PetscReal    dmax = 0;
+      PetscScalar *vals;
+      PetscCall(MatCreateSubMatrix(fp->W, isA, isA, MAT_INITIAL_MATRIX, &Ws));
+      if (fp->G) {
+        Mat GT;
+        IS  isall, isgrows;
+        PetscCall(MatTranspose(fp->G, MAT_INITIAL_MATRIX, &GT));
+        PetscCall(ISCreateStride(comm, rank == size - 1 ? ng : 0, 0, 1, &isall));
+        PetscCall(MatCreateSubMatrix(GT, isA, isall, MAT_INITIAL_MATRIX, &GTs));
+        PetscCall(ISCreateStride(comm, nglocal, gstart, 1, &isgrows));
+        PetscCall(MatCreateSubMatrix(fp->G, isgrows, isA, MAT_INITIAL_MATRIX, &Gs));
+        PetscCall(ISDestroy(&isall));
+        PetscCall(ISDestroy(&isgrows));
+        PetscCall(MatDestroy(&GT));
       }
-      for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
-        const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
-        if (!nt->active[i]) continue;
-        nmark = 0;
-        for (PetscInt e = 0; e < dim; e++) { /* the union of the contact's rows of W_AA and G_A^T */
-          for (PetscInt part = 0; part < (GTs ? 2 : 1); part++) {
-            Mat                src = part ? GTs : Ws;
-            const PetscInt     grow = rstart + k + e, shiftc = part ? NA : 0;
+      jstart = rstart; /* J's rows and columns on this rank */
+      jend   = rstart + nloc;
+      if (!nt->work) PetscCall(PetscMalloc3(3 * (Nloc + 1), &nt->work, Nloc + 1, &nt->mark, Nloc + 1, &nt->cols));
+      else {
+        PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));
+        PetscCall(PetscMalloc3(3 * (Nloc + 1), &nt->work, Nloc + 1, &nt->mark, Nloc + 1, &nt->cols));
+      }
+      for (PetscInt k = 0; k <= Nloc; k++) nt->mark[k] = -1;
+      for (PetscInt k = 0; k < 3 * (Nloc + 1); k++) nt->work[k] = 0;
+      PetscCall(PetscMalloc3(nloc + 1, &dnz, nloc + 1, &onz, Nloc + 1, &vals));
+      /* two passes over the active contacts: the row patterns (preallocation), then the values */
+      for (PetscInt pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+          PetscCall(MatCreate(comm, &J));
+          PetscCall(MatSetSizes(J, nloc, nloc, Nloc, Nloc));
+          PetscCall(MatSetType(J, MATAIJ));
+          PetscCall(MatSeqAIJSetPreallocation(J, 0, dnz));
+          PetscCall(MatMPIAIJSetPreallocation(J, 0, dnz, 0, onz));
+          PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+        }
+        for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
+          const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+          if (!nt->active[i]) continue;
+          nmark = 0;
+          for (PetscInt e = 0; e < dim; e++) { /* the union of the contact's rows of W_AA and G_A^T */
+            for (PetscInt part = 0; part < (GTs ? 2 : 1); part++) {
+              Mat                src = part ? GTs : Ws;
+              const PetscInt     grow = rstart + k + e, shiftc = part ? NA : 0;
+              PetscInt           ncols;
+              const PetscInt    *cc;
+              const PetscScalar *vv;
+              PetscCall(MatGetRow(src, grow, &ncols, &cc, &vv));
+              for (PetscInt j = 0; j < ncols; j++) {
+                const PetscInt c = cc[j] + shiftc;
+                if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+                if (pass == 1)
+                  for (PetscInt d = 0; d < dim; d++) nt->work[3 * nt->mark[c] + d] += nt->B[9 * i + dim * d + e] * PetscRealPart(vv[j]);
+              }
+              PetscCall(MatRestoreRow(src, grow, &ncols, &cc, &vv));
+            }
+            { /* the contact's own columns (A and the shift) */
+              const PetscInt c = rstart + k + e;
+              if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+            }
+          }
+          for (PetscInt d = 0; d < dim; d++) {
+            const PetscInt grow = rstart + k + d;
+            if (pass == 0) {
+              dnz[k + d] = onz[k + d] = 0;
+              for (PetscInt j = 0; j < nmark; j++) {
+                if (nt->cols[j] >= jstart && nt->cols[j] < jend) dnz[k + d]++;
+                else onz[k + d]++;
+              }
+            } else {
+              for (PetscInt e = 0; e < dim; e++) nt->work[3 * nt->mark[rstart + k + e] + d] += nt->A[9 * i + dim * d + e];
+              dmax = PetscMax(dmax, PetscAbsReal(nt->work[3 * nt->mark[grow] + d]));
+              for (PetscInt j = 0; j < nmark; j++) vals[j] = nt->work[3 * j + d];
+              PetscCall(MatSetValues(J, 1, &grow, nmark, nt->cols, vals, INSERT_VALUES));
+            }
+          }
+          for (PetscInt j = 0; j < nmark; j++) { /* clear the work rows */
+            nt->mark[nt->cols[j]] = -1;
+            for (PetscInt d = 0; d < 3; d++) nt->work[3 * j + d] = 0;
+          }
+          k += dim;
+        }
+        if (Gs) { /* equilibrium rows G_A on the last rank's tail */
+          for (PetscInt j = 0; j < nglocal; j++) {
+            const PetscInt     grow = gstart + j, jrow = NA + gstart + j;
             PetscInt           ncols;
             const PetscInt    *cc;
             const PetscScalar *vv;
-            PetscCall(MatGetRow(src, grow, &ncols, &cc, &vv));
-            for (PetscInt j = 0; j < ncols; j++) {
-              const PetscInt c = cc[j] + shiftc;
-              if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
-              if (pass == 1)
-                for (PetscInt d = 0; d < dim; d++) nt->work[3 * nt->mark[c] + d] += nt->B[9 * i + dim * d + e] * PetscRealPart(vv[j]);
+            PetscCall(MatGetRow(Gs, grow, &ncols, &cc, &vv));
+            if (pass == 1) {
+              PetscCall(MatSetValues(J, 1, &jrow, ncols, cc, vv, INSERT_VALUES));
+              PetscCall(MatSetValue(J, jrow, jrow, 0.0, INSERT_VALUES));
             }
-            PetscCall(MatRestoreRow(src, grow, &ncols, &cc, &vv));
+            PetscCall(MatRestoreRow(Gs, grow, &ncols, &cc, &vv));
           }
-          { /* the contact's own columns (A and the shift) */
-            const PetscInt c = rstart + k + e;
-            if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
-          }
+          if (pass == 0 && rank == size - 1)
+            for (PetscInt j = 0; j < ng; j++) dnz[nA + j] = nloc, onz[nA + j] = Nloc - nloc;
         }
-        for (PetscInt d = 0; d < dim; d++) {
-          const PetscInt grow = rstart + k + d;
-          if (pass == 0) {
-            dnz[k + d] = onz[k + d] = 0;
-            for (PetscInt j = 0; j < nmark; j++) {
-              if (nt->cols[j] >= jstart && nt->cols[j] < jend) dnz[k + d]++;
-              else onz[k + d]++;
-            }
-          } else {
-            for (PetscInt e = 0; e < dim; e++) nt->work[3 * nt->mark[rstart + k + e] + d] += nt->A[9 * i + dim * d + e];
-            dmax = PetscMax(dmax, PetscAbsReal(nt->work[3 * nt->mark[grow] + d]));
-            for (PetscInt j = 0; j < nmark; j++) vals[j] = nt->work[3 * j + d];
-            PetscCall(MatSetValues(J, 1, &grow, nmark, nt->cols, vals, INSERT_VALUES));
-          }
-        }
-        for (PetscInt j = 0; j < nmark; j++) { /* clear the work rows */
-          nt->mark[nt->cols[j]] = -1;
-          for (PetscInt d = 0; d < 3; d++) nt->work[3 * j + d] = 0;
-        }
-        k += dim;
       }
-      if (Gs) { /* equilibrium rows G_A on the last rank's tail */
-        for (PetscInt j = 0; j < nglocal; j++) {
-          const PetscInt     grow = gstart + j, jrow = NA + gstart + j;
-          PetscInt           ncols;
-          const PetscInt    *cc;
-          const PetscScalar *vv;
-          PetscCall(MatGetRow(Gs, grow, &ncols, &cc, &vv));
-          if (pass == 1) {
-            PetscCall(MatSetValues(J, 1, &jrow, ncols, cc, vv, INSERT_VALUES));
-            PetscCall(MatSetValue(J, jrow, jrow, 0.0, INSERT_VALUES));
-          }
-          PetscCall(MatRestoreRow(Gs, grow, &ncols, &cc, &vv));
-        }
-        if (pass == 0 && rank == size - 1)
-          for (PetscInt j = 0; j < ng; j++) dnz[nA + j] = nloc, onz[nA + j] = Nloc - nloc;
-      }
+      PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
+      PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
+      /* a shift of the contact rows: stick rows of a rank-deficient W (rigid bodies, redundant
+         constraints) are singular; it picks the least-force solution and costs the step only
+         shift x cond of accuracy, which the next steps recover */
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
+      for (PetscInt k = 0; k < nA; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
+      PetscCall(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
+      PetscCall(PetscFree3(dnz, onz, vals));
+      PetscCall(MatDestroy(&Ws));
+      PetscCall(MatDestroy(&GTs));
+      PetscCall(MatDestroy(&Gs));
+      PetscCall(KSPReset(nt->ksp));
+      PetscCall(KSPSetOperators(nt->ksp, J, J));
+      PetscCall(MatDestroy(&J));
+      PetscCall(KSPSetUp(nt->ksp));
+      nt->factors++;
+      PetscCall(ISDestroy(&nt->isbuilt));
+      nt->isbuilt  = isA;
+      nt->keptslip = (PetscBool)(slips || fp->G);
+      isA          = NULL;
     }
-    PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
-    PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
-    /* a shift of the contact rows: stick rows of a rank-deficient W (rigid bodies, redundant
-       constraints) are singular; it picks the least-force solution and costs the step only
-       shift x cond of accuracy, which the next steps recover */
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
-    for (PetscInt k = 0; k < nA; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
-    PetscCall(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
-    PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
-    PetscCall(PetscFree3(dnz, onz, vals));
-    PetscCall(MatDestroy(&Ws));
-    PetscCall(MatDestroy(&GTs));
-    PetscCall(MatDestroy(&Gs));
-    PetscCall(KSPReset(nt->ksp));
-    PetscCall(KSPSetOperators(nt->ksp, J, J));
-    PetscCall(MatDestroy(&J));
-    PetscCall(KSPSetUp(nt->ksp));
-    nt->factors++;
-    PetscCall(ISDestroy(&nt->isbuilt));
-    nt->isbuilt  = isA;
-    nt->keptslip = (PetscBool)(slips || fp->G);
-    isA          = NULL;
-  }
-  PetscCall(KSPSolve(nt->ksp, b, x));
-  PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
-  if (reason >= 0) { /* iterative refinement against the shift and the factor's rounding: the
-                        static saddle-point systems (free bodies) are conditioned enough that a plain
-                        solve floored the merit near 1e-8 */
-    Mat       J;
-    Vec       res, dx;
-    PetscReal r0, r1;
-    PetscCall(KSPGetOperators(nt->ksp, &J, NULL));
-    PetscCall(VecDuplicate(b, &res));
-    PetscCall(VecDuplicate(b, &dx));
-    PetscCall(MatMult(J, x, res));
-    PetscCall(VecAYPX(res, -1.0, b));
-    for (PetscInt k = 0, shifted = 1; k < 2 && shifted; k++) {
-      PetscCall(VecNorm(res, NORM_2, &r0));
-      PetscCall(KSPSolve(nt->ksp, res, dx));
-      PetscCall(VecAXPY(x, 1.0, dx));
+    PetscCall(KSPSolve(nt->ksp, b, x));
+    PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+    if (reason >= 0) { /* iterative refinement against the shift and the factor's rounding: the
+                          static saddle-point systems (free bodies) are conditioned enough that a plain
+                          solve floored the merit near 1e-8 */
+      Mat       J;
+      Vec       res, dx;
+      PetscReal r0, r1;
+      PetscCall(KSPGetOperators(nt->ksp, &J, NULL));
+      PetscCall(VecDuplicate(b, &res));
+      PetscCall(VecDuplicate(b, &dx));
       PetscCall(MatMult(J, x, res));
       PetscCall(VecAYPX(res, -1.0, b));
-      PetscCall(VecNorm(res, NORM_2, &r1));
-      if (!(r1 < 0.5 * r0)) { /* no gain: undo and stop */
-        PetscCall(VecAXPY(x, -1.0, dx));
-        shifted = 0;
+      for (PetscInt k = 0, shifted = 1; k < 2 && shifted; k++) {
+        PetscCall(VecNorm(res, NORM_2, &r0));
+        PetscCall(KSPSolve(nt->ksp, res, dx));
+        PetscCall(VecAXPY(x, 1.0, dx));
+        PetscCall(MatMult(J, x, res));
+        PetscCall(VecAYPX(res, -1.0, b));
+        PetscCall(VecNorm(res, NORM_2, &r1));
+        if (!(r1 < 0.5 * r0)) { /* no gain: undo and stop */
+          PetscCall(VecAXPY(x, -1.0, dx));
+          shifted = 0;
+        }
       }
+      PetscCall(VecDestroy(&res));
+      PetscCall(VecDestroy(&dx));
     }
-    PetscCall(VecDestroy(&res));
-    PetscCall(VecDestroy(&dx));
-  }
   }
   if (reason < 0) { /* a failed factorization: steepest descent on 1/2|phi|^2 instead (dr = -phi) */
     PetscCall(PetscInfo(m, "Newton matrix: %s; falling back to dr = -phi\n", KSPConvergedReasons[reason]));
