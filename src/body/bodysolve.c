@@ -3,6 +3,25 @@
 #include <mbc/private/element.h>
 #include <mbc/private/pointwise.h>
 
+/* After a failed factorization: MUMPS's INFOG(1) and ICNTL(14) (both 0 for another package), the
+   same on every rank of the body. */
+static PetscErrorCode BodyMumpsWorkspace(PC pc, PetscInt *infog1, PetscInt *icntl14)
+{
+  Mat           F;
+  MatSolverType type;
+  PetscBool     mumps;
+
+  PetscFunctionBegin;
+  *infog1 = *icntl14 = 0;
+  PetscCall(PCFactorGetMatrix(pc, &F));
+  PetscCall(MatFactorGetSolverType(F, &type));
+  PetscCall(PetscStrcmp(type, MATSOLVERMUMPS, &mumps));
+  if (!mumps) PetscFunctionReturn(0);
+  PetscCall(MatMumpsGetInfog(F, 1, infog1));
+  PetscCall(MatMumpsGetIcntl(F, 14, icntl14));
+  PetscFunctionReturn(0);
+}
+
 /* A = aK K + aM M with the constrained rows and columns zeroed and 1 on the diagonal
    (MatZeroRowsColumns: eliminating DOFs or a big diagonal number would make the contact
    flexibility matrix singular or ill-conditioned), factored once by a KSP with the options
@@ -40,28 +59,48 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
   if (aK != 0 && aM == 0 && body->nrigid) PetscCall(MatZeroRowsColumns(A, body->nfix, body->fix_rows, 1.0, NULL, NULL)); /* K^+ */
   PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
 
-  PetscCall(KSPCreate(body->comm, &ksp));
-  PetscCall(KSPSetOperators(ksp, A, A));
-  PetscCall(KSPGetPC(ksp, &pc));
-  if (aK != 0) {
-    PetscCall(KSPSetType(ksp, KSPPREONLY));
-    PetscCall(PCSetType(pc, PCCHOLESKY));
-    /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
-    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "%s", bodyprefix));
-  } else {
-    /* the mass matrix alone (initial acceleration): well conditioned, CG needs no factorization */
-    PetscCall(KSPSetType(ksp, KSPCG));
-    PetscCall(PCSetType(pc, PCJACOBI));
-    PetscCall(KSPSetTolerances(ksp, 1e-14, 0.0, PETSC_DEFAULT, 1000));
-    PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "%smass_", bodyprefix));
+  for (PetscInt attempt = 0;; attempt++) {
+    PetscInt infog1 = 0, icntl14 = 0;
+    PetscCall(KSPCreate(body->comm, &ksp));
+    PetscCall(KSPSetOperators(ksp, A, A));
+    PetscCall(KSPGetPC(ksp, &pc));
+    if (aK != 0) {
+      PetscCall(KSPSetType(ksp, KSPPREONLY));
+      PetscCall(PCSetType(pc, PCCHOLESKY));
+      /* MUMPS: fill-reducing ordering, serial or parallel, and Schur complements for contact later */
+      PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+      PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "%s", bodyprefix));
+    } else {
+      /* the mass matrix alone (initial acceleration): well conditioned, CG needs no factorization */
+      PetscCall(KSPSetType(ksp, KSPCG));
+      PetscCall(PCSetType(pc, PCJACOBI));
+      PetscCall(KSPSetTolerances(ksp, 1e-14, 0.0, PETSC_DEFAULT, 1000));
+      PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "%smass_", bodyprefix));
+    }
+    PetscCall(KSPSetOptionsPrefix(ksp, prefix));
+    PetscCall(KSPSetFromOptions(ksp));
+    PetscCall(KSPSetUp(ksp));
+    PetscCall(PCGetFailedReasonRank(pc, &reason));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &reason, 1, MPI_INT, MPI_MAX, body->comm));
+    if (reason == PC_NOERROR) break;
+    PetscCall(BodyMumpsWorkspace(pc, &infog1, &icntl14));
+    /* MUMPS's workspace estimate fell short (INFOG(1) -8, -9: parallel scheduling, oversubscribed
+       ranks): factor anew with more (ICNTL(14), as MUMPS's manual advises); a failed factor cannot
+       be refactored in place. -13 is the machine's memory: no retry helps. */
+    if (reason == PC_FACTOR_OUTMEMORY && infog1 && infog1 != -13 && attempt < 3) {
+      char name[300], value[32];
+      icntl14 = 2 * PetscMax(icntl14, 20);
+      PetscCall(PetscInfo(NULL, "Body %s: MUMPS's workspace ran short (INFOG(1) = %" PetscInt_FMT "): factoring again with ICNTL(14) = %" PetscInt_FMT "\n", body->name, infog1, icntl14));
+      PetscCall(PetscSNPrintf(name, sizeof(name), "-%smat_mumps_icntl_14", prefix));
+      PetscCall(PetscSNPrintf(value, sizeof(value), "%" PetscInt_FMT, icntl14));
+      PetscCall(PetscOptionsSetValue(NULL, name, value)); /* kept: this body's later factorizations start there */
+      PetscCall(KSPDestroy(&ksp));
+      continue;
+    }
+    PetscCheck(reason != PC_FACTOR_OUTMEMORY, body->comm, PETSC_ERR_MEM, "Body '%s': factorization of the %s operator ran out of memory (MUMPS INFOG(1) = %" PetscInt_FMT "%s)", body->name, purpose, infog1, infog1 == -13 ? ": the machine's memory; fewer DOFs per rank or more ranks" : ", even with four times the estimated workspace");
+    PetscCheck(reason != PC_FACTOR_OTHER || !infog1, body->comm, PETSC_ERR_LIB, "Body '%s': factorization of the %s operator failed (MUMPS INFOG(1) = %" PetscInt_FMT ": MUMPS's manual, error diagnostics)", body->name, purpose, infog1);
+    SETERRQ(body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': factorization of the %s operator failed (%s); is the body held against rigid-body motion? (static: see -mbc_static_stabilize)", body->name, purpose, PCFailedReasons[reason]);
   }
-  PetscCall(KSPSetOptionsPrefix(ksp, prefix));
-  PetscCall(KSPSetFromOptions(ksp));
-  PetscCall(KSPSetUp(ksp));
-  PetscCall(PCGetFailedReasonRank(pc, &reason));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &reason, 1, MPI_INT, MPI_MAX, body->comm));
-  PetscCheck(reason == PC_NOERROR, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': factorization of the %s operator failed (%s); is the body held against rigid-body motion? (static: see -mbc_static_stabilize)", body->name, purpose, PCFailedReasons[reason]);
   PetscCall(PetscLogEventEnd(MBC_BodyFactor, 0, 0, 0, 0));
   *newksp = ksp;
   *newA   = A;

@@ -52,6 +52,7 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
   PetscCall(PetscCalloc4(nbodies, &ifc->sinv, nbodies, &ifc->sinv_is, nbodies, &ifc->sinv_id, nbodies, &ifc->sinv_state));
+  PetscCall(PetscCalloc2(nbodies, &ifc->schur_F, nbodies, &ifc->schur_analysed_id));
   PetscCall(PetscMalloc1(nbodies, &ifc->schur_fits));
   for (PetscInt b = 0; b < nbodies; b++) ifc->schur_fits[b] = -1;
   *iface = ifc;
@@ -699,6 +700,21 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is)
   PetscFunctionReturn(0);
 }
 
+/* F: A's MUMPS Cholesky factor with C (is) as its Schur set, analysed (symbolic phase); *est MUMPS's
+   estimate of its numeric factorization in MB (INFOG(17)). */
+static PetscErrorCode BodySchurAnalyse(Mat A, IS is, Mat *F, PetscInt *est)
+{
+  MatFactorInfo info;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F));
+  PetscCall(MatFactorSetSchurIS(*F, is));
+  PetscCall(MatFactorInfoInitialize(&info));
+  PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
+  PetscCall(MatMumpsGetInfog(*F, 17, est));
+  PetscFunctionReturn(0);
+}
+
 /* -mbc_d_route auto: the Schur route for a body on one rank whose Schur factorization fits in
    -mbc_d_schur_max_mb: S^-1 (|C|^2 doubles) and MUMPS's own estimate of the factorization with C as
    its Schur set (INFOG(17) after the analysis: its fronts hold S dense, so its workspace grows
@@ -724,24 +740,24 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
     IS        is;
     PetscInt  nC, n, est = 0;
     PetscReal mb;
+    Mat       A, F = NULL;
+    PetscCall(KSPGetOperators(body->ksp, &A, NULL));
     PetscCall(BodyContactIS(ifc, b, &is));
     PetscCall(ISGetSize(is, &nC));
     PetscCall(VecGetSize(body->u, &n));
     mb = 8.0 * nC * nC / 1048576.0;
-    if (mb <= ifc->schur_max_mb && nC < n) { /* the analysis (symbolic, cheap against the factorization) */
-      Mat           A, F;
-      MatFactorInfo info;
-      PetscCall(KSPGetOperators(body->ksp, &A, NULL));
-      PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
-      PetscCall(MatFactorSetSchurIS(F, is));
-      PetscCall(MatFactorInfoInitialize(&info));
-      PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
-      PetscCall(MatMumpsGetInfog(F, 17, &est));
-      PetscCall(MatDestroy(&F));
-    }
+    if (mb <= ifc->schur_max_mb && nC < n) PetscCall(BodySchurAnalyse(A, is, &F, &est)); /* cheap against the factorization */
     ifc->schur_fits[b] = mb + est <= ifc->schur_max_mb;
     PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, MUMPS's estimate %" PetscInt_FMT "): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + est, mb, est, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
-    PetscCall(ISDestroy(&is));
+    if (ifc->schur_fits[b]) { /* kept for BodySchurInverse: the same operator needs neither again */
+      PetscCall(PetscObjectGetId((PetscObject)A, &ifc->schur_analysed_id[b]));
+      ifc->schur_F[b] = F;
+      PetscCall(ISDestroy(&ifc->sinv_is[b]));
+      ifc->sinv_is[b] = is;
+    } else {
+      PetscCall(MatDestroy(&F));
+      PetscCall(ISDestroy(&is));
+    }
   }
   *schur = (PetscBool)ifc->schur_fits[b];
   PetscFunctionReturn(0);
@@ -755,16 +771,17 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
    then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the multi-right-hand-side
    route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
    restart computes S^-1 from the same operator and the same C, so it builds the same D. */
-static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
+static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *ok)
 {
-  MBCBody        body = ifc->bodies[b];
-  Mat            A, P, F, S;
-  PetscInt       n, nC;
+  MBCBody          body = ifc->bodies[b];
+  Mat              A, P, F, S;
+  PetscInt         n, nC;
   PetscObjectState state;
-  PetscObjectId  id;
-  MatFactorInfo  info;
+  PetscObjectId    id;
+  MatFactorInfo    info;
 
   PetscFunctionBegin;
+  *ok = PETSC_TRUE;
   PetscCall(KSPGetOperators(body->ksp, &A, &P));
   PetscCall(PetscObjectStateGet((PetscObject)A, &state));
   PetscCall(PetscObjectGetId((PetscObject)A, &id));
@@ -773,18 +790,39 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
     PetscFunctionReturn(0);
   }
   PetscCall(MatDestroy(&ifc->sinv[b]));
-  PetscCall(ISDestroy(&ifc->sinv_is[b]));
+  F = NULL;
+  if (ifc->sinv_is[b] && ifc->schur_analysed_id[b] == id) { /* BodyUsesSchur's IS and analysis of this operator */
+    F                 = ifc->schur_F[b];
+    ifc->schur_F[b]   = NULL;
+  } else {
+    PetscCall(MatDestroy(&ifc->schur_F[b]));
+    PetscCall(ISDestroy(&ifc->sinv_is[b]));
+    PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b])); /* the held rows depend on the operator (K^+) */
+  }
   PetscCall(VecGetLocalSize(body->u, &n));
-  PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b]));
   PetscCall(ISGetSize(ifc->sinv_is[b], &nC));
-  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT "\n", body->name, nC, n));
+  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT "%s\n", body->name, nC, n, F ? " (analysis reused)" : ""));
   if (nC == n) PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S)); /* every DOF on a contact surface: S = A (MUMPS wants a Schur set smaller than the matrix) */
   else {
-    PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
-    PetscCall(MatFactorSetSchurIS(F, ifc->sinv_is[b]));
+    MatFactorError err;
+    if (!F) {
+      PetscInt est;
+      PetscCall(BodySchurAnalyse(A, ifc->sinv_is[b], &F, &est));
+    }
     PetscCall(MatFactorInfoInitialize(&info));
-    PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
     PetscCall(MatCholeskyFactorNumeric(F, A, &info));
+    PetscCall(MatFactorGetError(F, &err));
+    if (err) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
+      PetscInt infog1;
+      PetscCall(MatMumpsGetInfog(F, 1, &infog1));
+      PetscCall(MatDestroy(&F));
+      PetscCall(ISDestroy(&ifc->sinv_is[b]));
+      PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, PETSC_COMM_SELF, PETSC_ERR_MEM, "Body '%s': the factorization with its %" PetscInt_FMT " contact DOFs as Schur set failed (%s, MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, err == MAT_FACTOR_OUTMEMORY ? "out of memory" : "numerical failure", infog1);
+      PetscCall(PetscInfo(NULL, "Body %s: the Schur factorization failed (%s, INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, err == MAT_FACTOR_OUTMEMORY ? "out of memory" : "numerical failure", infog1));
+      ifc->schur_fits[b] = 0;
+      *ok                = PETSC_FALSE;
+      PetscFunctionReturn(0);
+    }
     PetscCall(MatFactorCreateSchurComplement(F, &S, NULL));
     PetscCall(MatDestroy(&F)); /* the factor's memory goes; S is ours */
   }
@@ -812,13 +850,17 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b)
   PetscFunctionReturn(0);
 }
 
-/* *Dout: the dense nb x nb D_b = H_C^T S^-1 H_C (BodySchurInverse). */
+/* *Dout: the dense nb x nb D_b = H_C^T S^-1 H_C (BodySchurInverse); NULL if the Schur factorization
+   failed (auto then takes the solves). */
 static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
 {
-  Mat HC, HCd, Y;
+  Mat       HC, HCd, Y;
+  PetscBool ok;
 
   PetscFunctionBegin;
-  PetscCall(BodySchurInverse(ifc, b));
+  *Dout = NULL;
+  PetscCall(BodySchurInverse(ifc, b, &ok));
+  if (!ok) PetscFunctionReturn(0);
   PetscCall(MatCreateSubMatrix(ifc->H[b], ifc->sinv_is[b], NULL, MAT_INITIAL_MATRIX, &HC));
   PetscCall(MatConvert(HC, MATDENSE, MAT_INITIAL_MATRIX, &HCd));
   PetscCall(MatMatMult(ifc->sinv[b], HCd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
@@ -933,12 +975,14 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
         const PetscScalar *a;
         PetscInt           lda;
         PetscCall(BodyDSchur(ifc, b, &D));
-        PetscCall(MatDenseGetArrayRead(D, &a));
-        PetscCall(MatDenseGetLDA(D, &lda));
-        PetscCall(AddDenseBlock(ifc->fp.W, ifc->bcols[b], 0, nb, ifc->bcols[b], nb, a, lda));
-        PetscCall(MatDenseRestoreArrayRead(D, &a));
-        PetscCall(MatDestroy(&D));
-        continue;
+        if (D) { /* else its Schur factorization failed: the solves below */
+          PetscCall(MatDenseGetArrayRead(D, &a));
+          PetscCall(MatDenseGetLDA(D, &lda));
+          PetscCall(AddDenseBlock(ifc->fp.W, ifc->bcols[b], 0, nb, ifc->bcols[b], nb, a, lda));
+          PetscCall(MatDenseRestoreArrayRead(D, &a));
+          PetscCall(MatDestroy(&D));
+          continue;
+        }
       }
     }
     PetscCall(PetscMalloc1(ifc->dblock, &hcols));
@@ -1131,8 +1175,10 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     PetscCall(MatDestroy(&ifc->sinv[b]));
     PetscCall(ISDestroy(&ifc->sinv_is[b]));
+    PetscCall(MatDestroy(&ifc->schur_F[b]));
   }
   PetscCall(PetscFree4(ifc->sinv, ifc->sinv_is, ifc->sinv_id, ifc->sinv_state));
+  PetscCall(PetscFree2(ifc->schur_F, ifc->schur_analysed_id));
   PetscCall(PetscFree(ifc->schur_fits));
   PetscCall(MBCMultiplierDestroy(&ifc->mult));
   PetscCall(PetscFree(*iface));

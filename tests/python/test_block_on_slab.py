@@ -72,6 +72,38 @@ def test_static_push_on_ranks(case, nproc):
     assert abs(c["fz"][-1] - W) < 1e-8 * W and abs(c["fx"][-1] + T) < 1e-8 * W and abs(c["fy"][-1]) < 1e-8 * W
 
 
+@pytest.mark.parametrize("nproc", [1, 4])
+def test_mumps_workspace_shortfall_is_factored_again(case, nproc):
+    """MUMPS's workspace estimate can fall short (INFO -9 factoring 'rock' on 4 oversubscribed ranks
+    in a CI run): the body is factored anew with twice the margin ICNTL(14), as MUMPS's manual
+    advises (a failed factor cannot be refactored in place). Forced here by a negative margin; on 4
+    ranks 'rock' spans three of them. The answer is the exact resultant all the same."""
+    h5 = static_scene(case, 0.4247)
+    r = solve(h5, "-body_rock_mat_mumps_icntl_14", "-90", "-info", ":sys", nproc=nproc)
+    assert "Body rock: MUMPS's workspace ran short (INFOG(1) = -9): factoring again with ICNTL(14) = 40" in r.stdout
+    c = read_csv(result(h5, "_contact.csv"))
+    T = 0.4247 * MU * W
+    assert abs(c["fz"][-1] - W) < 1e-8 * W and abs(c["fx"][-1] + T) < 1e-8 * W and abs(c["fy"][-1]) < 1e-8 * W
+
+
+def test_failed_schur_factorization_takes_the_solves(case):
+    """auto's Schur route for 'rock' (MUMPS estimates 44 MB) under a 25 MB MUMPS memory cap
+    (ICNTL(23)) that its plain factorization fits: the Schur factorization fails (INFOG(1) -19),
+    and rock's D is built by solves instead: the exact resultant. Before, the failed factor's
+    Schur complement was used unchecked. Forced (-mbc_d_route schur), the failure is an error
+    naming the body; a cap below the plain factorization names MUMPS's error."""
+    h5 = static_scene(case, 0.4247)
+    r = solve(h5, "-body_rock_mat_mumps_icntl_23", "25", "-info", ":sys")
+    assert "Body rock: the Schur factorization failed" in r.stdout and "its D by solves from now on" in r.stdout
+    c = read_csv(result(h5, "_contact.csv"))
+    T = 0.4247 * MU * W
+    assert abs(c["fz"][-1] - W) < 1e-8 * W and abs(c["fx"][-1] + T) < 1e-8 * W and abs(c["fy"][-1]) < 1e-8 * W
+    bad = solve(h5, "-body_rock_mat_mumps_icntl_23", "25", "-mbc_d_route", "schur", check=False)
+    assert bad.returncode != 0 and "Body 'rock': the factorization with its" in bad.stderr and "-mbc_d_route schur" in bad.stderr, bad.stderr
+    bad = solve(h5, "-body_rock_mat_mumps_icntl_23", "5", check=False)
+    assert bad.returncode != 0 and "Body 'rock': factorization of the static stiffness operator failed (MUMPS INFOG(1) = -19" in bad.stderr, bad.stderr
+
+
 def test_static_push_above_capacity_is_refused(case):
     h5 = static_scene(case, 1.05)
     r = solve(h5, check=False, timeout=120)

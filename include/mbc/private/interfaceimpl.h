@@ -58,6 +58,8 @@ struct _n_MBCInterface {
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
   PetscInt  *schur_fits;  /* per body, auto: whether its Schur factorization fits in -mbc_d_schur_max_mb (-1: not yet known) */
+  Mat       *schur_F;     /* per body: auto's analysed Schur factor (with sinv_is) of operator schur_analysed_id, until BodySchurInverse factors it */
+  PetscObjectId *schur_analysed_id;
   PetscObjectId *sinv_id;
   PetscObjectState *sinv_state;
   MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
