@@ -92,6 +92,14 @@ PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal
   PetscFunctionReturn(0);
 }
 
+/* Points per patch of the matrix-free Newton steps' coarse space (-mbc_d_coarse_points; 0: none). */
+PetscErrorCode MBCInterfaceSetCoarse(MBCInterface ifc, PetscInt points)
+{
+  PetscFunctionBegin;
+  ifc->coarse_points = points;
+  PetscFunctionReturn(0);
+}
+
 /* Write the multiplier problem of step `step` to FCLIB file `file` (none if file is empty). */
 PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface ifc, const char file[], PetscInt step)
 {
@@ -1029,6 +1037,9 @@ PetscErrorCode MBCInterfaceRebuildD(MBCInterface ifc)
   PetscCall(PetscLogEventBegin(MBC_FlexibilityAssemble, 0, 0, 0, 0));
   PetscCall(MatDestroy(&ifc->fp.W));
   PetscCall(MatDestroy(&ifc->fp.Winv));
+  PetscCall(MatDestroy(&ifc->fp.WPhi));
+  PetscCall(PetscFree2(ifc->fp.cocol, ifc->fp.cow));
+  ifc->fp.nco = 0;
   PetscCall(MatDestroy(&ifc->fp.G));
   PetscCall(VecDestroy(&ifc->fp.e));
   PetscCall(VecDestroy(&ifc->fp.alpha));

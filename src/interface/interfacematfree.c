@@ -260,5 +260,6 @@ PetscErrorCode MBCInterfaceBuildDShell(MBCInterface ifc, PetscInt m, PetscInt ml
     PetscCheck(ifc->dscale > 0, ifc->comm, PETSC_ERR_ARG_WRONG, "The contact flexibility matrix has no positive diagonal: every contact DOF is prescribed");
     PetscCall(MatScale(ifc->fp.Winv, ifc->dscale / c));
   }
+  PetscCall(MBCInterfaceBuildCoarse(ifc, mloc));
   PetscFunctionReturn(0);
 }

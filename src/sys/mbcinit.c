@@ -29,6 +29,7 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
   PetscCall(PetscLogEventRegister("MBCFlexibilityAssemble", classid, &MBC_FlexibilityAssemble));
   PetscCall(PetscLogEventRegister("MBCFlexibilityMult", classid, &MBC_FlexibilityMult));
+  PetscCall(PetscLogEventRegister("MBCFlexibilityCoarse", classid, &MBC_FlexibilityCoarse));
   PetscCall(MBCMultiplierInitializePackage());
   PetscFunctionReturn(0);
 }

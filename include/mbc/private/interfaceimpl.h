@@ -55,6 +55,7 @@ struct _n_MBCInterface {
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 and Schur factorization (MUMPS's estimate) fit in this */
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb: auto takes the matrix-free D where the dense one does not fit in this */
   PetscReal  solves_max;   /* -mbc_d_solves_max: auto takes the matrix-free D where building the dense one takes more solves */
+  PetscInt   coarse_points; /* -mbc_d_coarse_points: points per patch of the matrix-free Newton steps' coarse space (0: none) */
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
   PetscInt  *schur_fits;  /* per body, auto: whether its Schur factorization fits in -mbc_d_schur_max_mb (-1: not yet known) */
@@ -83,7 +84,7 @@ struct _n_MBCInterface {
   PetscReal *gscale;      /* the scale of each row of the problem's G */
 };
 
-PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble, MBC_FlexibilityMult;
+PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble, MBC_FlexibilityMult, MBC_FlexibilityCoarse;
 
 /* interface.c: the object, the rank order, H and D */
 PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], const char[], MBCInterface *);
@@ -109,6 +110,8 @@ PETSC_INTERN PetscErrorCode MBCInterfaceGatherFromBodies(MBCInterface, Vec[], Ve
 PETSC_INTERN PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface, PetscInt, PetscInt, const PetscInt[], Mat *, Mat *);
 /* interfacematfree.c: the matrix-free D */
 PETSC_INTERN PetscErrorCode MBCInterfaceBuildDShell(MBCInterface, PetscInt, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetCoarse(MBCInterface, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceFromBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceGapRate(MBCInterface, Vec);
 PETSC_INTERN PetscReal      MBCInterfaceStartGap(MBCInterface, PetscInt);

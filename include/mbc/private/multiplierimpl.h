@@ -22,6 +22,10 @@ struct _n_MBCFrictionProblem {
   PetscReal *mu;
   Mat        G;     /* rigid modes x multipliers, or NULL */
   Vec        e, alpha; /* G's row layout */
+  PetscInt   nco;   /* with W a shell: columns of the coarse space Phi of the Krylov steps (0: none) */
+  PetscInt  *cocol; /* per local row: its column of Phi (-1: none), one nonzero per row */
+  PetscReal *cow;   /*   and its value there */
+  Mat        WPhi;  /* W Phi, dense, W's row layout */
   char       title[256];
 };
 

@@ -27,6 +27,15 @@ typedef struct {
   Vec          *Z;        /* ng columns P_J^-1 B G_A^T */
   PetscScalar  *S;        /* ng x ng, LU-factored (getrf) */
   PetscBLASInt *piv;
+  PetscInt      nco, nloc; /* the coarse space (fp->nco columns; 0: none), J's local rows */
+  PetscInt      ncs;      /* E's size: nco, or nco + ng with the rigid modes */
+  PetscInt     *acol;     /* per active local row: its column of Phi (-1: none) */
+  PetscReal    *aw;       /*   and its value */
+  PetscScalar  *JPhi;     /* nloc x (nco + ng): J [Phi_A, 0; 0, I], from W Phi without a product */
+  PetscScalar  *E;        /* ncs x ncs: the coarse matrix, LU-factored (getrf), on every rank */
+  PetscBLASInt *cpiv;
+  PetscScalar  *c;        /* ncs */
+  Vec           xw;       /* J's layout: work */
 } NewtonKrylov;
 
 /* Rows [0, nA) of the J-layout array a into/from the W-layout vector v (active rows only). */
@@ -144,14 +153,13 @@ static PetscErrorCode ApplyPJ(NewtonKrylov *nk, Vec xA, Vec yA)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode NewtonKrylovPCApply(PC pc, Vec x, Vec y)
+/* y = P^-1 x, the lumped (and rigid-mode constraint) preconditioner */
+static PetscErrorCode NewtonKrylovPCApplyFine(NewtonKrylov *nk, Vec x, Vec y)
 {
-  NewtonKrylov      *nk;
   const PetscScalar *xa;
   PetscScalar       *ya, *s = NULL;
 
   PetscFunctionBegin;
-  PetscCall(PCShellGetContext(pc, &nk));
   PetscCall(VecGetArrayRead(x, &xa));
   PetscCall(VecPlaceArray(nk->xA, xa));
   PetscCall(ApplyPJ(nk, nk->xA, nk->yA));
@@ -239,11 +247,39 @@ static PetscErrorCode NewtonKrylovSetUpPJ(NewtonKrylov *nk)
   PetscFunctionReturn(0);
 }
 
+/* za (nA) = B (G^T e_j)_A: the active rows of J's column for rigid mode j. */
+static PetscErrorCode RigidColumn(NewtonKrylov *nk, PetscInt j, PetscScalar za[])
+{
+  MBC_Newton         *nt = (MBC_Newton *)nk->m->data;
+  MBCFrictionProblem *fp = nk->m->fp;
+  PetscInt            gs, ge;
+
+  PetscFunctionBegin;
+  PetscCall(VecZeroEntries(nk->galpha));
+  PetscCall(VecGetOwnershipRange(nk->galpha, &gs, &ge));
+  if (j >= gs && j < ge) PetscCall(VecSetValue(nk->galpha, j, 1.0, INSERT_VALUES));
+  PetscCall(VecAssemblyBegin(nk->galpha));
+  PetscCall(VecAssemblyEnd(nk->galpha));
+  PetscCall(MatMultTranspose(fp->G, nk->galpha, nk->wfull)); /* G^T e_j */
+  PetscCall(FullToActive(nk, nk->wfull, za));
+  for (PetscInt i = 0, k = 0; i < fp->nc; i++) { /* B (G^T e_j)_A, in place */
+    const PetscInt dim = fp->off[i + 1] - fp->off[i];
+    PetscScalar    t[3];
+    if (!nt->active[i]) continue;
+    for (PetscInt d = 0; d < dim; d++) {
+      t[d] = 0;
+      for (PetscInt e = 0; e < dim; e++) t[d] += nt->B[9 * i + dim * d + e] * za[k + e];
+    }
+    for (PetscInt d = 0; d < dim; d++) za[k + d] = t[d];
+    k += dim;
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Z = P_J^-1 B G_A^T and S = G_A Z, LU-factored (a small shift if it is singular). */
 static PetscErrorCode NewtonKrylovSetUpRigid(NewtonKrylov *nk)
 {
   MBCMultiplier       m  = nk->m;
-  MBC_Newton         *nt = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp = m->fp;
   const PetscInt      ng = nk->ng;
   PetscBLASInt        n, info;
@@ -253,27 +289,9 @@ static PetscErrorCode NewtonKrylovSetUpRigid(NewtonKrylov *nk)
   PetscCall(VecDuplicateVecs(nk->xA, ng, &nk->Z));
   PetscCall(PetscMalloc2(ng * ng, &nk->S, ng, &nk->piv));
   for (PetscInt j = 0; j < ng; j++) {
-    PetscInt     gs, ge;
     PetscScalar *za, *col;
-    PetscCall(VecZeroEntries(nk->galpha));
-    PetscCall(VecGetOwnershipRange(nk->galpha, &gs, &ge));
-    if (j >= gs && j < ge) PetscCall(VecSetValue(nk->galpha, j, 1.0, INSERT_VALUES));
-    PetscCall(VecAssemblyBegin(nk->galpha));
-    PetscCall(VecAssemblyEnd(nk->galpha));
-    PetscCall(MatMultTranspose(fp->G, nk->galpha, nk->wfull)); /* G^T e_j */
     PetscCall(VecGetArray(nk->xA, &za));
-    PetscCall(FullToActive(nk, nk->wfull, za));
-    for (PetscInt i = 0, k = 0; i < fp->nc; i++) { /* B (G^T e_j)_A, in place */
-      const PetscInt dim = fp->off[i + 1] - fp->off[i];
-      PetscScalar    t[3];
-      if (!nt->active[i]) continue;
-      for (PetscInt d = 0; d < dim; d++) {
-        t[d] = 0;
-        for (PetscInt e = 0; e < dim; e++) t[d] += nt->B[9 * i + dim * d + e] * za[k + e];
-      }
-      for (PetscInt d = 0; d < dim; d++) za[k + d] = t[d];
-      k += dim;
-    }
+    PetscCall(RigidColumn(nk, j, za));
     PetscCall(VecRestoreArray(nk->xA, &za));
     PetscCall(ApplyPJ(nk, nk->xA, nk->Z[j]));
     PetscCall(VecGetArray(nk->Z[j], &za));
@@ -298,6 +316,161 @@ static PetscErrorCode NewtonKrylovSetUpRigid(NewtonKrylov *nk)
       PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&n, &n, nk->S, &n, nk->piv, &info));
     }
     PetscCall(PetscFree(S0));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* With the coarse space: [c; a] = E^-1 [Phi_A^T x_r; x_g] (x_r the contacts' rows, x_g the rigid
+   modes'), then y = P^-1 (x - J [Phi_A c; a]) + [Phi_A c; a]; without, P^-1 x. A fixed linear map
+   either way, as right-preconditioned GMRES needs. */
+static PetscErrorCode NewtonKrylovPCApply(PC pc, Vec x, Vec y)
+{
+  NewtonKrylov *nk;
+  PetscScalar  *xa, *ya;
+  PetscBLASInt  n, one = 1, info, nl, ld;
+  PetscScalar   mone = -1, pone = 1;
+
+  PetscFunctionBegin;
+  PetscCall(PCShellGetContext(pc, &nk));
+  if (!nk->nco) {
+    PetscCall(NewtonKrylovPCApplyFine(nk, x, y));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscArrayzero(nk->c, nk->ncs));
+  PetscCall(VecCopy(x, nk->xw));
+  PetscCall(VecGetArray(nk->xw, &xa));
+  for (PetscInt k = 0; k < nk->nA; k++)
+    if (nk->acol[k] >= 0) nk->c[nk->acol[k]] += nk->aw[k] * xa[k];
+  for (PetscInt t = 0; nk->ncs > nk->nco && t < nk->nloc - nk->nA; t++) nk->c[nk->nco + t] = xa[nk->nA + t]; /* the rigid modes' rows: the last rank's */
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nk->c, (PetscMPIInt)nk->ncs, MPIU_SCALAR, MPIU_SUM, PetscObjectComm((PetscObject)nk->m)));
+  PetscCall(PetscBLASIntCast(nk->ncs, &n));
+  PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &n, &one, nk->E, &n, nk->cpiv, nk->c, &n, &info));
+  PetscCall(PetscBLASIntCast(nk->nloc, &nl));
+  ld = PetscMax(nl, 1);
+  if (nl) PetscCallBLAS("BLASgemv", BLASgemv_("N", &nl, &n, &mone, nk->JPhi, &ld, nk->c, &one, &pone, xa, &one)); /* x - J [Phi_A c; a] */
+  PetscCall(VecRestoreArray(nk->xw, &xa));
+  PetscCall(NewtonKrylovPCApplyFine(nk, nk->xw, y));
+  PetscCall(VecGetArray(y, &ya));
+  for (PetscInt k = 0; k < nk->nA; k++)
+    if (nk->acol[k] >= 0) ya[k] += nk->aw[k] * nk->c[nk->acol[k]];
+  for (PetscInt t = 0; nk->ncs > nk->nco && t < nk->nloc - nk->nA; t++) ya[nk->nA + t] += nk->c[nk->nco + t];
+  PetscCall(VecRestoreArray(y, &ya));
+  PetscFunctionReturn(0);
+}
+
+/* E = R^T J R with R = [Phi_A, 0; 0, I] (the coarse space and the rigid modes), LU-factored on every
+   rank (withrigid false: R = Phi_A, the rigid modes left to the fine preconditioner). */
+static PetscErrorCode CoarseMatrix(NewtonKrylov *nk, PetscBool withrigid, PetscBLASInt *info)
+{
+  const PetscInt ncs = nk->nco + (withrigid ? nk->ng : 0), nco = nk->nco;
+  PetscReal     *wsum;
+  PetscBLASInt   n;
+  PetscMPIInt    rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)nk->m), &rank));
+  nk->ncs = ncs;
+  PetscCall(PetscArrayzero(nk->E, (size_t)ncs * ncs));
+  PetscCall(PetscCalloc1(nco + 1, &wsum));
+  for (PetscInt k = 0; k < nk->nA; k++) {
+    const PetscInt l = nk->acol[k];
+    if (l < 0) continue;
+    wsum[l] += nk->aw[k] * nk->aw[k];
+    for (PetscInt j = 0; j < ncs; j++) nk->E[l + (size_t)ncs * j] += nk->aw[k] * nk->JPhi[k + (size_t)nk->nloc * j];
+  }
+  if (withrigid && rank == nk->last)
+    for (PetscInt t = 0; t < nk->ng; t++)
+      for (PetscInt j = 0; j < ncs; j++) nk->E[(nco + t) + (size_t)ncs * j] += nk->JPhi[(nk->nA + t) + (size_t)nk->nloc * j];
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nk->E, (PetscMPIInt)(ncs * ncs), MPIU_SCALAR, MPIU_SUM, PetscObjectComm((PetscObject)nk->m)));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, wsum, (PetscMPIInt)nco, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)nk->m)));
+  for (PetscInt l = 0; l < nco; l++)
+    if (wsum[l] == 0) { /* a column with no active row: its c stays 0 */
+      for (PetscInt j = 0; j < ncs; j++) nk->E[l + (size_t)ncs * j] = nk->E[j + (size_t)ncs * l] = 0;
+      nk->E[l + (size_t)ncs * l] = 1;
+    }
+  PetscCall(PetscFree(wsum));
+  PetscCall(PetscBLASIntCast(ncs, &n));
+  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&n, &n, nk->E, &n, nk->cpiv, info));
+  if (!*info) { /* numerically singular too (fewer patches than the free bodies' rigid modes leave
+                   E's zero block rank-deficient, and rounding hides the zero pivot: the correction
+                   then ruined the Krylov steps, 100 iterations without convergence) */
+    PetscReal umax = 0, umin = PETSC_MAX_REAL;
+    for (PetscInt i = 0; i < ncs; i++) {
+      const PetscReal u = PetscAbsScalar(nk->E[i + (size_t)ncs * i]);
+      umax = PetscMax(umax, u), umin = PetscMin(umin, u);
+    }
+    if (!(umin > 1e-12 * umax)) *info = -1;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* J [Phi_A, 0; 0, I] from the interface's W Phi (no product; Phi's columns include the inactive
+   rows there, so where a patch has separated points this is an approximation, which only weakens
+   the correction), and E (CoarseMatrix). */
+static PetscErrorCode NewtonKrylovSetUpCoarse(NewtonKrylov *nk)
+{
+  MBCMultiplier       m   = nk->m;
+  MBC_Newton         *nt  = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp  = m->fp;
+  const PetscInt      nco = fp->nco, ntot = fp->nco + nk->ng;
+  const PetscInt     *rows;
+  const PetscScalar  *wphi;
+  PetscInt            rs, ldw;
+  PetscBLASInt        info;
+
+  PetscFunctionBegin;
+  nk->nco = nco;
+  PetscCall(PetscMalloc5(nk->nA + 1, &nk->acol, nk->nA + 1, &nk->aw, (size_t)nk->nloc * ntot + 1, &nk->JPhi, (size_t)ntot * ntot, &nk->E, ntot, &nk->cpiv));
+  PetscCall(PetscMalloc1(ntot, &nk->c));
+  PetscCall(VecGetOwnershipRange(nk->vfull, &rs, NULL));
+  PetscCall(ISGetIndices(nk->isA, &rows));
+  for (PetscInt k = 0; k < nk->nA; k++) nk->acol[k] = fp->cocol[rows[k] - rs], nk->aw[k] = fp->cow[rows[k] - rs];
+  PetscCall(ISRestoreIndices(nk->isA, &rows));
+  PetscCall(PetscArrayzero(nk->JPhi, (size_t)nk->nloc * ntot));
+  PetscCall(MatDenseGetArrayRead(fp->WPhi, &wphi));
+  PetscCall(MatDenseGetLDA(fp->WPhi, &ldw));
+  for (PetscInt i = 0, k = 0; i < fp->nc; i++) { /* per active contact: A Phi_A + B (W Phi) */
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    if (!nt->active[i]) continue;
+    for (PetscInt d = 0; d < dim; d++) {
+      for (PetscInt e = 0; e < dim; e++) {
+        const PetscReal b = nt->B[9 * i + dim * d + e], a = nt->A[9 * i + dim * d + e];
+        if (b != 0)
+          for (PetscInt j = 0; j < nco; j++) nk->JPhi[(k + d) + (size_t)nk->nloc * j] += b * wphi[(o + e) + (size_t)ldw * j];
+        if (a != 0 && nk->acol[k + e] >= 0) nk->JPhi[(k + d) + (size_t)nk->nloc * nk->acol[k + e]] += a * nk->aw[k + e];
+      }
+    }
+    k += dim;
+  }
+  PetscCall(MatDenseRestoreArrayRead(fp->WPhi, &wphi));
+  if (nk->ng) {
+    PetscScalar *a;
+    for (PetscInt j = 0; j < nco; j++) { /* the rigid modes' rows: G_A Phi_A */
+      const PetscScalar *ga;
+      PetscInt           ng;
+      PetscCall(VecGetArray(nk->xA, &a));
+      for (PetscInt k = 0; k < nk->nA; k++) a[k] = nk->acol[k] == j ? nk->aw[k] : 0.0;
+      PetscCall(ActiveToFull(nk, a, nk->vfull));
+      PetscCall(VecRestoreArray(nk->xA, &a));
+      PetscCall(MatMult(fp->G, nk->vfull, nk->galpha));
+      PetscCall(VecGetLocalSize(nk->galpha, &ng));
+      PetscCall(VecGetArrayRead(nk->galpha, &ga));
+      for (PetscInt t = 0; t < ng; t++) nk->JPhi[(nk->nA + t) + (size_t)nk->nloc * j] = ga[t];
+      PetscCall(VecRestoreArrayRead(nk->galpha, &ga));
+    }
+    for (PetscInt t = 0; t < nk->ng; t++) { /* the rigid modes' columns: B (G^T e_t)_A */
+      PetscCall(VecGetArray(nk->xA, &a));
+      PetscCall(RigidColumn(nk, t, a));
+      for (PetscInt k = 0; k < nk->nA; k++) nk->JPhi[k + (size_t)nk->nloc * (nco + t)] = a[k];
+      PetscCall(VecRestoreArray(nk->xA, &a));
+    }
+  }
+  PetscCall(CoarseMatrix(nk, (PetscBool)(nk->ng > 0), &info));
+  if (info) { /* singular (too few patches to balance the free bodies' modes): no correction this
+                 step; without the rigid modes in E, the correction fought the fine constraint
+                 preconditioner (the small static dam: 27 Krylov iterations became 32 to 41) */
+    PetscCall(PetscInfo(m, "Coarse matrix singular (getrf %d, -1: a pivot below 1e-12 of the largest): no coarse correction\n", (int)info));
+    nk->nco = 0;
   }
   PetscFunctionReturn(0);
 }
@@ -338,6 +511,11 @@ PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier m, IS isA, PetscInt nA, Vec b,
   if (fp->G) PetscCall(VecDuplicate(fp->alpha, &nk.galpha));
   PetscCall(NewtonKrylovSetUpPJ(&nk));
   if (nk.ng) PetscCall(NewtonKrylovSetUpRigid(&nk));
+  nk.nloc = nloc;
+  if (fp->nco) {
+    PetscCall(VecDuplicate(b, &nk.xw));
+    PetscCall(NewtonKrylovSetUpCoarse(&nk));
+  }
   PetscCall(MatCreateShell(comm, nloc, nloc, N, N, &nk, &J));
   PetscCall(MatShellSetOperation(J, MATOP_MULT, (void (*)(void))NewtonKrylovMult));
   PetscCall(KSPSetOperators(nt->kmf, J, J));
@@ -356,6 +534,17 @@ PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier m, IS isA, PetscInt nA, Vec b,
     PetscCall(KSPSetTolerances(nt->kmf, eta, abstol, dtol, maxit));
     PetscCall(VecZeroEntries(x));
     PetscCall(KSPSolve(nt->kmf, b, x));
+    PetscCall(KSPGetConvergedReason(nt->kmf, reason));
+    if (*reason < 0 && nk.nco) { /* the coarse correction is an approximation (patches with separated
+                                    points, a nearly singular E): never worse than without it */
+      PetscInt its0;
+      PetscCall(KSPGetIterationNumber(nt->kmf, &its0));
+      nt->kits += its0;
+      PetscCall(PetscInfo(m, "Krylov Newton step with the coarse space: %" PetscInt_FMT " iterations, %s; again without it\n", its0, KSPConvergedReasons[*reason]));
+      nk.nco = 0;
+      PetscCall(VecZeroEntries(x));
+      PetscCall(KSPSolve(nt->kmf, b, x));
+    }
     PetscCall(KSPSetTolerances(nt->kmf, rtol, abstol, dtol, maxit));
   }
   PetscCall(KSPGetConvergedReason(nt->kmf, reason));
@@ -381,5 +570,8 @@ PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier m, IS isA, PetscInt nA, Vec b,
   PetscCall(VecDestroy(&nk.galpha));
   if (nk.ng) PetscCall(VecDestroyVecs(nk.ng, &nk.Z));
   PetscCall(PetscFree2(nk.S, nk.piv));
+  PetscCall(PetscFree5(nk.acol, nk.aw, nk.JPhi, nk.E, nk.cpiv));
+  PetscCall(PetscFree(nk.c));
+  PetscCall(VecDestroy(&nk.xw));
   PetscFunctionReturn(0);
 }
