@@ -92,11 +92,13 @@ PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal
   PetscFunctionReturn(0);
 }
 
-/* Points per patch of the matrix-free Newton steps' coarse space (-mbc_d_coarse_points; 0: none). */
-PetscErrorCode MBCInterfaceSetCoarse(MBCInterface ifc, PetscInt points)
+/* Points per patch of the matrix-free Newton steps' coarse space (-mbc_d_coarse_points; 0: none)
+   and the most memory its W Phi may take (-mbc_d_coarse_max_mb). */
+PetscErrorCode MBCInterfaceSetCoarse(MBCInterface ifc, PetscInt points, PetscReal max_mb)
 {
   PetscFunctionBegin;
   ifc->coarse_points = points;
+  ifc->coarse_max_mb = max_mb;
   PetscFunctionReturn(0);
 }
 

@@ -41,7 +41,7 @@ PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface ifc, PetscInt mloc)
   MBCContact  c  = ifc->contact;
   const PetscInt np = ifc->ncontact, N = ifc->nbodies;
   /* blocks of 64 columns: faster than 256 (9.5 against 11.1 s at 200k DOFs) and a quarter of the memory */
-  PetscInt   *patch, *pfirst, nco = 0, rs, blk = PetscMax(PetscMin(ifc->dblock, 64), 1);
+  PetscInt   *patch, *pfirst, nco = 0, rs, cap, blk = PetscMax(PetscMin(ifc->dblock, 64), 1);
   PetscReal  *x, *key;
   Vec         phi, w, *lam, *Hl, *Hu;
 
@@ -51,6 +51,13 @@ PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface ifc, PetscInt mloc)
   ifc->fp.nco = 0;
   if (ifc->coarse_points <= 0 || !np) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(MBC_FlexibilityCoarse, 0, 0, 0, 0));
+  { /* W Phi within -mbc_d_coarse_max_mb: larger patches where the multipliers are many (the 1M dam
+       with its joints: 37 620 multipliers, 16 points a patch would give 2 352 columns, 0.7 GB; its
+       static run peaked at 15.7 GB without it). Bisection leaves patches of cap/2 to cap points,
+       so at most ~6 np / cap columns. */
+    const PetscInt m = ifc->coff[np], maxcols = (PetscInt)PetscMax(1.0, ifc->coarse_max_mb * 1048576.0 / (8.0 * m));
+    cap = PetscMax(ifc->coarse_points, (6 * np + maxcols - 1) / maxcols);
+  }
   /* patches: per couple, its points (couple order k: couples one after the other) bisected */
   PetscCall(PetscMalloc4(np, &patch, np + 1, &pfirst, 3 * np, &x, np, &key));
   for (PetscInt k0 = 0; k0 < np;) {
@@ -62,7 +69,7 @@ PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface ifc, PetscInt mloc)
     }
     PetscCall(PetscMalloc1(k1 - k0, &idx));
     for (PetscInt k = k0; k < k1; k++) idx[k - k0] = k;
-    PetscCall(Bisect(x, idx, k1 - k0, ifc->coarse_points, key, patch, &nco));
+    PetscCall(Bisect(x, idx, k1 - k0, cap, key, patch, &nco));
     PetscCall(PetscFree(idx));
     k0 = k1;
   }
@@ -195,7 +202,7 @@ PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface ifc, PetscInt mloc)
   PetscCall(PetscFree3(lam, Hl, Hu));
   PetscCall(VecDestroy(&phi));
   PetscCall(VecDestroy(&w));
-  PetscCall(PetscInfo(NULL, "Matrix-free D: coarse space of %" PetscInt_FMT " columns (%" PetscInt_FMT " patches of <= %" PetscInt_FMT " points)\n", ifc->fp.nco, nco, ifc->coarse_points));
+  PetscCall(PetscInfo(NULL, "Matrix-free D: coarse space of %" PetscInt_FMT " columns (%" PetscInt_FMT " patches of <= %" PetscInt_FMT " points)\n", ifc->fp.nco, nco, cap));
   PetscCall(PetscFree4(patch, pfirst, x, key));
   PetscCall(PetscLogEventEnd(MBC_FlexibilityCoarse, 0, 0, 0, 0));
   PetscFunctionReturn(0);

@@ -24,6 +24,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->schur_max_mb     = 8192; /* S^-1 and MUMPS's factorization with the Schur set: 4.3 GB at the 400k-DOF dam's foundation */
   s->dense_max_mb     = 4096; /* up to ~15 000 multipliers (docs/performance.md) */
   s->coarse_points    = 16; /* the 200k static dam: 218 products became 155, 5 s of solves for 17 s of products saved (docs/performance.md) */
+  s->coarse_max_mb    = 256;
   s->solves_max       = 4096; /* a matrix-free multiplier solve took 60 to 100 products per static iteration (docs/performance.md) */
   *solver = s;
   PetscFunctionReturn(0);
@@ -90,6 +91,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
     PetscCheck(s->solves_max >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_solves_max %g: must be >= 0", (double)s->solves_max);
     PetscCall(PetscOptionsInt("-mbc_d_coarse_points", "Matrix-free D: contact points per patch of the coarse space that corrects the Krylov Newton steps' preconditioner (0: none)", "MBCSolverSetFromOptions", s->coarse_points, &s->coarse_points, NULL));
     PetscCheck(s->coarse_points >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_coarse_points %" PetscInt_FMT ": must be >= 0", s->coarse_points);
+    PetscCall(PetscOptionsReal("-mbc_d_coarse_max_mb", "Matrix-free D: the most memory, in MB, W times the coarse space may take (larger patches beyond)", "MBCSolverSetFromOptions", s->coarse_max_mb, &s->coarse_max_mb, NULL));
+    PetscCheck(s->coarse_max_mb > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_d_coarse_max_mb %g: must be > 0", (double)s->coarse_max_mb);
     PetscCheck(!(s->droute == MBC_D_ROUTE_MATFREE && s->fclib_file[0]), s->comm, PETSC_ERR_ARG_INCOMP, "-mbc_fclib_write writes the entries of D, which -mbc_d_route matfree never forms: use another -mbc_d_route");
   }
   PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
@@ -208,7 +211,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
     PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb, s->solves_max));
-    PetscCall(MBCInterfaceSetCoarse(s->iface, s->coarse_points));
+    PetscCall(MBCInterfaceSetCoarse(s->iface, s->coarse_points, s->coarse_max_mb));
     PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }
   s->setupcalled = PETSC_TRUE;

@@ -207,7 +207,15 @@ def test_coarse_space_cuts_the_krylov_iterations_dynamic_dam(tmp_path):
     assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
 
 
-def test_coarse_points_option_is_checked(tmp_path):
+def test_coarse_space_memory_bound_and_options(tmp_path):
+    """W Phi is held within -mbc_d_coarse_max_mb by larger patches (the small static dam's 38 points,
+    114 multipliers: 4 patches of <= 16 by default; a bound of 2 kB, room for 2 columns, takes one
+    patch of all 38); bad values are refused naming the option."""
     h5 = dam.build(tmp_path, **STATIC)
-    bad = solve(h5, "-mbc_d_coarse_points", "-2", check=False)
-    assert bad.returncode != 0 and "-mbc_d_coarse_points" in bad.stdout + bad.stderr
+    r = solve(h5, "-mbc_d_route", "matfree", "-info", ":sys")
+    assert "coarse space of 12 columns (4 patches of <= 16 points)" in r.stdout
+    r = solve(h5, "-mbc_d_route", "matfree", "-mbc_d_coarse_max_mb", "0.002", "-info", ":sys")
+    assert "coarse space of 3 columns (1 patches of <= 114 points)" in r.stdout
+    for opt, val in (("-mbc_d_coarse_points", "-2"), ("-mbc_d_coarse_max_mb", "0")):
+        bad = solve(h5, opt, val, check=False)
+        assert bad.returncode != 0 and opt in bad.stdout + bad.stderr

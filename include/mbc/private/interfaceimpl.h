@@ -56,6 +56,7 @@ struct _n_MBCInterface {
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb: auto takes the matrix-free D where the dense one does not fit in this */
   PetscReal  solves_max;   /* -mbc_d_solves_max: auto takes the matrix-free D where building the dense one takes more solves */
   PetscInt   coarse_points; /* -mbc_d_coarse_points: points per patch of the matrix-free Newton steps' coarse space (0: none) */
+  PetscReal  coarse_max_mb; /* -mbc_d_coarse_max_mb: the most W Phi may take (larger patches beyond) */
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
   PetscInt  *schur_fits;  /* per body, auto: whether its Schur factorization fits in -mbc_d_schur_max_mb (-1: not yet known) */
@@ -111,7 +112,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface, PetscInt,
 /* interfacematfree.c: the matrix-free D */
 PETSC_INTERN PetscErrorCode MBCInterfaceBuildDShell(MBCInterface, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface, PetscInt);
-PETSC_INTERN PetscErrorCode MBCInterfaceSetCoarse(MBCInterface, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetCoarse(MBCInterface, PetscInt, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceFromBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceGapRate(MBCInterface, Vec);
 PETSC_INTERN PetscReal      MBCInterfaceStartGap(MBCInterface, PetscInt);

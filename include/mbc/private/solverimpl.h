@@ -87,6 +87,7 @@ struct _n_MBCSolver {
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb */
   PetscReal  solves_max;   /* -mbc_d_solves_max */
   PetscInt   coarse_points; /* -mbc_d_coarse_points */
+  PetscReal  coarse_max_mb; /* -mbc_d_coarse_max_mb */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 

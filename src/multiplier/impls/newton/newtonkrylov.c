@@ -31,7 +31,9 @@ typedef struct {
   PetscInt      ncs;      /* E's size: nco, or nco + ng with the rigid modes */
   PetscInt     *acol;     /* per active local row: its column of Phi (-1: none) */
   PetscReal    *aw;       /*   and its value */
-  PetscScalar  *JPhi;     /* nloc x (nco + ng): J [Phi_A, 0; 0, I], from W Phi without a product */
+  PetscScalar  *JG;       /* nA x ng: J's rigid-mode columns on the active rows, B (G^T e_t)_A */
+  PetscScalar  *GPhi;     /* ng x nco on the last rank: J's rigid-mode rows on Phi_A, G_A Phi_A */
+  PetscScalar  *wc;       /* W's local rows: W Phi c */
   PetscScalar  *E;        /* ncs x ncs: the coarse matrix, LU-factored (getrf), on every rank */
   PetscBLASInt *cpiv;
   PetscScalar  *c;        /* ncs */
@@ -320,6 +322,46 @@ static PetscErrorCode NewtonKrylovSetUpRigid(NewtonKrylov *nk)
   PetscFunctionReturn(0);
 }
 
+/* xa -= J [Phi_A c; a] with [c; a] = nk->c: J Phi_A c = A Phi_A c + B (W Phi c)_A from the stored
+   W Phi (one dense product, no solve), the rigid modes' columns and rows from JG and GPhi. */
+static PetscErrorCode CoarseResidual(NewtonKrylov *nk, PetscScalar xa[])
+{
+  MBC_Newton         *nt = (MBC_Newton *)nk->m->data;
+  MBCFrictionProblem *fp = nk->m->fp;
+  const PetscInt      nco = nk->nco, ngc = nk->ncs - nk->nco;
+  const PetscScalar  *wphi;
+  PetscInt            ldw, mloc;
+  PetscBLASInt        bm, bn, bld, one = 1;
+  PetscScalar         zero = 0, pone = 1;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetLocalSize(fp->WPhi, &mloc, NULL));
+  PetscCall(MatDenseGetArrayRead(fp->WPhi, &wphi));
+  PetscCall(MatDenseGetLDA(fp->WPhi, &ldw));
+  PetscCall(PetscBLASIntCast(mloc, &bm));
+  PetscCall(PetscBLASIntCast(nco, &bn));
+  PetscCall(PetscBLASIntCast(PetscMax(ldw, 1), &bld));
+  if (bm) PetscCallBLAS("BLASgemv", BLASgemv_("N", &bm, &bn, &pone, wphi, &bld, nk->c, &one, &zero, nk->wc, &one));
+  PetscCall(MatDenseRestoreArrayRead(fp->WPhi, &wphi));
+  for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    if (!nt->active[i]) continue;
+    for (PetscInt d = 0; d < dim; d++) {
+      PetscScalar v = 0;
+      for (PetscInt e = 0; e < dim; e++) {
+        v += nt->B[9 * i + dim * d + e] * nk->wc[o + e];
+        if (nk->acol[k + e] >= 0) v += nt->A[9 * i + dim * d + e] * nk->aw[k + e] * nk->c[nk->acol[k + e]];
+      }
+      for (PetscInt t = 0; t < ngc; t++) v += nk->JG[(k + d) + (size_t)nk->nA * t] * nk->c[nco + t];
+      xa[k + d] -= v;
+    }
+    k += dim;
+  }
+  for (PetscInt t = 0; ngc && t < nk->nloc - nk->nA; t++) /* the rigid modes' rows (the last rank) */
+    for (PetscInt j = 0; j < nco; j++) xa[nk->nA + t] -= nk->GPhi[t + (size_t)nk->ng * j] * nk->c[j];
+  PetscFunctionReturn(0);
+}
+
 /* With the coarse space: [c; a] = E^-1 [Phi_A^T x_r; x_g] (x_r the contacts' rows, x_g the rigid
    modes'), then y = P^-1 (x - J [Phi_A c; a]) + [Phi_A c; a]; without, P^-1 x. A fixed linear map
    either way, as right-preconditioned GMRES needs. */
@@ -327,8 +369,7 @@ static PetscErrorCode NewtonKrylovPCApply(PC pc, Vec x, Vec y)
 {
   NewtonKrylov *nk;
   PetscScalar  *xa, *ya;
-  PetscBLASInt  n, one = 1, info, nl, ld;
-  PetscScalar   mone = -1, pone = 1;
+  PetscBLASInt  n, one = 1, info;
 
   PetscFunctionBegin;
   PetscCall(PCShellGetContext(pc, &nk));
@@ -345,9 +386,7 @@ static PetscErrorCode NewtonKrylovPCApply(PC pc, Vec x, Vec y)
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nk->c, (PetscMPIInt)nk->ncs, MPIU_SCALAR, MPIU_SUM, PetscObjectComm((PetscObject)nk->m)));
   PetscCall(PetscBLASIntCast(nk->ncs, &n));
   PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &n, &one, nk->E, &n, nk->cpiv, nk->c, &n, &info));
-  PetscCall(PetscBLASIntCast(nk->nloc, &nl));
-  ld = PetscMax(nl, 1);
-  if (nl) PetscCallBLAS("BLASgemv", BLASgemv_("N", &nl, &n, &mone, nk->JPhi, &ld, nk->c, &one, &pone, xa, &one)); /* x - J [Phi_A c; a] */
+  PetscCall(CoarseResidual(nk, xa));
   PetscCall(VecRestoreArray(nk->xw, &xa));
   PetscCall(NewtonKrylovPCApplyFine(nk, nk->xw, y));
   PetscCall(VecGetArray(y, &ya));
@@ -359,28 +398,52 @@ static PetscErrorCode NewtonKrylovPCApply(PC pc, Vec x, Vec y)
 }
 
 /* E = R^T J R with R = [Phi_A, 0; 0, I] (the coarse space and the rigid modes), LU-factored on every
-   rank (withrigid false: R = Phi_A, the rigid modes left to the fine preconditioner). */
+   rank (withrigid false: R = Phi_A). J R is formed a contact's rows at a time from W Phi and
+   summed into E, never stored (it would be as large as W Phi: 0.7 GB for the 1M dam). */
 static PetscErrorCode CoarseMatrix(NewtonKrylov *nk, PetscBool withrigid, PetscBLASInt *info)
 {
-  const PetscInt ncs = nk->nco + (withrigid ? nk->ng : 0), nco = nk->nco;
-  PetscReal     *wsum;
-  PetscBLASInt   n;
-  PetscMPIInt    rank;
+  MBC_Newton         *nt  = (MBC_Newton *)nk->m->data;
+  MBCFrictionProblem *fp  = nk->m->fp;
+  const PetscInt      ncs = nk->nco + (withrigid ? nk->ng : 0), nco = nk->nco;
+  const PetscScalar  *wphi;
+  PetscScalar        *row;
+  PetscReal          *wsum;
+  PetscInt            ldw;
+  PetscBLASInt        n;
+  PetscMPIInt         rank;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)nk->m), &rank));
   nk->ncs = ncs;
   PetscCall(PetscArrayzero(nk->E, (size_t)ncs * ncs));
   PetscCall(PetscCalloc1(nco + 1, &wsum));
-  for (PetscInt k = 0; k < nk->nA; k++) {
-    const PetscInt l = nk->acol[k];
-    if (l < 0) continue;
-    wsum[l] += nk->aw[k] * nk->aw[k];
-    for (PetscInt j = 0; j < ncs; j++) nk->E[l + (size_t)ncs * j] += nk->aw[k] * nk->JPhi[k + (size_t)nk->nloc * j];
+  PetscCall(PetscMalloc1(ncs + 1, &row));
+  PetscCall(MatDenseGetArrayRead(fp->WPhi, &wphi));
+  PetscCall(MatDenseGetLDA(fp->WPhi, &ldw));
+  for (PetscInt i = 0, k = 0; i < fp->nc; i++) { /* row k + d of J R: A Phi_A + B (W Phi), then the rigid columns */
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    if (!nt->active[i]) continue;
+    for (PetscInt d = 0; d < dim; d++) {
+      const PetscInt l = nk->acol[k + d];
+      if (l < 0) continue;
+      PetscCall(PetscArrayzero(row, ncs));
+      for (PetscInt e = 0; e < dim; e++) {
+        const PetscReal b = nt->B[9 * i + dim * d + e], a = nt->A[9 * i + dim * d + e];
+        if (b != 0)
+          for (PetscInt j = 0; j < nco; j++) row[j] += b * wphi[(o + e) + (size_t)ldw * j];
+        if (a != 0 && nk->acol[k + e] >= 0) row[nk->acol[k + e]] += a * nk->aw[k + e];
+      }
+      for (PetscInt t = nco; t < ncs; t++) row[t] = nk->JG[(k + d) + (size_t)nk->nA * (t - nco)];
+      wsum[l] += nk->aw[k + d] * nk->aw[k + d];
+      for (PetscInt j = 0; j < ncs; j++) nk->E[l + (size_t)ncs * j] += nk->aw[k + d] * row[j];
+    }
+    k += dim;
   }
+  PetscCall(MatDenseRestoreArrayRead(fp->WPhi, &wphi));
+  PetscCall(PetscFree(row));
   if (withrigid && rank == nk->last)
     for (PetscInt t = 0; t < nk->ng; t++)
-      for (PetscInt j = 0; j < ncs; j++) nk->E[(nco + t) + (size_t)ncs * j] += nk->JPhi[(nk->nA + t) + (size_t)nk->nloc * j];
+      for (PetscInt j = 0; j < nco; j++) nk->E[(nco + t) + (size_t)ncs * j] += nk->GPhi[t + (size_t)nk->ng * j];
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nk->E, (PetscMPIInt)(ncs * ncs), MPIU_SCALAR, MPIU_SUM, PetscObjectComm((PetscObject)nk->m)));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, wsum, (PetscMPIInt)nco, MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)nk->m)));
   for (PetscInt l = 0; l < nco; l++)
@@ -404,48 +467,32 @@ static PetscErrorCode CoarseMatrix(NewtonKrylov *nk, PetscBool withrigid, PetscB
   PetscFunctionReturn(0);
 }
 
-/* J [Phi_A, 0; 0, I] from the interface's W Phi (no product; Phi's columns include the inactive
-   rows there, so where a patch has separated points this is an approximation, which only weakens
-   the correction), and E (CoarseMatrix). */
+/* The coarse space for this Newton step: J's rigid-mode rows and columns on it, and E
+   (CoarseMatrix). J Phi_A comes from the interface's W Phi, no product: Phi's columns include the
+   inactive rows there, so where a patch has separated points it is an approximation, which only
+   weakens the correction. */
 static PetscErrorCode NewtonKrylovSetUpCoarse(NewtonKrylov *nk)
 {
   MBCMultiplier       m   = nk->m;
-  MBC_Newton         *nt  = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp  = m->fp;
   const PetscInt      nco = fp->nco, ntot = fp->nco + nk->ng;
   const PetscInt     *rows;
-  const PetscScalar  *wphi;
-  PetscInt            rs, ldw;
+  PetscInt            rs, mloc;
   PetscBLASInt        info;
 
   PetscFunctionBegin;
   nk->nco = nco;
-  PetscCall(PetscMalloc5(nk->nA + 1, &nk->acol, nk->nA + 1, &nk->aw, (size_t)nk->nloc * ntot + 1, &nk->JPhi, (size_t)ntot * ntot, &nk->E, ntot, &nk->cpiv));
-  PetscCall(PetscMalloc1(ntot, &nk->c));
+  PetscCall(MatGetLocalSize(fp->WPhi, &mloc, NULL));
+  PetscCall(PetscMalloc5(nk->nA + 1, &nk->acol, nk->nA + 1, &nk->aw, (size_t)ntot * ntot, &nk->E, ntot, &nk->cpiv, mloc + 1, &nk->wc));
+  PetscCall(PetscMalloc3(ntot, &nk->c, (size_t)nk->nA * nk->ng + 1, &nk->JG, (size_t)nk->ng * nco + 1, &nk->GPhi));
   PetscCall(VecGetOwnershipRange(nk->vfull, &rs, NULL));
   PetscCall(ISGetIndices(nk->isA, &rows));
   for (PetscInt k = 0; k < nk->nA; k++) nk->acol[k] = fp->cocol[rows[k] - rs], nk->aw[k] = fp->cow[rows[k] - rs];
   PetscCall(ISRestoreIndices(nk->isA, &rows));
-  PetscCall(PetscArrayzero(nk->JPhi, (size_t)nk->nloc * ntot));
-  PetscCall(MatDenseGetArrayRead(fp->WPhi, &wphi));
-  PetscCall(MatDenseGetLDA(fp->WPhi, &ldw));
-  for (PetscInt i = 0, k = 0; i < fp->nc; i++) { /* per active contact: A Phi_A + B (W Phi) */
-    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
-    if (!nt->active[i]) continue;
-    for (PetscInt d = 0; d < dim; d++) {
-      for (PetscInt e = 0; e < dim; e++) {
-        const PetscReal b = nt->B[9 * i + dim * d + e], a = nt->A[9 * i + dim * d + e];
-        if (b != 0)
-          for (PetscInt j = 0; j < nco; j++) nk->JPhi[(k + d) + (size_t)nk->nloc * j] += b * wphi[(o + e) + (size_t)ldw * j];
-        if (a != 0 && nk->acol[k + e] >= 0) nk->JPhi[(k + d) + (size_t)nk->nloc * nk->acol[k + e]] += a * nk->aw[k + e];
-      }
-    }
-    k += dim;
-  }
-  PetscCall(MatDenseRestoreArrayRead(fp->WPhi, &wphi));
   if (nk->ng) {
     PetscScalar *a;
-    for (PetscInt j = 0; j < nco; j++) { /* the rigid modes' rows: G_A Phi_A */
+    PetscCall(PetscArrayzero(nk->GPhi, (size_t)nk->ng * nco));
+    for (PetscInt j = 0; j < nco; j++) { /* the rigid modes' rows: G_A Phi_A (G's rows on the last rank) */
       const PetscScalar *ga;
       PetscInt           ng;
       PetscCall(VecGetArray(nk->xA, &a));
@@ -455,13 +502,13 @@ static PetscErrorCode NewtonKrylovSetUpCoarse(NewtonKrylov *nk)
       PetscCall(MatMult(fp->G, nk->vfull, nk->galpha));
       PetscCall(VecGetLocalSize(nk->galpha, &ng));
       PetscCall(VecGetArrayRead(nk->galpha, &ga));
-      for (PetscInt t = 0; t < ng; t++) nk->JPhi[(nk->nA + t) + (size_t)nk->nloc * j] = ga[t];
+      for (PetscInt t = 0; t < ng; t++) nk->GPhi[t + (size_t)nk->ng * j] = ga[t];
       PetscCall(VecRestoreArrayRead(nk->galpha, &ga));
     }
     for (PetscInt t = 0; t < nk->ng; t++) { /* the rigid modes' columns: B (G^T e_t)_A */
       PetscCall(VecGetArray(nk->xA, &a));
       PetscCall(RigidColumn(nk, t, a));
-      for (PetscInt k = 0; k < nk->nA; k++) nk->JPhi[k + (size_t)nk->nloc * (nco + t)] = a[k];
+      PetscCall(PetscArraycpy(nk->JG + (size_t)nk->nA * t, a, nk->nA));
       PetscCall(VecRestoreArray(nk->xA, &a));
     }
   }
@@ -570,8 +617,8 @@ PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier m, IS isA, PetscInt nA, Vec b,
   PetscCall(VecDestroy(&nk.galpha));
   if (nk.ng) PetscCall(VecDestroyVecs(nk.ng, &nk.Z));
   PetscCall(PetscFree2(nk.S, nk.piv));
-  PetscCall(PetscFree5(nk.acol, nk.aw, nk.JPhi, nk.E, nk.cpiv));
-  PetscCall(PetscFree(nk.c));
+  PetscCall(PetscFree5(nk.acol, nk.aw, nk.E, nk.cpiv, nk.wc));
+  PetscCall(PetscFree3(nk.c, nk.JG, nk.GPhi));
   PetscCall(VecDestroy(&nk.xw));
   PetscFunctionReturn(0);
 }
