@@ -395,7 +395,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsInt("-newton_ls_max", "Halvings of the step in the line search", "MBCMultiplierSetFromOptions", nt->ls_max, &nt->ls_max, NULL));
   PetscCall(PetscOptionsInt("-newton_nonmonotone", "Memory of the non-monotone line search (1: monotone Armijo)", "MBCMultiplierSetFromOptions", nt->nonmonotone, &nt->nonmonotone, NULL));
   PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
-  PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
+  PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps (without sweeps: other rho)", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->rho_scale > 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_rho %g must be positive", (double)nt->rho_scale);
@@ -409,6 +409,24 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall((*nt->pgs->ops->setfromoptions)(nt->pgs, PetscOptionsObject));
   PetscCall(MBCMultiplierPGSSetActiveSet(nt->pgs, 0));
   PetscFunctionReturn(0);
+}
+
+/* rho = scale / (the contact's diagonal of W), normal and tangential; 0 where W has no flexibility. */
+static void NewtonAugmentations(MBCMultiplier m, PetscReal scale)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    PetscReal      wt = 0;
+    PetscInt       nt_ = 0;
+    nt->rho[2 * i] = nt->frozen[o] ? 0 : scale / nt->diag[0 + 9 * i];
+    for (PetscInt d = 1; d < dim; d++)
+      if (!nt->frozen[o + d]) wt += nt->diag[9 * i + (dim + 1) * d], nt_++;
+    nt->rho[2 * i + 1] = nt_ ? scale * nt_ / wt : 0;
+  }
+  nt->rho_used = scale;
 }
 
 /* Per W: the diagonal blocks, the augmentations, the directions without flexibility. */
@@ -448,14 +466,9 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)m)));
   for (PetscInt i = 0; i < fp->nc; i++) {
     const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
-    PetscReal      wt = 0;
-    PetscInt       nt_ = 0;
     for (PetscInt d = 0; d < dim; d++) nt->frozen[o + d] = (PetscBool)!(nt->diag[9 * i + (dim + 1) * d] > 1e-12 * dmax);
-    nt->rho[2 * i] = nt->frozen[o] ? 0 : nt->rho_scale / nt->diag[0 + 9 * i];
-    for (PetscInt d = 1; d < dim; d++)
-      if (!nt->frozen[o + d]) wt += nt->diag[9 * i + (dim + 1) * d], nt_++;
-    nt->rho[2 * i + 1] = nt_ ? nt->rho_scale * nt_ / wt : 0;
   }
+  NewtonAugmentations(m, nt->rho_scale);
   PetscCall(MatCreateVecs(fp->W, &nt->phi, NULL));
   PetscCall(VecDuplicate(nt->phi, &nt->dr));
   PetscCall(VecDuplicate(nt->phi, &nt->wdr));
@@ -495,6 +508,10 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
 
   PetscFunctionBegin;
   nt->lsfail = nt->pgssweeps = nt->factors = nt->kits = 0;
+  if (nt->rho_used != nt->rho_scale) { /* a restart of the last solve changed them */
+    NewtonAugmentations(m, nt->rho_scale);
+    PetscCall(ISDestroy(&nt->isbuilt));
+  }
   PetscCall(PetscMalloc1(nt->nonmonotone, &hist));
   PetscCall(VecDuplicate(r, &rbest));
   if (fp->G) PetscCall(VecDuplicate(fp->alpha, &abest));
@@ -573,7 +590,16 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(VecCopy(rbest, r));
       if (abest) PetscCall(VecCopy(abest, fp->alpha));
       restarts++;
-      PetscCall(NewtonSweeps(m, restarts * nt->pgs_fallback, r, u));
+      if (!nt->pgs_fallback || fp->G || fp->Winv) { /* no sweeps to move it (W a shell, or constraints):
+                                                      other augmentations, / 2, x 2, / 4, x 4, ... The
+                                                      solution does not depend on rho, but the active
+                                                      sets Newton visits do: the same start with the same
+                                                      rho stalls again (dynamic dam 100k, matrix-free) */
+        const PetscInt k = (restarts + 1) / 2;
+        NewtonAugmentations(m, nt->rho_scale * (restarts % 2 ? 1.0 / PetscPowInt(2, k) : PetscPowInt(2, k)));
+        PetscCall(ISDestroy(&nt->isbuilt)); /* its Newton matrix had the old rho */
+        if (m->monitor) PetscCall(PetscPrintf(PetscObjectComm((PetscObject)m), "  newton watchdog: back to the best iterate (merit %g), rho %g / diag(W)\n", (double)best, (double)nt->rho_used));
+      } else PetscCall(NewtonSweeps(m, restarts * nt->pgs_fallback, r, u));
       PetscCall(MBCFrictionVelocity(fp, r, u));
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       stall = 0;
