@@ -41,7 +41,8 @@ from mbcontact.results import log_view_times  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 EVENTS = {"assemble": "MBCBodyAssemble", "factor": "MBCBodyFactor", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch"),
-          "D": "MBCFlexibilityAssemble", "PGS": "MBCMultiplierSolve", "solves": "MBCBodySolve", "output": "MBCOutput"}
+          "D": "MBCFlexibilityAssemble", "PGS": "MBCMultiplierSolve", "solves": "MBCBodySolve", "output": "MBCOutput",
+          "wait": "MBCRankWait"}  # wait: the ranks waiting for the slowest one before a contact gather (load imbalance)
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
 STATIC_OK = dict(level=80.0, mu_base=1.0)  # the converging static case of tests/python/test_dam.py (height 100)
 
@@ -88,7 +89,7 @@ def fit(x, y):
     return float(np.polyfit(np.log(x[ok]), np.log(y[ok]), 1)[0])
 
 
-PH = ("assemble", "factor", "search", "D", "PGS", "solves", "output")
+PH = ("assemble", "factor", "search", "D", "PGS", "solves", "output", "wait")
 
 
 def row(label, r, extra=""):

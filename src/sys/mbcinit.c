@@ -24,6 +24,7 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCBodyFactor", classid, &MBC_BodyFactor));
   PetscCall(PetscLogEventRegister("MBCBodySolve", classid, &MBC_BodySolve));
   PetscCall(PetscLogEventRegister("MBCOutput", classid, &MBC_Output));
+  PetscCall(PetscLogEventRegister("MBCRankWait", classid, &MBC_RankWait));
   PetscCall(PetscLogEventRegister("MBCContactGather", classid, &MBC_ContactGather));
   PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
