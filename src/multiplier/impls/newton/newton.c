@@ -389,7 +389,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "Semismooth Newton, Alart-Curnier (-mbc_multiplier_type newton)");
-  PetscCall(PetscOptionsReal("-newton_rho", "Augmentation rho = this / (the contact's diagonal of W)", "MBCMultiplierSetFromOptions", nt->rho_scale, &nt->rho_scale, NULL));
+  PetscCall(PetscOptionsReal("-newton_rho", "Augmentation rho = this / (the contact's diagonal of W); default 1, 0.5 with a matrix-free W", "MBCMultiplierSetFromOptions", nt->rho_scale, &nt->rho_scale, &nt->rho_set));
   PetscCall(PetscOptionsInt("-newton_pgs_warm", "Gauss-Seidel sweeps before the first Newton step", "MBCMultiplierSetFromOptions", nt->pgs_warm, &nt->pgs_warm, NULL));
   PetscCall(PetscOptionsInt("-newton_pgs_fallback", "Gauss-Seidel sweeps when the line search fails", "MBCMultiplierSetFromOptions", nt->pgs_fallback, &nt->pgs_fallback, NULL));
   PetscCall(PetscOptionsInt("-newton_ls_max", "Halvings of the step in the line search", "MBCMultiplierSetFromOptions", nt->ls_max, &nt->ls_max, NULL));
@@ -409,6 +409,18 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall((*nt->pgs->ops->setfromoptions)(nt->pgs, PetscOptionsObject));
   PetscCall(MBCMultiplierPGSSetActiveSet(nt->pgs, 0));
   PetscFunctionReturn(0);
+}
+
+/* The augmentations' scale: -mbc_newton_rho, else 1 on W's diagonal, and 1/2 on the lumped estimate
+   of a matrix-free W's. That estimate is up to 19 times below W_dd at some points (the joints of
+   the 100k dynamic dam, docs/performance.md), and a rho too large there flips their active sets
+   with every small change of u: 1/2 took that dam's stalled step from 59 (41 with the watchdog's
+   restarts) to 18 Newton steps, the two blocks' 5 steps from 8 to 6, and left the small dynamic
+   dam's 75 steps at 235 -> 240. */
+static PetscReal NewtonRhoScale(MBCMultiplier m)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+  return nt->rho_set ? nt->rho_scale : (m->fp && m->fp->Winv ? 0.5 : 1.0);
 }
 
 /* rho = scale / (the contact's diagonal of W), normal and tangential; 0 where W has no flexibility. */
@@ -468,7 +480,7 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
     const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
     for (PetscInt d = 0; d < dim; d++) nt->frozen[o + d] = (PetscBool)!(nt->diag[9 * i + (dim + 1) * d] > 1e-12 * dmax);
   }
-  NewtonAugmentations(m, nt->rho_scale);
+  NewtonAugmentations(m, NewtonRhoScale(m));
   PetscCall(MatCreateVecs(fp->W, &nt->phi, NULL));
   PetscCall(VecDuplicate(nt->phi, &nt->dr));
   PetscCall(VecDuplicate(nt->phi, &nt->wdr));
@@ -508,8 +520,8 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
 
   PetscFunctionBegin;
   nt->lsfail = nt->pgssweeps = nt->factors = nt->kits = 0;
-  if (nt->rho_used != nt->rho_scale) { /* a restart of the last solve changed them */
-    NewtonAugmentations(m, nt->rho_scale);
+  if (nt->rho_used != NewtonRhoScale(m)) { /* a restart of the last solve changed them */
+    NewtonAugmentations(m, NewtonRhoScale(m));
     PetscCall(ISDestroy(&nt->isbuilt));
   }
   PetscCall(PetscMalloc1(nt->nonmonotone, &hist));
@@ -591,12 +603,14 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       if (abest) PetscCall(VecCopy(abest, fp->alpha));
       restarts++;
       if (!nt->pgs_fallback || fp->G || fp->Winv) { /* no sweeps to move it (W a shell, or constraints):
-                                                      other augmentations, / 2, x 2, / 4, x 4, ... The
+                                                      other augmentations, x 2, / 2, x 4, / 4, ... The
                                                       solution does not depend on rho, but the active
                                                       sets Newton visits do: the same start with the same
-                                                      rho stalls again (dynamic dam 100k, matrix-free) */
+                                                      rho stalls again (dynamic dam 100k, matrix-free:
+                                                      59 steps; from rho 1/2 the first restart at 1
+                                                      ended it in 18, one at 1/4 in 26) */
         const PetscInt k = (restarts + 1) / 2;
-        NewtonAugmentations(m, nt->rho_scale * (restarts % 2 ? 1.0 / PetscPowInt(2, k) : PetscPowInt(2, k)));
+        NewtonAugmentations(m, NewtonRhoScale(m) * (restarts % 2 ? PetscPowInt(2, k) : 1.0 / PetscPowInt(2, k)));
         PetscCall(ISDestroy(&nt->isbuilt)); /* its Newton matrix had the old rho */
         if (m->monitor) PetscCall(PetscPrintf(PetscObjectComm((PetscObject)m), "  newton watchdog: back to the best iterate (merit %g), rho %g / diag(W)\n", (double)best, (double)nt->rho_used));
       } else PetscCall(NewtonSweeps(m, restarts * nt->pgs_fallback, r, u));
@@ -687,7 +701,7 @@ static PetscErrorCode MBCMultiplierView_Newton(MBCMultiplier m, PetscViewer view
   MBC_Newton *nt = (MBC_Newton *)m->data;
 
   PetscFunctionBegin;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Alart-Curnier, rho %g / diag(W), non-monotone Armijo (memory %" PetscInt_FMT ", %" PetscInt_FMT " halvings), shift %g; Gauss-Seidel: %" PetscInt_FMT " warm-start sweeps, %" PetscInt_FMT " on a failed line search\n", (double)nt->rho_scale, nt->nonmonotone, nt->ls_max, (double)nt->shift, nt->pgs_warm, nt->pgs_fallback));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Alart-Curnier, rho %g / diag(W), non-monotone Armijo (memory %" PetscInt_FMT ", %" PetscInt_FMT " halvings), shift %g; Gauss-Seidel: %" PetscInt_FMT " warm-start sweeps, %" PetscInt_FMT " on a failed line search\n", (double)NewtonRhoScale(m), nt->nonmonotone, nt->ls_max, (double)nt->shift, nt->pgs_warm, nt->pgs_fallback));
   PetscCall(PetscViewerASCIIPrintf(viewer, "last solve: %" PetscInt_FMT " factorizations, %" PetscInt_FMT " failed line searches, %" PetscInt_FMT " Gauss-Seidel sweeps, %" PetscInt_FMT " Krylov iterations (matrix-free W)\n", nt->factors, nt->lsfail, nt->pgssweeps, nt->kits));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(KSPView(nt->ksp, viewer));

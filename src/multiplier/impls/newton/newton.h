@@ -6,6 +6,7 @@
 
 typedef struct {
   PetscReal     rho_scale;    /* rho = rho_scale / W_dd */
+  PetscBool     rho_set;      /* -mbc_newton_rho given: else 1, or 1/2 where W_dd is estimated (NewtonRhoScale) */
   PetscInt      pgs_warm;     /* Gauss-Seidel sweeps before the first step */
   PetscInt      pgs_fallback; /* sweeps when the line search fails */
   PetscReal     sigma;        /* Armijo's constant */
