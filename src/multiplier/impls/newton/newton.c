@@ -494,13 +494,19 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
   PetscFunctionReturn(0);
 }
 
-/* Gauss-Seidel sweeps from r (without equilibrium constraints only); u = W r + q after. */
+/* Can Gauss-Seidel sweep? Not with equilibrium constraints, nor on W without rows (a shell). */
+static PetscBool NewtonCanSweep(MBCMultiplier m)
+{
+  return (PetscBool)!(m->fp->G || m->fp->Winv);
+}
+
+/* Gauss-Seidel sweeps from r (where NewtonCanSweep); u = W r + q after. */
 static PetscErrorCode NewtonSweeps(MBCMultiplier m, PetscInt n, Vec r, Vec u)
 {
   MBC_Newton *nt = (MBC_Newton *)m->data;
 
   PetscFunctionBegin;
-  if (!n || m->fp->G || m->fp->Winv) PetscFunctionReturn(0); /* with constraints, or W without rows (a shell): none */
+  if (!n || !NewtonCanSweep(m)) PetscFunctionReturn(0);
   PetscCall(MBCMultiplierSetTolerances(nt->pgs, m->rtol, n));
   PetscCall(MBCMultiplierSolve(nt->pgs, r, u));
   nt->pgssweeps += nt->pgs->its;
@@ -577,7 +583,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(ACResidual(m, nt->rt, nt->ut, PETSC_FALSE, PETSC_FALSE, &psit, NULL));
       if (psit <= ref - nt->sigma * t * 2 * psi) break;
     }
-    if (ls < nt->ls_max || fp->G || fp->Winv) { /* accepted (with constraints, or no sweeps to fall back on, the last, shortest step is taken anyway) */
+    if (ls < nt->ls_max || !NewtonCanSweep(m)) { /* accepted (with constraints, or no sweeps to fall back on, the last, shortest step is taken anyway) */
       PetscCall(VecCopy(nt->rt, r));
       if (fp->G) PetscCall(VecCopy(nt->alphat, fp->alpha));
       if (ls == nt->ls_max) fails++, nt->lsfail++;
@@ -602,7 +608,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(VecCopy(rbest, r));
       if (abest) PetscCall(VecCopy(abest, fp->alpha));
       restarts++;
-      if (!nt->pgs_fallback || fp->G || fp->Winv) { /* no sweeps to move it (W a shell, or constraints):
+      if (!nt->pgs_fallback || !NewtonCanSweep(m)) { /* no sweeps to move it (W a shell, or constraints):
                                                       other augmentations, x 2, / 2, x 4, / 4, ... The
                                                       solution does not depend on rho, but the active
                                                       sets Newton visits do: the same start with the same
@@ -622,7 +628,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     if (stall == 0 && restarts && m->merit == best) for (PetscInt k = 0; k < nt->nonmonotone; k++) hist[k] = psi;
     for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
     hist[0] = psi;
-    if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (fp->G || fp->Winv ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
+    if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (!NewtonCanSweep(m) ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
   }
   if (m->reason > 0) { /* the iterate into the cones (Newton's iterates are not in them), kept if it
                           still meets the tolerance: with a rank-deficient W a projection can move u

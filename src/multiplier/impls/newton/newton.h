@@ -18,7 +18,7 @@ typedef struct {
   KSP           ksp;
   /* per W */
   PetscReal *diag, *rho; /* 9, 2 per contact */
-  PetscReal  rho_used;   /* the scale rho holds now (rho_scale but after a watchdog restart) */
+  PetscReal  rho_used;   /* the scale rho holds now (NewtonRhoScale but after a watchdog restart) */
   PetscBool *frozen;     /* per local row: a direction without flexibility */
   PetscReal *A, *B;      /* 9 per contact: the Jacobian blocks at the current iterate */
   PetscBool *active;     /* per contact: in the Newton system (not separated) */
