@@ -1086,7 +1086,7 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
   {
     PetscMPIInt P;
     PetscCallMPI(MPI_Comm_size(s->comm, &P));
-    PetscCall(PetscViewerASCIIPrintf(viewer, "decomposition (METIS on the body graph) onto %d ranks: largest rank load %.3f of the mean, %g contact faces between bodies on different ranks\n", P, (double)s->decomp_imbalance, (double)s->decomp_cut));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "decomposition (METIS on the body graph) onto %d ranks: largest rank work (DOFs^4/3, the factor's entries) %.3f of the mean, %g contact faces between bodies on different ranks\n", P, (double)s->decomp_imbalance, (double)s->decomp_cut));
   }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     const PetscInt ndof = 3 * s->scene->bodies[b].num_vertices; /* P1/Q1 displacement */

@@ -61,7 +61,7 @@ struct _n_MBCSolver {
   PetscInt  nbodies;
   MBCBody  *bodies;       /* NULL where this rank is not in the body */
   PetscMPIInt *body_first_rank, *body_nranks;
-  PetscReal   decomp_cut, decomp_imbalance; /* contact faces between bodies on different ranks; largest rank load / mean */
+  PetscReal   decomp_cut, decomp_imbalance; /* contact faces between bodies on different ranks; largest rank work / mean */
 
   /* output */
   char      output[PETSC_MAX_PATH_LEN];
