@@ -896,21 +896,28 @@ static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool
   PetscFunctionBegin;
   *shell = (PetscBool)(ifc->droute == MBC_D_ROUTE_MATFREE);
   if (ifc->droute != MBC_D_ROUTE_AUTO) PetscFunctionReturn(0);
-  for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    PetscBool   schur = PETSC_TRUE;
-    PetscMPIInt brank = 1;
-    bytes += 12.0 * ifc->nbcols[b] * ifc->nbcols[b];
-    if (!ifc->bodies[b] || !ifc->nbcols[b]) continue;
-    PetscCall(BodyUsesSchur(ifc, b, &schur));
-    PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
-    if (!schur && !brank) solves += ifc->nbcols[b];
-  }
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &solves, 1, MPIU_REAL, MPIU_SUM, ifc->comm));
-  if (!(bytes > ifc->dense_max_mb * 1048576.0) && !(solves > ifc->solves_max)) PetscFunctionReturn(0);
   PetscCall(PetscObjectTypeCompare((PetscObject)ifc->mult, MBCMULTIPLIERNEWTON, &newton));
   if (!((PetscObject)ifc->mult)->type_name) newton = PETSC_TRUE; /* the default type */
+  for (PetscInt b = 0; b < ifc->nbodies; b++) bytes += 12.0 * ifc->nbcols[b] * ifc->nbcols[b];
+  /* too large dense: no Schur analyses to count the solves (the 1M dam's five, kept for the Schur
+     route it would not take, held 4.3 GB beside the bodies' factors) */
+  if (!(bytes > ifc->dense_max_mb * 1048576.0) || !newton || ifc->fclib_file[0]) {
+    for (PetscInt b = 0; b < ifc->nbodies; b++) {
+      PetscBool   schur = PETSC_TRUE;
+      PetscMPIInt brank = 1;
+      if (!ifc->bodies[b] || !ifc->nbcols[b]) continue;
+      PetscCall(BodyUsesSchur(ifc, b, &schur));
+      PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
+      if (!schur && !brank) solves += ifc->nbcols[b];
+    }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &solves, 1, MPIU_REAL, MPIU_SUM, ifc->comm));
+    if (!(bytes > ifc->dense_max_mb * 1048576.0) && !(solves > ifc->solves_max)) PetscFunctionReturn(0);
+  }
   *shell = (PetscBool)(newton && !ifc->fclib_file[0]);
-  PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g) and %g solves to build (-mbc_d_solves_max %g): %s\n", bytes / 1048576.0, (double)ifc->dense_max_mb, solves, (double)ifc->solves_max, *shell ? "matrix-free" : "dense all the same (the pgs type or -mbc_fclib_write needs its entries)"));
+  if (*shell) /* the analyses BodyUsesSchur keeps for the Schur route are not needed */
+    for (PetscInt b = 0; b < ifc->nbodies; b++) PetscCall(MatDestroy(&ifc->schur_F[b]));
+  if (*shell && !(solves > 0)) PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g): matrix-free (its solves not counted: no Schur analyses)\n", bytes / 1048576.0, (double)ifc->dense_max_mb));
+  else PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g) and %g solves to build (-mbc_d_solves_max %g): %s\n", bytes / 1048576.0, (double)ifc->dense_max_mb, solves, (double)ifc->solves_max, *shell ? "matrix-free" : "dense all the same (the pgs type or -mbc_fclib_write needs its entries)"));
   PetscFunctionReturn(0);
 }
 
