@@ -160,7 +160,7 @@ PetscErrorCode MBCSolverDecompose(MBCSolver s)
   }
   { /* then one more rank at a time to the big body with the most work per rank, while that lowers
        the larger of its work per rank and the small bodies' (the 200k dam on 3 ranks: the
-       foundation, 1.75 shares, on 2 ranks and the four monoliths on one: 1.25 of the mean, not 1.75) */
+       foundation, 1.75 shares, on 2 ranks and the four monoliths on one: 1.23 of the mean, not 1.77) */
     PetscReal wsmall = 0;
     for (PetscInt i = 0; i < ns; i++) wsmall += BodyWork(scene, small[i]);
     while (nb && P - nbig > (ns ? 1 : 0)) {
