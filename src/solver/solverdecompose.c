@@ -47,11 +47,11 @@ static PetscErrorCode BodyGraphWeights(MBCScene scene, PetscReal w[])
 static PetscErrorCode BalanceSmallBodies(MBCScene scene, const PetscReal w[], PetscInt ns, const PetscInt small[], PetscInt nparts, PetscInt part[])
 {
   const PetscInt N = scene->nbodies;
-  PetscReal     *load, *key, lmetis = 0, lgreedy = 0;
+  PetscReal     *load, *cut, *key, lmetis = 0, lgreedy = 0;
   PetscInt      *order, *greedy;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1(nparts, &load));
+  PetscCall(PetscCalloc2(nparts, &load, nparts, &cut));
   PetscCall(PetscMalloc3(ns, &key, ns, &order, ns, &greedy));
   for (PetscInt i = 0; i < ns; i++) load[part[i]] += BodyWork(scene, small[i]);
   for (PetscInt q = 0; q < nparts; q++) lmetis = PetscMax(lmetis, load[q]);
@@ -61,14 +61,10 @@ static PetscErrorCode BalanceSmallBodies(MBCScene scene, const PetscReal w[], Pe
   for (PetscInt j = 0; j < ns; j++) {
     const PetscInt i = order[j];
     PetscInt       best = 0;
-    PetscReal      bestcut = -1;
-    for (PetscInt q = 0; q < nparts; q++) {
-      PetscReal cut = 0;
-      if (load[q] > load[best]) continue;
-      for (PetscInt jj = 0; jj < j; jj++)
-        if (greedy[order[jj]] == q) cut += w[small[i] * N + small[order[jj]]];
-      if (load[q] < load[best] || cut > bestcut) best = q, bestcut = cut;
-    }
+    PetscCall(PetscArrayzero(cut, nparts)); /* the contact faces body i shares with each part so far */
+    for (PetscInt jj = 0; jj < j; jj++) cut[greedy[order[jj]]] += w[small[i] * N + small[order[jj]]];
+    for (PetscInt q = 1; q < nparts; q++)
+      if (load[q] < load[best] || (load[q] == load[best] && cut[q] > cut[best])) best = q;
     greedy[i] = best;
     load[best] += BodyWork(scene, small[i]);
   }
@@ -77,7 +73,7 @@ static PetscErrorCode BalanceSmallBodies(MBCScene scene, const PetscReal w[], Pe
     PetscCall(PetscInfo(NULL, "METIS's partition of %" PetscInt_FMT " bodies onto %" PetscInt_FMT " ranks has a largest work %g times the greedy one's: the greedy one taken\n", ns, nparts, (double)(lmetis / lgreedy)));
     PetscCall(PetscArraycpy(part, greedy, ns));
   }
-  PetscCall(PetscFree(load));
+  PetscCall(PetscFree2(load, cut));
   PetscCall(PetscFree3(key, order, greedy));
   PetscFunctionReturn(0);
 }
@@ -123,15 +119,19 @@ static PetscErrorCode PartitionSmallBodies(MBCScene scene, const PetscReal w[], 
   PetscFunctionReturn(0);
 }
 
+/* The body of list[] (n > 0) with the most work per rank. */
+static PetscInt MostWorkPerRank(MBCScene scene, const PetscMPIInt nranks[], PetscInt n, const PetscInt list[])
+{
+  PetscInt best = list[0];
+  for (PetscInt i = 1; i < n; i++)
+    if (BodyWork(scene, list[i]) / nranks[list[i]] > BodyWork(scene, best) / nranks[best]) best = list[i];
+  return best;
+}
+
 /* extra more ranks, one at a time, to the body of list[] with the most work per rank. */
 static void SpreadRanks(MBCScene scene, PetscMPIInt nranks[], PetscInt n, const PetscInt list[], PetscInt extra)
 {
-  for (; extra > 0 && n > 0; extra--) {
-    PetscInt best = list[0];
-    for (PetscInt i = 1; i < n; i++)
-      if (BodyWork(scene, list[i]) / nranks[list[i]] > BodyWork(scene, best) / nranks[best]) best = list[i];
-    nranks[best]++;
-  }
+  for (; extra > 0 && n > 0; extra--) nranks[MostWorkPerRank(scene, nranks, n, list)]++;
 }
 
 /* Every rank computes the same decomposition from the scene alone. */
@@ -164,16 +164,15 @@ PetscErrorCode MBCSolverDecompose(MBCSolver s)
     PetscReal wsmall = 0;
     for (PetscInt i = 0; i < ns; i++) wsmall += BodyWork(scene, small[i]);
     while (nb && P - nbig > (ns ? 1 : 0)) {
-      PetscInt  best = big[0];
-      PetscReal after;
-      for (PetscInt i = 1; i < nb; i++)
-        if (BodyWork(scene, big[i]) / s->body_nranks[big[i]] > BodyWork(scene, best) / s->body_nranks[best]) best = big[i];
-      after = BodyWork(scene, best) / (s->body_nranks[best] + 1);
-      for (PetscInt i = 0; i < nb; i++)
-        if (big[i] != best) after = PetscMax(after, BodyWork(scene, big[i]) / s->body_nranks[big[i]]);
-      if (ns) after = PetscMax(after, wsmall / (P - nbig - 1));
-      if (!(after < PetscMax(BodyWork(scene, best) / s->body_nranks[best], ns ? wsmall / (P - nbig) : 0))) break;
+      const PetscInt  best   = MostWorkPerRank(scene, s->body_nranks, nb, big);
+      const PetscReal before = PetscMax(BodyWork(scene, best) / s->body_nranks[best], ns ? wsmall / (P - nbig) : 0);
+      PetscInt        most;
       s->body_nranks[best]++;
+      most = MostWorkPerRank(scene, s->body_nranks, nb, big);
+      if (!(PetscMax(BodyWork(scene, most) / s->body_nranks[most], ns ? wsmall / (P - nbig - 1) : 0) < before)) {
+        s->body_nranks[best]--;
+        break;
+      }
       nbig++;
     }
   }
