@@ -52,7 +52,6 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
   PetscCall(PetscCalloc4(nbodies, &ifc->sinv, nbodies, &ifc->sinv_is, nbodies, &ifc->sinv_id, nbodies, &ifc->sinv_state));
-  PetscCall(PetscCalloc2(nbodies, &ifc->schur_F, nbodies, &ifc->schur_analysed_id));
   PetscCall(PetscMalloc1(nbodies, &ifc->schur_fits));
   for (PetscInt b = 0; b < nbodies; b++) ifc->schur_fits[b] = -1;
   *iface = ifc;
@@ -710,28 +709,16 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is)
   PetscFunctionReturn(0);
 }
 
-/* F: A's MUMPS Cholesky factor with C (is) as its Schur set, analysed (symbolic phase); *est MUMPS's
-   estimate of its numeric factorization in MB (INFOG(17)). */
-static PetscErrorCode BodySchurAnalyse(Mat A, IS is, Mat *F, PetscInt *est)
-{
-  MatFactorInfo info;
+/* Columns of the inverse's entries asked of MUMPS at once (BodyInverseEntries): their pattern
+   takes 12 |C| bytes each. */
+#define MBC_SINV_BLOCK 1024
 
-  PetscFunctionBegin;
-  PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F));
-  PetscCall(MatFactorSetSchurIS(*F, is));
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
-  PetscCall(MatMumpsGetInfog(*F, 17, est));
-  PetscFunctionReturn(0);
-}
-
-/* -mbc_d_route auto: the Schur route for a body on one rank whose Schur factorization fits in
-   -mbc_d_schur_max_mb: S^-1 (|C|^2 doubles) and MUMPS's own estimate of the factorization with C as
-   its Schur set (INFOG(17) after the analysis: its fronts hold S dense, so its workspace grows
-   faster than S^-1; 4 GB at 400k DOFs, ~16 times S^-1 for the 1M dam's foundation by the model,
-   docs/performance-model.md). Measured faster than the solves at every size that fits (3.8k to
-   400k DOFs, docs/performance.md). Decided once per body: C is fixed by the scene and the analysis
-   depends on the operator's pattern only. */
+/* -mbc_d_route auto: the Schur route for a body on one rank whose S^-1 (|C|^2 doubles) and the
+   pattern of one block of the inverse's entries asked of MUMPS fit in -mbc_d_schur_max_mb. S^-1
+   comes from the body's own factor (BodySchurInverse), so nothing else is allocated: until stop 27
+   a second MUMPS factorization with C as its Schur set held S dense in its fronts, a workspace 9 to
+   17 times S^-1 (1.75 GB at the 200k dam's foundation, 4 GB at the 400k one), which auto had to
+   estimate by a symbolic analysis per body. Decided once per body: C is fixed by the scene. */
 static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *schur)
 {
   MBCBody     body = ifc->bodies[b];
@@ -741,54 +728,110 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
   *schur = PETSC_FALSE;
   if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
-  if (bsize > 1) PetscFunctionReturn(0); /* MUMPS's distributed Schur complement is not wired */
+  if (bsize > 1) PetscFunctionReturn(0); /* S^-1 of a body over several ranks is not wired */
   if (ifc->droute == MBC_D_ROUTE_SCHUR) {
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
   if (ifc->schur_fits[b] < 0) {
     IS        is;
-    PetscInt  nC, n, est = 0;
-    PetscReal mb;
-    Mat       A, F = NULL;
-    PetscCall(KSPGetOperators(body->ksp, &A, NULL));
+    PetscInt  nC;
+    PetscReal mb, pat;
     PetscCall(BodyContactIS(ifc, b, &is));
     PetscCall(ISGetSize(is, &nC));
-    PetscCall(VecGetSize(body->u, &n));
-    mb = 8.0 * nC * nC / 1048576.0;
-    if (mb <= ifc->schur_max_mb && nC < n) PetscCall(BodySchurAnalyse(A, is, &F, &est)); /* cheap against the factorization */
-    ifc->schur_fits[b] = mb + est <= ifc->schur_max_mb;
-    PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, MUMPS's estimate %" PetscInt_FMT "): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + est, mb, est, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
-    if (ifc->schur_fits[b]) { /* kept for BodySchurInverse: the same operator needs neither again */
-      PetscCall(PetscObjectGetId((PetscObject)A, &ifc->schur_analysed_id[b]));
-      ifc->schur_F[b] = F;
-      PetscCall(ISDestroy(&ifc->sinv_is[b]));
-      ifc->sinv_is[b] = is;
-    } else {
-      PetscCall(MatDestroy(&F));
-      PetscCall(ISDestroy(&is));
-    }
+    PetscCall(ISDestroy(&is));
+    mb                 = 8.0 * nC * nC / 1048576.0;
+    pat                = 12.0 * nC * PetscMin(nC, MBC_SINV_BLOCK) / 1048576.0;
+    ifc->schur_fits[b] = mb + pat <= ifc->schur_max_mb;
+    PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, the inverse's entries asked %g): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + pat, mb, pat, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
   }
   *schur = (PetscBool)ifc->schur_fits[b];
+  PetscFunctionReturn(0);
+}
+
+/* S (nC x nC, dense) = (A^-1)_CC from A's MUMPS factor F: the selected entries of the inverse
+   (ICNTL(30)), blocks of MBC_SINV_BLOCK columns at a time. A sparse right-hand side names the
+   entries, so MUMPS's solves skip what cannot reach C (the forward substitution from each column's
+   leaf, the backward one only to C's rows): faster than the solves of the multi-right-hand-side
+   route, and than the second factorization with C as Schur set it replaces (the 200k dam's
+   monoliths 0.3 against 1.0 s each, its foundation's 3 672 contact DOFs 16.3 against 21.6 s).
+   *ok false when MUMPS fails (its message is then in INFOG(1)); F's controls as they were. */
+static PetscErrorCode BodyInverseEntries(Mat F, IS isC, PetscInt n, Mat *S, PetscInt *infog1, PetscBool *ok)
+{
+  const PetscInt *ci;
+  PetscInt        nC, *pos, *ia, *ja, icntl20, icntl21, icntl27;
+  PetscScalar    *va, *sa;
+
+  PetscFunctionBegin;
+  *ok     = PETSC_TRUE;
+  *infog1 = 0;
+  PetscCall(ISGetSize(isC, &nC));
+  PetscCall(ISGetIndices(isC, &ci));
+  PetscCall(MatMumpsGetIcntl(F, 20, &icntl20));
+  PetscCall(MatMumpsGetIcntl(F, 21, &icntl21));
+  PetscCall(MatMumpsGetIcntl(F, 27, &icntl27));
+  PetscCall(MatMumpsSetIcntl(F, 27, 128)); /* right-hand sides per block of MUMPS's solve: 128 took the
+                                              100k dam's foundation (2 352 contact DOFs) 6.2 -> 4.1 s */
+  PetscCall(PetscMalloc4(n, &pos, n + 1, &ia, (size_t)nC * PetscMin(nC, MBC_SINV_BLOCK) + 1, &ja, (size_t)nC * PetscMin(nC, MBC_SINV_BLOCK) + 1, &va));
+  for (PetscInt i = 0; i < n; i++) pos[i] = -1;
+  for (PetscInt k = 0; k < nC; k++) pos[ci[k]] = k;
+  PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, nC, nC, NULL, S));
+  PetscCall(MatDenseGetArrayWrite(*S, &sa));
+  for (PetscInt k0 = 0; k0 < nC && *ok; k0 += MBC_SINV_BLOCK) {
+    const PetscInt k1 = PetscMin(nC, k0 + MBC_SINV_BLOCK);
+    Mat            Bt, spRHS;
+    PetscErrorCode ierr;
+    /* Bt's row j (the inverse's column j, j in C's block) asks for the rows C */
+    ia[0] = 0;
+    for (PetscInt i = 0, nz = 0; i < n; i++) {
+      if (pos[i] >= k0 && pos[i] < k1)
+        for (PetscInt k = 0; k < nC; k++) ja[nz++] = ci[k];
+      ia[i + 1] = nz;
+    }
+    PetscCall(PetscArrayzero(va, (size_t)nC * (k1 - k0)));
+    PetscCall(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, ia, ja, va, &Bt));
+    PetscCall(MatCreateTranspose(Bt, &spRHS));
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL)); /* MUMPS's failure: the caller decides */
+    ierr = MatMumpsGetInverse(F, spRHS);
+    PetscCall(PetscPopErrorHandler());
+    if (ierr) {
+      PetscCall(MatMumpsGetInfog(F, 1, infog1));
+      *ok = PETSC_FALSE;
+    }
+    for (PetscInt i = 0; i < n && *ok; i++)
+      if (pos[i] >= k0 && pos[i] < k1)
+        for (PetscInt z = ia[i]; z < ia[i + 1]; z++) sa[pos[ja[z]] + (size_t)nC * pos[i]] = va[z];
+    PetscCall(MatDestroy(&spRHS));
+    PetscCall(MatDestroy(&Bt));
+  }
+  PetscCall(MatDenseRestoreArrayWrite(*S, &sa));
+  /* the factor serves the body's solves again */
+  PetscCall(MatMumpsSetIcntl(F, 30, 0));
+  PetscCall(MatMumpsSetIcntl(F, 20, icntl20));
+  PetscCall(MatMumpsSetIcntl(F, 21, icntl21));
+  PetscCall(MatMumpsSetIcntl(F, 27, icntl27));
+  PetscCall(PetscFree4(pos, ia, ja, va));
+  PetscCall(ISRestoreIndices(isC, &ci));
+  if (!*ok) PetscCall(MatDestroy(S));
   PetscFunctionReturn(0);
 }
 
 /* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
    C the DOFs of the body's nodes on its contact surfaces (every couple, both sides) that are not
    held (MBCBodyZeroHeldRows): a set fixed by the scene, which holds the rows of every H_b the search
-   can make. S = A_CC - A_CI A_II^-1 A_IC from a MUMPS factorization of the body's operator with C
-   as its Schur set, S^-1 by LAPACK, kept while the operator is the same object in the same state;
-   then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the multi-right-hand-side
-   route ((A^-1)_CC = S^-1), and a rebuild for new pairs costs two dense products, no solve. A
+   can make. S^-1 = (A^-1)_CC, with S = A_CC - A_CI A_II^-1 A_IC the Schur complement onto C, from
+   the body's own factor (BodyInverseEntries), kept while the operator is the same object in the
+   same state; then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the
+   multi-right-hand-side route, and a rebuild for new pairs costs two dense products, no solve. A
    restart computes S^-1 from the same operator and the same C, so it builds the same D. */
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *ok)
 {
   MBCBody          body = ifc->bodies[b];
-  Mat              A, P, F, S;
+  Mat              A, P, S;
   PetscInt         n, nC;
   PetscObjectState state;
   PetscObjectId    id;
-  MatFactorInfo    info;
+  PetscLogDouble   t0, t1;
 
   PetscFunctionBegin;
   *ok = PETSC_TRUE;
@@ -800,63 +843,49 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *
     PetscFunctionReturn(0);
   }
   PetscCall(MatDestroy(&ifc->sinv[b]));
-  F = NULL;
-  if (ifc->sinv_is[b] && ifc->schur_analysed_id[b] == id) { /* BodyUsesSchur's IS and analysis of this operator */
-    F                 = ifc->schur_F[b];
-    ifc->schur_F[b]   = NULL;
-  } else {
-    PetscCall(MatDestroy(&ifc->schur_F[b]));
-    PetscCall(ISDestroy(&ifc->sinv_is[b]));
-    PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b])); /* the held rows depend on the operator (K^+) */
-  }
+  PetscCall(ISDestroy(&ifc->sinv_is[b]));
+  PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b])); /* the held rows depend on the operator (K^+) */
   PetscCall(VecGetLocalSize(body->u, &n));
   PetscCall(ISGetSize(ifc->sinv_is[b], &nC));
-  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT "%s\n", body->name, nC, n, F ? " (analysis reused)" : ""));
-  if (nC == n) PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S)); /* every DOF on a contact surface: S = A (MUMPS wants a Schur set smaller than the matrix) */
-  else {
-    MatFactorError err;
-    if (!F) {
-      PetscInt est;
-      PetscCall(BodySchurAnalyse(A, ifc->sinv_is[b], &F, &est));
-    }
-    PetscCall(MatFactorInfoInitialize(&info));
-    PetscCall(MatCholeskyFactorNumeric(F, A, &info));
-    PetscCall(MatFactorGetError(F, &err));
-    if (err) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
-      PetscInt infog1;
-      PetscCall(MatMumpsGetInfog(F, 1, &infog1));
-      PetscCall(MatDestroy(&F));
-      PetscCall(ISDestroy(&ifc->sinv_is[b]));
-      PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, PETSC_COMM_SELF, PETSC_ERR_MEM, "Body '%s': the factorization with its %" PetscInt_FMT " contact DOFs as Schur set failed (%s, MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, err == MAT_FACTOR_OUTMEMORY ? "out of memory" : "numerical failure", infog1);
-      PetscCall(PetscInfo(NULL, "Body %s: the Schur factorization failed (%s, INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, err == MAT_FACTOR_OUTMEMORY ? "out of memory" : "numerical failure", infog1));
-      ifc->schur_fits[b] = 0;
-      *ok                = PETSC_FALSE;
-      PetscFunctionReturn(0);
-    }
-    PetscCall(MatFactorCreateSchurComplement(F, &S, NULL));
-    PetscCall(MatDestroy(&F)); /* the factor's memory goes; S is ours */
-  }
-  { /* S^-1 in place: Cholesky of the dense SPD S, then its inverse (LAPACK potrf, potri) */
+  PetscCall(PetscTime(&t0));
+  if (nC == n) { /* every DOF on a contact surface: S^-1 = A^-1, by LAPACK on A dense */
     PetscScalar *s;
     PetscBLASInt bn, lda, info2;
     PetscInt     ld;
+    PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S));
     PetscCall(MatDenseGetLDA(S, &ld));
     PetscCall(PetscBLASIntCast(nC, &bn));
     PetscCall(PetscBLASIntCast(ld, &lda));
     PetscCall(MatDenseGetArray(S, &s));
     if (bn) {
       PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, s, &lda, &info2));
-      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': the Schur complement onto its contact DOFs is not positive definite (potrf %d)", body->name, (int)info2);
+      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': its operator is not positive definite (potrf %d)", body->name, (int)info2);
       PetscCallBLAS("LAPACKpotri", LAPACKpotri_("L", &bn, s, &lda, &info2));
       PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': potri %d", body->name, (int)info2);
       for (PetscInt j = 0; j < nC; j++) /* the upper triangle from the lower */
         for (PetscInt i = 0; i < j; i++) s[i + j * ld] = s[j + i * ld];
     }
     PetscCall(MatDenseRestoreArray(S, &s));
+  } else {
+    PC       pc;
+    Mat      F;
+    PetscInt infog1;
+    PetscCall(KSPGetPC(body->ksp, &pc));
+    PetscCall(PCFactorGetMatrix(pc, &F));
+    PetscCall(BodyInverseEntries(F, ifc->sinv_is[b], n, &S, &infog1, ok));
+    if (!*ok) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
+      PetscCall(ISDestroy(&ifc->sinv_is[b]));
+      PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, PETSC_COMM_SELF, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, infog1);
+      PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, infog1));
+      ifc->schur_fits[b] = 0;
+      PetscFunctionReturn(0);
+    }
   }
   ifc->sinv[b]       = S;
   ifc->sinv_id[b]    = id;
   ifc->sinv_state[b] = state;
+  PetscCall(PetscTime(&t1));
+  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT " (S^-1, the inverse's entries from the body's factor, in %g s)\n", body->name, nC, n, t1 - t0));
   PetscFunctionReturn(0);
 }
 
@@ -899,8 +928,6 @@ static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool
   PetscCall(PetscObjectTypeCompare((PetscObject)ifc->mult, MBCMULTIPLIERNEWTON, &newton));
   if (!((PetscObject)ifc->mult)->type_name) newton = PETSC_TRUE; /* the default type */
   for (PetscInt b = 0; b < ifc->nbodies; b++) bytes += 12.0 * ifc->nbcols[b] * ifc->nbcols[b];
-  /* too large dense: no Schur analyses to count the solves (the 1M dam's five, kept for the Schur
-     route it would not take, held 4.3 GB beside the bodies' factors) */
   if (!(bytes > ifc->dense_max_mb * 1048576.0) || !newton || ifc->fclib_file[0]) {
     for (PetscInt b = 0; b < ifc->nbodies; b++) {
       PetscBool   schur = PETSC_TRUE;
@@ -914,9 +941,7 @@ static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool
     if (!(bytes > ifc->dense_max_mb * 1048576.0) && !(solves > ifc->solves_max)) PetscFunctionReturn(0);
   }
   *shell = (PetscBool)(newton && !ifc->fclib_file[0]);
-  if (*shell) /* the analyses BodyUsesSchur keeps for the Schur route are not needed */
-    for (PetscInt b = 0; b < ifc->nbodies; b++) PetscCall(MatDestroy(&ifc->schur_F[b]));
-  if (*shell && !(solves > 0)) PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g): matrix-free (its solves not counted: no Schur analyses)\n", bytes / 1048576.0, (double)ifc->dense_max_mb));
+  if (*shell && !(solves > 0)) PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g): matrix-free\n", bytes / 1048576.0, (double)ifc->dense_max_mb));
   else PetscCall(PetscInfo(NULL, "D dense would take %g MB (-mbc_d_dense_max_mb %g) and %g solves to build (-mbc_d_solves_max %g): %s\n", bytes / 1048576.0, (double)ifc->dense_max_mb, solves, (double)ifc->solves_max, *shell ? "matrix-free" : "dense all the same (the pgs type or -mbc_fclib_write needs its entries)"));
   PetscFunctionReturn(0);
 }
@@ -1195,10 +1220,8 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     PetscCall(MatDestroy(&ifc->sinv[b]));
     PetscCall(ISDestroy(&ifc->sinv_is[b]));
-    PetscCall(MatDestroy(&ifc->schur_F[b]));
   }
   PetscCall(PetscFree4(ifc->sinv, ifc->sinv_is, ifc->sinv_id, ifc->sinv_state));
-  PetscCall(PetscFree2(ifc->schur_F, ifc->schur_analysed_id));
   PetscCall(PetscFree(ifc->schur_fits));
   PetscCall(MBCMultiplierDestroy(&ifc->mult));
   PetscCall(PetscFree(*iface));

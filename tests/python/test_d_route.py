@@ -1,5 +1,6 @@
 """-mbc_d_route schur (docs/performance.md): D_i = H_C^T S^-1 H_C with S the Schur complement of
-the body's operator onto its contact DOFs (MUMPS), against the multi-right-hand-side solves: the
+the body's operator onto its contact DOFs (S^-1 = (A^-1)_CC, MUMPS's entries of the inverse from the
+body's own factor), against the multi-right-hand-side solves: the
 same D, so the same answer to rounding, on the small static dam (3 free monoliths: their operators
 are K with the fixing rows of K^+) and on the two-rank run (a body on one rank each). The
 matrix-free route: test_matfree.py."""

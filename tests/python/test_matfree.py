@@ -122,9 +122,9 @@ def test_matfree_route_dynamic_dam_with_joints(tmp_path):
 def test_auto_route_goes_matrix_free_beyond_the_dense_budget(tmp_path):
     """-mbc_d_route auto (default) keeps D dense while it and the Newton matrix fit in
     -mbc_d_dense_max_mb and goes matrix-free beyond (here forced with a 0.01 MB budget): the same
-    answer, and no body's Schur analysis is made (the 1M dam's five were kept for a route it did not
-    take: 4.3 GB beside the factors, 20.0 against 15.7 GB peak); with the pgs type, which needs W's
-    rows, it stays dense and says so."""
+    answer, and no body's Schur route is weighed (stop 26: the 1M dam's five Schur analyses, made to
+    weigh it, were kept for a route it did not take: 4.3 GB beside the factors); with the pgs type,
+    which needs W's rows, it stays dense and says so."""
     h5 = dam.build(tmp_path, **STATIC)
     solve(h5, "-mbc_output", str(tmp_path / "ref"), "-mbc_d_route", "multirhs", *TIGHT)
     r = solve(h5, "-mbc_output", str(tmp_path / "auto"), "-mbc_d_dense_max_mb", "0.01", "-info", *TIGHT)
@@ -142,15 +142,15 @@ def test_auto_route_goes_matrix_free_beyond_the_dense_budget(tmp_path):
 
 
 def test_auto_route_counts_the_schur_workspace_and_the_solves(tmp_path):
-    """auto's Schur route must fit in -mbc_d_schur_max_mb with MUMPS's own estimate of the
-    factorization with the Schur set, not S^-1 alone (the 1M dam's foundation: S^-1 0.9 GB, the
-    factorization ~14 GB by the model): at 1 MB the foundation (S^-1 1 MB, estimate 10 MB) takes
-    the solves and a 36-DOF monolith keeps the Schur route; the dense D then needs 156 solves, and
-    beyond -mbc_d_solves_max 100 auto goes matrix-free. The answers stay the solves' ones."""
+    """auto's Schur route must fit in -mbc_d_schur_max_mb with S^-1 and the pattern of the inverse's
+    entries asked of MUMPS at once, not S^-1 alone: at 1 MB the foundation (360 contact DOFs: S^-1
+    0.99 MB, the entries asked 1.48 MB) takes the solves and a 36-DOF monolith keeps the Schur
+    route; the dense D then needs 156 solves, and beyond -mbc_d_solves_max 100 auto goes
+    matrix-free. The answers stay the solves' ones."""
     h5 = dam.build(tmp_path, **STATIC)
     solve(h5, "-mbc_output", str(tmp_path / "ref"), "-mbc_d_route", "multirhs", *TIGHT)
     r = solve(h5, "-mbc_output", str(tmp_path / "a"), "-mbc_d_schur_max_mb", "1", "-info", ":sys", *TIGHT)
-    assert re.search(r"Body foundation: the Schur route onto \d+ contact DOFs would take [\d.]+ MB \(S\^-1 [\d.]+, MUMPS's estimate [1-9]\d*\): beyond", r.stdout)
+    assert "Body foundation: the Schur route onto 360 contact DOFs would take 2.47192 MB (S^-1 0.98877, the inverse's entries asked 1.48315): beyond" in r.stdout
     assert re.search(r"Body m1: the Schur route .*: within", r.stdout)
     assert "Matrix-free D" not in r.stdout and "D through the Schur complement onto" in r.stdout
     r = solve(h5, "-mbc_output", str(tmp_path / "b"), "-mbc_d_schur_max_mb", "1", "-mbc_d_solves_max", "100", "-info", ":sys", *TIGHT)

@@ -52,16 +52,14 @@ struct _n_MBCInterface {
   PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
   PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
   PetscInt   droute;      /* -mbc_d_route: MBCDRoute */
-  PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 and Schur factorization (MUMPS's estimate) fit in this */
+  PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 (and the inverse's entries asked at once) fit in this */
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb: auto takes the matrix-free D where the dense one does not fit in this */
   PetscReal  solves_max;   /* -mbc_d_solves_max: auto takes the matrix-free D where building the dense one takes more solves */
   PetscInt   coarse_points; /* -mbc_d_coarse_points: points per patch of the matrix-free Newton steps' coarse space (0: none) */
   PetscReal  coarse_max_mb; /* -mbc_d_coarse_max_mb: the most W Phi may take (larger patches beyond) */
   Mat       *sinv;        /* per body, -mbc_d_route schur: S^-1 on the contact-surface DOFs sinv_is, for the operator sinv_id in state sinv_state */
   IS        *sinv_is;
-  PetscInt  *schur_fits;  /* per body, auto: whether its Schur factorization fits in -mbc_d_schur_max_mb (-1: not yet known) */
-  Mat       *schur_F;     /* per body: auto's analysed Schur factor (with sinv_is) of operator schur_analysed_id, until BodySchurInverse factors it */
-  PetscObjectId *schur_analysed_id;
+  PetscInt  *schur_fits;  /* per body, auto: whether its S^-1 fits in -mbc_d_schur_max_mb (-1: not yet known) */
   PetscObjectId *sinv_id;
   PetscObjectState *sinv_state;
   MBCFrictionProblem fp;  /* D, q, mu of the multiplier problem: this rank's rows */
