@@ -672,40 +672,62 @@ static PetscErrorCode BodyContactDofs(MBCInterface ifc, PetscInt b, Vec r)
   PetscScalar *ra;
   PetscInt     n;
 
+  PetscInt     rs;
+
   PetscFunctionBegin;
   PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetOwnershipRange(r, &rs, NULL));
   PetscCall(VecGetArray(r, &ra));
   for (PetscInt i = 0; i < n; i++) ra[i] = 0;
   for (PetscInt k = 0; k < c->ncouples; k++)
     for (PetscInt side = 0; side < 2; side++) {
       const MBCSurface *sf = side ? &c->couples[k].slave : &c->couples[k].master;
       for (PetscInt v = 0; v < sf->nnodes; v++)
-        if (sf->nbody[v] == b)
-          for (PetscInt d = 0; d < 3; d++) ra[sf->nrow[v] + d] = 1;
+        if (sf->nbody[v] == b && sf->nrow[v] >= rs && sf->nrow[v] < rs + n) /* the surfaces are on every rank, the rows on their owner */
+          for (PetscInt d = 0; d < 3; d++) ra[sf->nrow[v] - rs + d] = 1;
     }
   PetscCall(VecRestoreArray(r, &ra));
   PetscCall(MBCBodyZeroHeldRows(ifc->bodies[b], r, NULL));
   PetscFunctionReturn(0);
 }
 
-/* The IS of BodyContactDofs (sequential: a body on one rank). */
-static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is)
+/* The rows of BodyContactDofs in the body's global numbering, ascending, all on the body's first
+   rank (an empty IS on the others; a body on one rank: all of them). *nC: how many, on every rank
+   of the body. Collective on the body. */
+static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscInt *nC)
 {
+  MBCBody      body = ifc->bodies[b];
   Vec          r;
-  PetscInt     n, nC = 0, *idx;
+  PetscInt     n, nl = 0, rs, *idx, *all = NULL;
+  PetscMPIInt  size, rank, cnt, *counts = NULL, *displs = NULL;
   PetscScalar *ra;
 
   PetscFunctionBegin;
-  PetscCall(VecDuplicate(ifc->bodies[b]->u, &r));
+  PetscCallMPI(MPI_Comm_size(body->comm, &size));
+  PetscCallMPI(MPI_Comm_rank(body->comm, &rank));
+  PetscCall(VecDuplicate(body->u, &r));
   PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetOwnershipRange(r, &rs, NULL));
   PetscCall(BodyContactDofs(ifc, b, r));
   PetscCall(VecGetArray(r, &ra));
   PetscCall(PetscMalloc1(n + 1, &idx));
   for (PetscInt i = 0; i < n; i++)
-    if (ra[i] != 0.0) idx[nC++] = i;
+    if (ra[i] != 0.0) idx[nl++] = rs + i;
   PetscCall(VecRestoreArray(r, &ra));
   PetscCall(VecDestroy(&r));
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nC, idx, PETSC_OWN_POINTER, is));
+  PetscCall(MPIU_Allreduce(&nl, nC, 1, MPIU_INT, MPI_SUM, body->comm));
+  if (size == 1) {
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nl, idx, PETSC_OWN_POINTER, is));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscMPIIntCast(nl, &cnt));
+  if (!rank) PetscCall(PetscMalloc3(size, &counts, size, &displs, *nC + 1, &all));
+  PetscCallMPI(MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, body->comm));
+  for (PetscMPIInt p = 0; !rank && p < size; p++) displs[p] = p ? displs[p - 1] + counts[p - 1] : 0;
+  PetscCallMPI(MPI_Gatherv(idx, cnt, MPIU_INT, all, counts, displs, MPIU_INT, 0, body->comm)); /* rank order: ascending */
+  PetscCall(PetscFree(idx));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, rank ? 0 : *nC, all, PETSC_COPY_VALUES, is));
+  if (!rank) PetscCall(PetscFree3(counts, displs, all));
   PetscFunctionReturn(0);
 }
 
@@ -713,7 +735,7 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is)
    takes 12 |C| bytes each. */
 #define MBC_SINV_BLOCK 1024
 
-/* -mbc_d_route auto: the Schur route for a body on one rank whose S^-1 (|C|^2 doubles) and the
+/* -mbc_d_route auto: the Schur route for a body whose S^-1 (|C|^2 doubles) and the
    pattern of one block of the inverse's entries asked of MUMPS fit in -mbc_d_schur_max_mb. S^-1
    comes from the body's own factor (BodySchurInverse), so nothing else is allocated: until stop 27
    a second MUMPS factorization with C as its Schur set held S dense in its fronts, a workspace 9 to
@@ -721,14 +743,11 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is)
    estimate by a symbolic analysis per body. Decided once per body: C is fixed by the scene. */
 static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *schur)
 {
-  MBCBody     body = ifc->bodies[b];
-  PetscMPIInt bsize;
+  MBCBody body = ifc->bodies[b];
 
   PetscFunctionBegin;
   *schur = PETSC_FALSE;
   if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE) PetscFunctionReturn(0);
-  PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
-  if (bsize > 1) PetscFunctionReturn(0); /* S^-1 of a body over several ranks is not wired */
   if (ifc->droute == MBC_D_ROUTE_SCHUR) {
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);
@@ -737,59 +756,73 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
     IS        is;
     PetscInt  nC;
     PetscReal mb, pat;
-    PetscCall(BodyContactIS(ifc, b, &is));
-    PetscCall(ISGetSize(is, &nC));
+    PetscCall(BodyContactIS(ifc, b, &is, &nC));
     PetscCall(ISDestroy(&is));
     mb                 = 8.0 * nC * nC / 1048576.0;
     pat                = 12.0 * nC * PetscMin(nC, MBC_SINV_BLOCK) / 1048576.0;
     ifc->schur_fits[b] = mb + pat <= ifc->schur_max_mb;
-    PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, the inverse's entries asked %g): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + pat, mb, pat, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
+    PetscMPIInt brank;
+    PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
+    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, the inverse's entries asked %g): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + pat, mb, pat, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
   }
   *schur = (PetscBool)ifc->schur_fits[b];
   PetscFunctionReturn(0);
 }
 
-/* S (nC x nC, dense) = (A^-1)_CC from A's MUMPS factor F: the selected entries of the inverse
-   (ICNTL(30)), blocks of MBC_SINV_BLOCK columns at a time. A sparse right-hand side names the
-   entries, so MUMPS's solves skip what cannot reach C (the forward substitution from each column's
-   leaf, the backward one only to C's rows): faster than the solves of the multi-right-hand-side
-   route, and than the second factorization with C as Schur set it replaces (the 200k dam's
-   monoliths 0.3 against 1.0 s each, its foundation's 3 672 contact DOFs 16.3 against 21.6 s).
-   *ok false when MUMPS fails (its message is then in INFOG(1)); F's controls as they were. */
-static PetscErrorCode BodyInverseEntries(Mat F, IS isC, PetscInt n, Mat *S, PetscInt *infog1, PetscBool *ok)
+/* S (nC x nC, dense, on the body's first rank; 0 x 0 on its others) = (A^-1)_CC from A's MUMPS
+   factor F on comm (the body's): the selected entries of the inverse (ICNTL(30)), blocks of
+   MBC_SINV_BLOCK columns at a time; isC holds C (global rows, ascending) on the first rank. A sparse
+   right-hand side names the entries, so MUMPS's solves skip what cannot reach C (the forward
+   substitution from each column's leaf, the backward one only to C's rows): faster than the solves
+   of the multi-right-hand-side route, and than the second factorization with C as Schur set it
+   replaces (the 200k dam's monoliths 0.3 against 1.0 s each, its foundation's 3 672 contact DOFs
+   16.3 against 21.6 s). On several ranks MUMPS takes the pattern and gives the entries on the first
+   rank (centralised), and solves in parallel. *ok false when MUMPS fails (INFOG(1) then says why),
+   the same on every rank; F's controls as they were. Collective on comm. */
+static PetscErrorCode BodyInverseEntries(Mat F, MPI_Comm comm, IS isC, PetscInt n, PetscInt nC, Mat *S, PetscInt *infog1, PetscBool *ok)
 {
   const PetscInt *ci;
-  PetscInt        nC, *pos, *ia, *ja, icntl20, icntl21, icntl27;
-  PetscScalar    *va, *sa;
+  PetscInt        nl, *pos = NULL, *ia, *ja = NULL, icntl20, icntl21, icntl27;
+  PetscScalar    *va = NULL, *sa;
+  PetscMPIInt     size, rank;
 
   PetscFunctionBegin;
   *ok     = PETSC_TRUE;
   *infog1 = 0;
-  PetscCall(ISGetSize(isC, &nC));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(ISGetLocalSize(isC, &nl));
   PetscCall(ISGetIndices(isC, &ci));
   PetscCall(MatMumpsGetIcntl(F, 20, &icntl20));
   PetscCall(MatMumpsGetIcntl(F, 21, &icntl21));
   PetscCall(MatMumpsGetIcntl(F, 27, &icntl27));
   PetscCall(MatMumpsSetIcntl(F, 27, 128)); /* right-hand sides per block of MUMPS's solve: 128 took the
                                               100k dam's foundation (2 352 contact DOFs) 6.2 -> 4.1 s */
-  PetscCall(PetscMalloc4(n, &pos, n + 1, &ia, (size_t)nC * PetscMin(nC, MBC_SINV_BLOCK) + 1, &ja, (size_t)nC * PetscMin(nC, MBC_SINV_BLOCK) + 1, &va));
-  for (PetscInt i = 0; i < n; i++) pos[i] = -1;
-  for (PetscInt k = 0; k < nC; k++) pos[ci[k]] = k;
-  PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, nC, nC, NULL, S));
+  if (!rank) { /* the pattern: this rank holds all of it */
+    PetscCall(PetscMalloc4(n, &pos, n + 1, &ia, (size_t)nC * PetscMin(nC, MBC_SINV_BLOCK) + 1, &ja, (size_t)nC * PetscMin(nC, MBC_SINV_BLOCK) + 1, &va));
+    for (PetscInt i = 0; i < n; i++) pos[i] = -1;
+    for (PetscInt k = 0; k < nl; k++) pos[ci[k]] = k;
+  } else {
+    PetscCall(PetscCalloc1(1, &ia));
+  }
+  PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, rank ? 0 : nC, rank ? 0 : nC, NULL, S));
   PetscCall(MatDenseGetArrayWrite(*S, &sa));
   for (PetscInt k0 = 0; k0 < nC && *ok; k0 += MBC_SINV_BLOCK) {
-    const PetscInt k1 = PetscMin(nC, k0 + MBC_SINV_BLOCK);
-    Mat            Bt, spRHS;
-    PetscErrorCode ierr;
-    /* Bt's row j (the inverse's column j, j in C's block) asks for the rows C */
-    ia[0] = 0;
-    for (PetscInt i = 0, nz = 0; i < n; i++) {
-      if (pos[i] >= k0 && pos[i] < k1)
-        for (PetscInt k = 0; k < nC; k++) ja[nz++] = ci[k];
-      ia[i + 1] = nz;
+    const PetscInt     k1 = PetscMin(nC, k0 + MBC_SINV_BLOCK);
+    const PetscScalar *v  = va;
+    Mat                Bt, spRHS;
+    PetscErrorCode     ierr;
+    if (!rank) { /* Bt's row j (the inverse's column j, j in C's block) asks for the rows C */
+      ia[0] = 0;
+      for (PetscInt i = 0, nz = 0; i < n; i++) {
+        if (pos[i] >= k0 && pos[i] < k1)
+          for (PetscInt k = 0; k < nC; k++) ja[nz++] = ci[k];
+        ia[i + 1] = nz;
+      }
+      PetscCall(PetscArrayzero(va, (size_t)nC * (k1 - k0)));
     }
-    PetscCall(PetscArrayzero(va, (size_t)nC * (k1 - k0)));
-    PetscCall(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, ia, ja, va, &Bt));
+    if (size == 1) PetscCall(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, ia, ja, va, &Bt)); /* the answer in va */
+    else PetscCall(MatCreateMPIAIJWithArrays(comm, rank ? 0 : n, rank ? 0 : n, n, n, ia, ja, va, &Bt));
     PetscCall(MatCreateTranspose(Bt, &spRHS));
     PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL)); /* MUMPS's failure: the caller decides */
     ierr = MatMumpsGetInverse(F, spRHS);
@@ -798,9 +831,19 @@ static PetscErrorCode BodyInverseEntries(Mat F, IS isC, PetscInt n, Mat *S, Pets
       PetscCall(MatMumpsGetInfog(F, 1, infog1));
       *ok = PETSC_FALSE;
     }
-    for (PetscInt i = 0; i < n && *ok; i++)
+    if (size > 1 && !rank) { /* the answer in Bt's diagonal block: the first rank owns every row and column */
+      Mat Ad;
+      PetscCall(MatMPIAIJGetSeqAIJ(Bt, &Ad, NULL, NULL));
+      PetscCall(MatSeqAIJGetArrayRead(Ad, &v));
+    }
+    for (PetscInt i = 0; !rank && i < n && *ok; i++)
       if (pos[i] >= k0 && pos[i] < k1)
-        for (PetscInt z = ia[i]; z < ia[i + 1]; z++) sa[pos[ja[z]] + (size_t)nC * pos[i]] = va[z];
+        for (PetscInt z = ia[i]; z < ia[i + 1]; z++) sa[pos[ja[z]] + (size_t)nC * pos[i]] = v[z];
+    if (size > 1 && !rank) {
+      Mat Ad;
+      PetscCall(MatMPIAIJGetSeqAIJ(Bt, &Ad, NULL, NULL));
+      PetscCall(MatSeqAIJRestoreArrayRead(Ad, &v));
+    }
     PetscCall(MatDestroy(&spRHS));
     PetscCall(MatDestroy(&Bt));
   }
@@ -810,20 +853,22 @@ static PetscErrorCode BodyInverseEntries(Mat F, IS isC, PetscInt n, Mat *S, Pets
   PetscCall(MatMumpsSetIcntl(F, 20, icntl20));
   PetscCall(MatMumpsSetIcntl(F, 21, icntl21));
   PetscCall(MatMumpsSetIcntl(F, 27, icntl27));
-  PetscCall(PetscFree4(pos, ia, ja, va));
+  if (!rank) PetscCall(PetscFree4(pos, ia, ja, va));
+  else PetscCall(PetscFree(ia));
   PetscCall(ISRestoreIndices(isC, &ci));
   if (!*ok) PetscCall(MatDestroy(S));
   PetscFunctionReturn(0);
 }
 
-/* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur, a body on one rank):
-   C the DOFs of the body's nodes on its contact surfaces (every couple, both sides) that are not
-   held (MBCBodyZeroHeldRows): a set fixed by the scene, which holds the rows of every H_b the search
-   can make. S^-1 = (A^-1)_CC, with S = A_CC - A_CI A_II^-1 A_IC the Schur complement onto C, from
-   the body's own factor (BodyInverseEntries), kept while the operator is the same object in the
-   same state; then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as the
-   multi-right-hand-side route, and a rebuild for new pairs costs two dense products, no solve. A
-   restart computes S^-1 from the same operator and the same C, so it builds the same D. */
+/* D_b = H_b^T A_b^-1 H_b through the Schur complement (-mbc_d_route schur): C the DOFs of the body's
+   nodes on its contact surfaces (every couple, both sides) that are not held (MBCBodyZeroHeldRows):
+   a set fixed by the scene, which holds the rows of every H_b the search can make. S^-1 =
+   (A^-1)_CC, with S = A_CC - A_CI A_II^-1 A_IC the Schur complement onto C, from the body's own
+   factor (BodyInverseEntries; on the body's first rank), kept while the operator is the same
+   object in the same state; then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as
+   the multi-right-hand-side route, and a rebuild for new pairs costs two dense products, no solve.
+   A restart computes S^-1 from the same operator and the same C, so it builds the same D.
+   Collective on the body. */
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *ok)
 {
   MBCBody          body = ifc->bodies[b];
@@ -832,23 +877,25 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *
   PetscObjectState state;
   PetscObjectId    id;
   PetscLogDouble   t0, t1;
+  PetscMPIInt      bsize, brank;
 
   PetscFunctionBegin;
   *ok = PETSC_TRUE;
+  PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
+  PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
   PetscCall(KSPGetOperators(body->ksp, &A, &P));
   PetscCall(PetscObjectStateGet((PetscObject)A, &state));
   PetscCall(PetscObjectGetId((PetscObject)A, &id));
   if (ifc->sinv[b] && ifc->sinv_id[b] == id && ifc->sinv_state[b] == state) {
-    PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement, S^-1 reused\n", body->name));
+    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement, S^-1 reused\n", body->name));
     PetscFunctionReturn(0);
   }
   PetscCall(MatDestroy(&ifc->sinv[b]));
   PetscCall(ISDestroy(&ifc->sinv_is[b]));
-  PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b])); /* the held rows depend on the operator (K^+) */
-  PetscCall(VecGetLocalSize(body->u, &n));
-  PetscCall(ISGetSize(ifc->sinv_is[b], &nC));
+  PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b], &nC)); /* the held rows depend on the operator (K^+) */
+  PetscCall(VecGetSize(body->u, &n));
   PetscCall(PetscTime(&t0));
-  if (nC == n) { /* every DOF on a contact surface: S^-1 = A^-1, by LAPACK on A dense */
+  if (nC == n && bsize == 1) { /* every DOF on a contact surface: S^-1 = A^-1, by LAPACK on A dense */
     PetscScalar *s;
     PetscBLASInt bn, lda, info2;
     PetscInt     ld;
@@ -872,11 +919,11 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *
     PetscInt infog1;
     PetscCall(KSPGetPC(body->ksp, &pc));
     PetscCall(PCFactorGetMatrix(pc, &F));
-    PetscCall(BodyInverseEntries(F, ifc->sinv_is[b], n, &S, &infog1, ok));
+    PetscCall(BodyInverseEntries(F, body->comm, ifc->sinv_is[b], n, nC, &S, &infog1, ok));
     if (!*ok) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
       PetscCall(ISDestroy(&ifc->sinv_is[b]));
-      PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, PETSC_COMM_SELF, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, infog1);
-      PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, infog1));
+      PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, body->comm, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, infog1);
+      if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, infog1));
       ifc->schur_fits[b] = 0;
       PetscFunctionReturn(0);
     }
@@ -885,28 +932,36 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *
   ifc->sinv_id[b]    = id;
   ifc->sinv_state[b] = state;
   PetscCall(PetscTime(&t1));
-  PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT " (S^-1, the inverse's entries from the body's factor, in %g s)\n", body->name, nC, n, t1 - t0));
+  if (!brank) PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT " (S^-1, the inverse's entries from the body's factor, %d rank%s, in %g s)\n", body->name, nC, n, (int)bsize, bsize > 1 ? "s" : "", t1 - t0));
   PetscFunctionReturn(0);
 }
 
-/* *Dout: the dense nb x nb D_b = H_C^T S^-1 H_C (BodySchurInverse); NULL if the Schur factorization
-   failed (auto then takes the solves). */
+/* *Dout: the dense nb x nb D_b = H_C^T S^-1 H_C (BodySchurInverse) on the body's first rank, 0 x 0
+   on its others; NULL on every rank if the inverse's entries failed (auto then takes the solves).
+   Collective on the body. */
 static PetscErrorCode BodyDSchur(MBCInterface ifc, PetscInt b, Mat *Dout)
 {
-  Mat       HC, HCd, Y;
+  Mat       HC, HCd, Y, *sub;
+  IS        cols;
   PetscBool ok;
+  PetscInt  nrow;
 
   PetscFunctionBegin;
   *Dout = NULL;
   PetscCall(BodySchurInverse(ifc, b, &ok));
   if (!ok) PetscFunctionReturn(0);
-  PetscCall(MatCreateSubMatrix(ifc->H[b], ifc->sinv_is[b], NULL, MAT_INITIAL_MATRIX, &HC));
-  PetscCall(MatConvert(HC, MATDENSE, MAT_INITIAL_MATRIX, &HCd));
+  /* H's rows C, all its columns, on the first rank (H is distributed by the body's rows) */
+  PetscCall(ISGetLocalSize(ifc->sinv_is[b], &nrow));
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, nrow ? ifc->nbcols[b] : 0, 0, 1, &cols));
+  PetscCall(MatCreateSubMatrices(ifc->H[b], 1, &ifc->sinv_is[b], &cols, MAT_INITIAL_MATRIX, &sub));
+  PetscCall(ISDestroy(&cols));
+  HC = sub[0];
+  PetscCall(MatConvert(HC, MATSEQDENSE, MAT_INITIAL_MATRIX, &HCd));
   PetscCall(MatMatMult(ifc->sinv[b], HCd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
   PetscCall(MatTransposeMatMult(HC, Y, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Dout));
   PetscCall(MatDestroy(&Y));
   PetscCall(MatDestroy(&HCd));
-  PetscCall(MatDestroy(&HC));
+  PetscCall(MatDestroySubMatrices(1, &sub));
   PetscFunctionReturn(0);
 }
 
@@ -1017,10 +1072,12 @@ static PetscErrorCode InterfaceBuildD(MBCInterface ifc, PetscInt m, PetscInt mlo
         const PetscScalar *a;
         PetscInt           lda;
         PetscCall(BodyDSchur(ifc, b, &D));
-        if (D) { /* else its Schur factorization failed: the solves below */
+        if (D) { /* else the inverse's entries failed: the solves below */
+          PetscInt nr;
+          PetscCall(MatGetSize(D, &nr, NULL));
           PetscCall(MatDenseGetArrayRead(D, &a));
           PetscCall(MatDenseGetLDA(D, &lda));
-          PetscCall(AddDenseBlock(ifc->fp.W, ifc->bcols[b], 0, nb, ifc->bcols[b], nb, a, lda));
+          if (nr) PetscCall(AddDenseBlock(ifc->fp.W, ifc->bcols[b], 0, nb, ifc->bcols[b], nb, a, lda)); /* the body's first rank adds it all */
           PetscCall(MatDenseRestoreArrayRead(D, &a));
           PetscCall(MatDestroy(&D));
           continue;

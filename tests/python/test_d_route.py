@@ -4,6 +4,8 @@ body's own factor), against the multi-right-hand-side solves: the
 same D, so the same answer to rounding, on the small static dam (3 free monoliths: their operators
 are K with the fixing rows of K^+) and on the two-rank run (a body on one rank each). The
 matrix-free route: test_matfree.py."""
+import re
+
 import numpy as np
 import pytest
 
@@ -21,13 +23,17 @@ def final(h5file):
     return u, read_contact(h5file, step=-1)["force"]
 
 
-@pytest.mark.parametrize("nproc", [1, 2])
+@pytest.mark.parametrize("nproc", [1, 2, 4])
 def test_schur_route_gives_the_same_answer(tmp_path, nproc):
+    """On 4 ranks the foundation spans 3 of them: its S^-1 by parallel MUMPS (the inverse's entries
+    gathered on its first rank), which before stop 27 fell back to the solves."""
     h5 = dam.build(tmp_path, **STATIC)
     solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_d_route", "multirhs", nproc=nproc)
     r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_d_route", "schur", "-info", nproc=nproc)
     assert r.stdout.count("D through the Schur complement onto") == 4, r.stdout[-2000:]  # 4 bodies, S^-1 once
     assert r.stdout.count("S^-1 reused") == 4  # the second build
+    if nproc == 4:
+        assert re.search(r"Body foundation: D through the Schur complement onto \d+ contact DOFs of \d+ \(S\^-1, the inverse's entries from the body's factor, 3 ranks", r.stdout)
     u0, f0 = final(str(tmp_path / "rhs.h5"))
     u1, f1 = final(str(tmp_path / "schur.h5"))
     assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
