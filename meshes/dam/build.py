@@ -209,6 +209,28 @@ def monolith(p, a, k):
     return points, cells, surfaces
 
 
+def _footprint(p, a, cx, cy):
+    """Whether the foundation's top faces with centres (cx, cy) lie under the dam with `ring`
+    elements beyond it on every side (the contact surface)."""
+    def beyond(axis, lo, hi):  # coordinates `ring` elements outside [lo, hi]
+        i, j = np.searchsorted(axis, lo - 1e-9 * abs(hi - lo)), np.searchsorted(axis, hi - 1e-9 * abs(hi - lo))
+        return axis[max(i - p.ring, 0)], axis[min(j + p.ring, len(axis) - 1)]
+
+    x0, x1 = beyond(a["fx"], 0.0, p.base)
+    y0, y1 = beyond(a["fy"], 0.0, p.monoliths * p.width)
+    return (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+
+
+def wet_surfaces(p, a):
+    """The foundation's top surfaces the reservoir loads: the floor upstream of the contact ring and
+    the ring's upstream part (heel_ring), those that have faces (a foundation that ends within the
+    ring upstream has no floor: a load on it would name a surface the mesh does not have)."""
+    cx, cy = np.meshgrid(0.5 * (a["fx"][1:] + a["fx"][:-1]), 0.5 * (a["fy"][1:] + a["fy"][:-1]), indexing="ij")
+    footprint = _footprint(p, a, cx, cy)
+    faces = {"floor": ~footprint & (cx < 0), "heel_ring": footprint & (cx < 0)}
+    return [name for name in ("floor", "heel_ring") if faces[name].any()]
+
+
 def foundation(p, a):
     """Points, cells and surfaces of the foundation block. Its top: the contact surface under the
     dam with `ring` elements beyond the footprint on every side (a base node moved off the
@@ -221,14 +243,7 @@ def foundation(p, a):
     points = np.stack([fx[idx[:, 0]], fy[idx[:, 1]], fz[idx[:, 2]]], axis=1)
     top = sides["zmax"]
     cx, cy = points[top][:, :, 0].mean(axis=1), points[top][:, :, 1].mean(axis=1)
-
-    def beyond(axis, lo, hi):  # coordinates `ring` elements outside [lo, hi]
-        i, j = np.searchsorted(axis, lo - 1e-9 * abs(hi - lo)), np.searchsorted(axis, hi - 1e-9 * abs(hi - lo))
-        return axis[max(i - p.ring, 0)], axis[min(j + p.ring, len(axis) - 1)]
-
-    x0, x1 = beyond(fx, 0.0, p.base)
-    y0, y1 = beyond(fy, 0.0, p.monoliths * p.width)
-    footprint = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+    footprint = _footprint(p, a, cx, cy)
     surfaces = {"foundation_contact": top[footprint & (cx > 0)], "heel_ring": top[footprint & (cx < 0)],
                 "floor": top[~footprint & (cx < 0)], "foundation_bottom": sides["zmin"],
                 "foundation_xsides": np.concatenate([sides["xmin"], sides["xmax"]]),
@@ -305,7 +320,7 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
              {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": ramped}]
     if p.floor:
         loads += [{"kind": "hydrostatic", "surface": name, "level": p.water, "unit_weight": WATER, "time": ramped}
-                  for name in ("floor", "heel_ring")]
+                  for name in wet_surfaces(p, layout(p))]
     mid = [(k - 0.5) * p.width for k in range(1, n + 1)]
     points = {}
     for k, y in enumerate(mid, start=1):

@@ -101,13 +101,13 @@ def test_decomposition_by_work(tmp_path):
     """Bodies onto ranks by their work, DOFs^(4/3) (the factor's entries: every solve with it), not
     their DOFs. A small dam on a small foundation (3 monoliths of 288-378 DOFs, the foundation 1 170
     DOFs: 55 % of the DOFs, 65 % of the work; the foundation so short upstream that no reservoir floor
-    is left beyond the contact ring: floor=False). On 2 ranks the foundation is alone on one. On 3 it
+    is left beyond the contact ring). On 2 ranks the foundation is alone on one. On 3 it
     gets two ranks of its own (alone on one it would carry 1.96 of the mean work, on two 0.98 while
     the monoliths' rank carries 1.04); by DOFs it had one (1.65 of the mean) and the monoliths two.
     The printed balance is the largest rank's work over the mean, recomputed here from the
     printed layout, and the 3-rank answer is the 1-rank one."""
     h5 = dam.build(str(tmp_path), joints=False, h=15.0, monoliths=3, level=80.0, mu_base=1.0,
-                   upstream=0.3, downstream=0.5, depth=0.3, floor=False)
+                   upstream=0.3, downstream=0.5, depth=0.3)
     runs, views = {}, {}
     for n in (1, 2, 3):
         prefix = str(tmp_path / f"np{n}")
