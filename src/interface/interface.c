@@ -670,9 +670,7 @@ static PetscErrorCode BodyContactDofs(MBCInterface ifc, PetscInt b, Vec r)
 {
   MBCContact   c = ifc->contact;
   PetscScalar *ra;
-  PetscInt     n;
-
-  PetscInt     rs;
+  PetscInt     n, rs;
 
   PetscFunctionBegin;
   PetscCall(VecGetLocalSize(r, &n));
@@ -692,8 +690,8 @@ static PetscErrorCode BodyContactDofs(MBCInterface ifc, PetscInt b, Vec r)
 }
 
 /* The rows of BodyContactDofs in the body's global numbering, ascending, all on the body's first
-   rank (an empty IS on the others; a body on one rank: all of them). *nC: how many, on every rank
-   of the body. Collective on the body. */
+   rank (an empty IS on the others; a body on one rank: all of them); is NULL: only their number
+   *nC, on every rank of the body. Collective on the body. */
 static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscInt *nC)
 {
   MBCBody      body = ifc->bodies[b];
@@ -716,6 +714,10 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscI
   PetscCall(VecRestoreArray(r, &ra));
   PetscCall(VecDestroy(&r));
   PetscCall(MPIU_Allreduce(&nl, nC, 1, MPIU_INT, MPI_SUM, body->comm));
+  if (!is) {
+    PetscCall(PetscFree(idx));
+    PetscFunctionReturn(0);
+  }
   if (size == 1) {
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nl, idx, PETSC_OWN_POINTER, is));
     PetscFunctionReturn(0);
@@ -743,7 +745,8 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscI
    estimate by a symbolic analysis per body. Decided once per body: C is fixed by the scene. */
 static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *schur)
 {
-  MBCBody body = ifc->bodies[b];
+  MBCBody     body = ifc->bodies[b];
+  PetscMPIInt brank;
 
   PetscFunctionBegin;
   *schur = PETSC_FALSE;
@@ -753,15 +756,12 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
     PetscFunctionReturn(0);
   }
   if (ifc->schur_fits[b] < 0) {
-    IS        is;
     PetscInt  nC;
     PetscReal mb, pat;
-    PetscCall(BodyContactIS(ifc, b, &is, &nC));
-    PetscCall(ISDestroy(&is));
+    PetscCall(BodyContactIS(ifc, b, NULL, &nC));
     mb                 = 8.0 * nC * nC / 1048576.0;
     pat                = 12.0 * nC * PetscMin(nC, MBC_SINV_BLOCK) / 1048576.0;
     ifc->schur_fits[b] = mb + pat <= ifc->schur_max_mb;
-    PetscMPIInt brank;
     PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
     if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, the inverse's entries asked %g): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + pat, mb, pat, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
   }
@@ -810,7 +810,7 @@ static PetscErrorCode BodyInverseEntries(Mat F, MPI_Comm comm, IS isC, PetscInt 
   for (PetscInt k0 = 0; k0 < nC && *ok; k0 += MBC_SINV_BLOCK) {
     const PetscInt     k1 = PetscMin(nC, k0 + MBC_SINV_BLOCK);
     const PetscScalar *v  = va;
-    Mat                Bt, spRHS;
+    Mat                Bt, spRHS, Ad = NULL;
     PetscErrorCode     ierr;
     if (!rank) { /* Bt's row j (the inverse's column j, j in C's block) asks for the rows C */
       ia[0] = 0;
@@ -832,18 +832,13 @@ static PetscErrorCode BodyInverseEntries(Mat F, MPI_Comm comm, IS isC, PetscInt 
       *ok = PETSC_FALSE;
     }
     if (size > 1 && !rank) { /* the answer in Bt's diagonal block: the first rank owns every row and column */
-      Mat Ad;
       PetscCall(MatMPIAIJGetSeqAIJ(Bt, &Ad, NULL, NULL));
       PetscCall(MatSeqAIJGetArrayRead(Ad, &v));
     }
     for (PetscInt i = 0; !rank && i < n && *ok; i++)
       if (pos[i] >= k0 && pos[i] < k1)
         for (PetscInt z = ia[i]; z < ia[i + 1]; z++) sa[pos[ja[z]] + (size_t)nC * pos[i]] = v[z];
-    if (size > 1 && !rank) {
-      Mat Ad;
-      PetscCall(MatMPIAIJGetSeqAIJ(Bt, &Ad, NULL, NULL));
-      PetscCall(MatSeqAIJRestoreArrayRead(Ad, &v));
-    }
+    if (Ad) PetscCall(MatSeqAIJRestoreArrayRead(Ad, &v));
     PetscCall(MatDestroy(&spRHS));
     PetscCall(MatDestroy(&Bt));
   }
@@ -872,8 +867,9 @@ static PetscErrorCode BodyInverseEntries(Mat F, MPI_Comm comm, IS isC, PetscInt 
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *ok)
 {
   MBCBody          body = ifc->bodies[b];
-  Mat              A, P, S;
-  PetscInt         n, nC;
+  Mat              A, P, S, F;
+  PC               pc;
+  PetscInt         n, nC, infog1;
   PetscObjectState state;
   PetscObjectId    id;
   PetscLogDouble   t0, t1;
@@ -895,38 +891,17 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *
   PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b], &nC)); /* the held rows depend on the operator (K^+) */
   PetscCall(VecGetSize(body->u, &n));
   PetscCall(PetscTime(&t0));
-  if (nC == n && bsize == 1) { /* every DOF on a contact surface: S^-1 = A^-1, by LAPACK on A dense */
-    PetscScalar *s;
-    PetscBLASInt bn, lda, info2;
-    PetscInt     ld;
-    PetscCall(MatConvert(A, MATSEQDENSE, MAT_INITIAL_MATRIX, &S));
-    PetscCall(MatDenseGetLDA(S, &ld));
-    PetscCall(PetscBLASIntCast(nC, &bn));
-    PetscCall(PetscBLASIntCast(ld, &lda));
-    PetscCall(MatDenseGetArray(S, &s));
-    if (bn) {
-      PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, s, &lda, &info2));
-      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': its operator is not positive definite (potrf %d)", body->name, (int)info2);
-      PetscCallBLAS("LAPACKpotri", LAPACKpotri_("L", &bn, s, &lda, &info2));
-      PetscCheck(!info2, PETSC_COMM_SELF, PETSC_ERR_LIB, "Body '%s': potri %d", body->name, (int)info2);
-      for (PetscInt j = 0; j < nC; j++) /* the upper triangle from the lower */
-        for (PetscInt i = 0; i < j; i++) s[i + j * ld] = s[j + i * ld];
-    }
-    PetscCall(MatDenseRestoreArray(S, &s));
-  } else {
-    PC       pc;
-    Mat      F;
-    PetscInt infog1;
-    PetscCall(KSPGetPC(body->ksp, &pc));
-    PetscCall(PCFactorGetMatrix(pc, &F));
-    PetscCall(BodyInverseEntries(F, body->comm, ifc->sinv_is[b], n, nC, &S, &infog1, ok));
-    if (!*ok) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
-      PetscCall(ISDestroy(&ifc->sinv_is[b]));
-      PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, body->comm, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, infog1);
-      if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, infog1));
-      ifc->schur_fits[b] = 0;
-      PetscFunctionReturn(0);
-    }
+  /* also where every DOF lies on a contact surface (S^-1 = A^-1: a coarse monolith with joints on
+     both sides), which the Schur factorization had to take by LAPACK on A dense */
+  PetscCall(KSPGetPC(body->ksp, &pc));
+  PetscCall(PCFactorGetMatrix(pc, &F));
+  PetscCall(BodyInverseEntries(F, body->comm, ifc->sinv_is[b], n, nC, &S, &infog1, ok));
+  if (!*ok) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
+    PetscCall(ISDestroy(&ifc->sinv_is[b]));
+    PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, body->comm, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, infog1);
+    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, infog1));
+    ifc->schur_fits[b] = 0;
+    PetscFunctionReturn(0);
   }
   ifc->sinv[b]       = S;
   ifc->sinv_id[b]    = id;
