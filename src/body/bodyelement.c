@@ -276,6 +276,49 @@ PetscErrorCode MBCBodyCellVertices(MBCBody body, PetscInt c, const PetscScalar x
   PetscFunctionReturn(0);
 }
 
+/* *K: the body's operator, preallocated from its cells' vertices (the pattern assembly fills) by
+   a MATPREALLOCATOR. DMPlex's own preallocation walks the adjacency of every mesh point: 5.3 of
+   the 8.2 s of assembly of the 198k dam. Collective on the body. */
+PetscErrorCode MBCBodyCreateOperator(MBCBody body, Mat *K)
+{
+  Mat                    pre;
+  ISLocalToGlobalMapping rl2g, cl2g;
+  Vec                    coords;
+  const PetscScalar     *x;
+  PetscInt               m, n, M, N, bs, cStart, cEnd, idx[24];
+  PetscReal              X[24];
+  static const PetscScalar zeros[576] = {0};
+
+  PetscFunctionBegin;
+  PetscCall(DMSetMatrixPreallocateSkip(body->dm, PETSC_TRUE));
+  PetscCall(DMCreateMatrix(body->dm, K)); /* sizes, block size, type, local-to-global map */
+  PetscCall(DMSetMatrixPreallocateSkip(body->dm, PETSC_FALSE));
+  PetscCall(MatGetLocalSize(*K, &m, &n));
+  PetscCall(MatGetSize(*K, &M, &N));
+  PetscCall(MatGetBlockSize(*K, &bs));
+  PetscCall(MatGetLocalToGlobalMapping(*K, &rl2g, &cl2g));
+  PetscCall(MatCreate(PetscObjectComm((PetscObject)*K), &pre));
+  PetscCall(MatSetType(pre, MATPREALLOCATOR));
+  PetscCall(MatSetSizes(pre, m, n, M, N));
+  PetscCall(MatSetBlockSize(pre, bs));
+  PetscCall(MatSetLocalToGlobalMapping(pre, rl2g, cl2g));
+  PetscCall(MatSetUp(pre));
+  PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
+  PetscCall(VecGetArrayRead(coords, &x));
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  for (PetscInt c = cStart; c < cEnd; c++) {
+    PetscInt nv;
+    PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
+    PetscCall(MatSetValuesLocal(pre, 3 * nv, idx, 3 * nv, idx, zeros, INSERT_VALUES));
+  }
+  PetscCall(VecRestoreArrayRead(coords, &x));
+  PetscCall(MatAssemblyBegin(pre, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(pre, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatPreallocatorPreallocate(pre, PETSC_TRUE, *K));
+  PetscCall(MatDestroy(&pre));
+  PetscFunctionReturn(0);
+}
+
 /* Assembles K (and M, unit factors times density, when M != NULL) over the body's cells, with
    the vertices of each cell in closure order for both coordinates and DOFs. */
 PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)

@@ -6,7 +6,7 @@
 static PetscErrorCode BodyAssembleOperators(MBCBody body, PetscBool mass, MBCMassType type)
 {
   PetscFunctionBegin;
-  PetscCall(DMCreateMatrix(body->dm, &body->K));
+  PetscCall(MBCBodyCreateOperator(body, &body->K));
   if (mass) PetscCall(MatDuplicate(body->K, MAT_DO_NOT_COPY_VALUES, &body->M));
   PetscCall(MBCBodyAssembleElasticity(body, body->K, body->M));
   PetscCall(MatSetOption(body->K, MAT_SYMMETRIC, PETSC_TRUE));
