@@ -6,6 +6,9 @@ static const char help[] = "mbcontact: finite-element multibody contact with Cou
 #include <mbc/private/multiplierimpl.h>
 #include <mbcontact.h>
 #include <hdf5.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 /* User errors print one line that names the input; -mbc_error_traceback keeps PETSc's full report. */
@@ -140,6 +143,29 @@ static PetscErrorCode WarnUnusedOptions(void)
   PetscFunctionReturn(0);
 }
 
+/* glibc's malloc backs its large blocks with transparent huge pages only when told so at start-up
+   (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, glibc >= 2.35; the kernel's THP mode "madvise", Debian's
+   default): the factorizations' fresh workspace then faults 2 MB at a time instead of 4 kB. On
+   the 198k dam, system time 10.0 -> 6.0 s, wall 38.1 -> 32.3 s. So, before MPI starts, the program
+   runs itself again with it set, unless GLIBC_TUNABLES is set already (the user's choice, or this
+   second start), MBC_HUGEPAGES=0, THP is off, or valgrind runs it. If exec fails it goes on. */
+static void ReexecWithHugePages(char **argv)
+{
+  const char *off = getenv("MBC_HUGEPAGES"), *pre = getenv("LD_PRELOAD");
+  char        mode[128] = "";
+  FILE       *f;
+
+  if (getenv("GLIBC_TUNABLES") || (off && !strcmp(off, "0")) || (pre && strstr(pre, "vgpreload"))) return;
+  f = fopen("/sys/kernel/mm/transparent_hugepage/enabled", "r");
+  if (!f) return;
+  if (!fgets(mode, sizeof(mode), f)) mode[0] = 0;
+  fclose(f);
+  if (!strstr(mode, "[madvise]") && !strstr(mode, "[always]")) return;
+  if (setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=1", 1)) return;
+  execv("/proc/self/exe", argv);
+  unsetenv("GLIBC_TUNABLES");
+}
+
 int main(int argc, char **argv)
 {
   PetscErrorCode ierr;
@@ -148,7 +174,9 @@ int main(int argc, char **argv)
   MBCSolver      solver    = NULL;
   int            sig;
 
+  ReexecWithHugePages(argv);
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  if (getenv("GLIBC_TUNABLES") && strstr(getenv("GLIBC_TUNABLES"), "glibc.malloc.hugetlb=1")) PetscCall(PetscInfo(NULL, "malloc: transparent huge pages (GLIBC_TUNABLES %s)\n", getenv("GLIBC_TUNABLES")));
   PetscCall(PetscOptionsGetBool(NULL, NULL, "-mbc_error_traceback", &traceback, NULL));
   if (!traceback) PetscCall(PetscPushErrorHandler(MBCErrorHandler, NULL));
   PetscCall(MBCStopInitialize(PETSC_COMM_WORLD));

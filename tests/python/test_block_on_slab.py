@@ -21,7 +21,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import PREP, ROOT, env, result, solve
+from conftest import PREP, ROOT, SOLVER, env, result, solve
 from mbcontact.results import read_csv
 
 CASE = os.path.join(ROOT, "meshes", "block-on-slab")
@@ -153,3 +153,32 @@ def test_dynamic_stick_slip_stick_matches_rigid_block(case):
     assert (c["slip"] == c["points"]).any()
     near = (c["t"] > 1.24) & (c["t"] < 1.29)
     assert (c["stick"][near] >= 0.9 * c["points"][near]).any()
+
+
+def thp_mode():
+    try:
+        return open("/sys/kernel/mm/transparent_hugepage/enabled").read()
+    except OSError:
+        return ""
+
+
+@pytest.mark.skipif("[never]" in thp_mode() or not thp_mode(), reason="transparent huge pages off in this kernel")
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_solver_starts_with_huge_pages(case, nproc):
+    """The solver runs itself again with glibc's malloc on transparent huge pages (GLIBC_TUNABLES
+    glibc.malloc.hugetlb=1: 198k dam 38 -> 32 s); MBC_HUGEPAGES=0 or the user's own GLIBC_TUNABLES
+    keep the plain start. The same answer either way."""
+    h5 = static_scene(case, 0.4247)
+    answers = []
+    for extra, on in (({}, True), ({"MBC_HUGEPAGES": "0"}, False), ({"GLIBC_TUNABLES": "glibc.malloc.check=0"}, False)):
+        e = env()
+        e.pop("GLIBC_TUNABLES", None)
+        e.update(extra)
+        cmd = [SOLVER, "-scene", str(h5), "-info", ":sys"]
+        if nproc > 1:
+            cmd = ["mpirun", "-n", str(nproc)] + cmd
+        r = subprocess.run(cmd, capture_output=True, text=True, env=e, timeout=300)
+        assert r.returncode == 0, r.stderr
+        assert ("malloc: transparent huge pages (GLIBC_TUNABLES glibc.malloc.hugetlb=1)" in r.stdout) == on, (extra, r.stdout[:2000])
+        answers.append(read_csv(result(h5, "_contact.csv"))["fx"][-1])
+    assert answers[0] == answers[1] == answers[2]
