@@ -21,6 +21,7 @@ the Schur route) and the multiplier solves' Newton iterations (from -mbc_monitor
 each run's whole output to DIR (docs/performance-model.md reads the MUMPS statistics from it).
 """
 import argparse
+import glob
 import json
 import os
 import re
@@ -49,6 +50,14 @@ STATIC_OK = dict(level=80.0, mu_base=1.0)  # the converging static case of tests
 
 def solve(h5, ranks=1, timeout=300, *options):
     """Runs the solver; returns dict(wall, rss MiB, rc, phases..., points, multipliers, out)."""
+    options = list(options)
+    info = None
+    if "-info" in options:  # each rank's -info lines into its own file: on stdout they interleaved with -log_view's table
+        i = options.index("-info")
+        info = os.path.join(os.path.dirname(h5), f"info{ranks}")
+        for f in glob.glob(info + ".*"):
+            os.remove(f)
+        options[i + 1] = info + options[i + 1][options[i + 1].index(":"):] if i + 1 < len(options) and ":" in options[i + 1] else info
     cmd = [SOLVER, "-scene", h5, "-mbc_output", os.path.join(os.path.dirname(h5), f"out{ranks}"), "-log_view", "-mbc_view", "-mbc_monitor", *options]
     if ranks > 1:
         cmd = ["mpirun", "-n", str(ranks)] + cmd
@@ -66,6 +75,8 @@ def solve(h5, ranks=1, timeout=300, *options):
     out = out.decode(errors="replace")
     r = dict(wall=wall, rss=rss, rc=p.returncode, out=out)
     r.update(log_view_times(out, EVENTS))
+    info_text = "".join(open(f, errors="replace").read() for f in sorted(glob.glob(info + ".*"))) if info else ""
+    r["out"] = out + info_text
     r["dofs"] = sum(int(d) for d in re.findall(r"(\d+) DOFs", out))
     m = re.findall(r"(\d+) contact points", out)
     r["points"] = int(m[-1]) if m else -1
@@ -73,7 +84,7 @@ def solve(h5, ranks=1, timeout=300, *options):
     r["mult"] = int(m[-1]) if m else -1
     r["err"] = [l for l in out.splitlines() if re.search(r"DIVERGED|[Ee]rror|not converge", l) and "CONVERGED" not in l][:3]
     r["rebuilds"] = out.count("flexibility matrix rebuilt")
-    schur = [(int(c), int(n)) for c, n in re.findall(r"Schur complement onto (\d+) contact DOFs of (\d+)", out)]
+    schur = [(int(c), int(n)) for c, n in re.findall(r"Schur complement onto (\d+) contact DOFs of (\d+)", out + info_text)]
     r["C"], r["C_body"] = max(schur) if schur else (0, 0)  # the largest body's |C| and its DOFs
     its = [int(i) for i in re.findall(r"contact: newton \S+ in (\d+) iterations", out)]
     r["solves_newton"], r["newton_its"] = len(its), sum(its)

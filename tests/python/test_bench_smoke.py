@@ -72,3 +72,19 @@ def test_search_plot_without_brute_force(tmp_path):
                        capture_output=True, text=True, env=dict(env(), MPLBACKEND="Agg"), timeout=120, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     assert re.search(r"^\s+1060\s.*\bnan\b", r.stdout, re.M) and plot.stat().st_size > 1000
+
+
+def test_dam_bench_info_at_two_ranks(tmp_path):
+    """With --info, rank 1's -info lines went to stdout and broke -log_view's table lines: the
+    2-rank scaling row read assemble 0.000 (measured at 198k). They now go to a file per rank, and
+    the Schur route's |C| is still read from them."""
+    out = tmp_path / "dam.json"
+    e = dict(env(), MPLBACKEND="Agg", TMPDIR=str(tmp_path))
+    r = subprocess.run([sys.executable, os.path.join(BENCH, "dam.py"), "--dofs", "1e3", "--scaling", "1e3", "--ranks", "2", "--info",
+                        "--plot", str(tmp_path / "p.png"), "--json", str(out)], capture_output=True, text=True, env=e, timeout=300, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    import json
+    rows = json.load(open(out))
+    for s in rows["scaling"] + rows["sizes"]:
+        assert s["rc"] == 0 and s["assemble"] > 0 and s["factor"] > 0 and s["D"] > 0 and s["C"] > 0, s
+    assert len(glob.glob(str(tmp_path / "**" / "scaling" / "info2.*"), recursive=True)) == 2, "one -info file per rank"
