@@ -283,11 +283,7 @@ PetscErrorCode MBCBodyCreateOperator(MBCBody body, Mat *K)
 {
   Mat                    pre;
   ISLocalToGlobalMapping rl2g, cl2g;
-  Vec                    coords;
-  const PetscScalar     *x;
-  PetscInt               m, n, M, N, bs, cStart, cEnd, idx[24];
-  PetscReal              X[24];
-  static const PetscScalar zeros[576] = {0};
+  PetscInt               m, n, M, N, bs;
 
   PetscFunctionBegin;
   PetscCall(DMSetMatrixPreallocateSkip(body->dm, PETSC_TRUE));
@@ -303,24 +299,15 @@ PetscErrorCode MBCBodyCreateOperator(MBCBody body, Mat *K)
   PetscCall(MatSetBlockSize(pre, bs));
   PetscCall(MatSetLocalToGlobalMapping(pre, rl2g, cl2g));
   PetscCall(MatSetUp(pre));
-  PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
-  PetscCall(VecGetArrayRead(coords, &x));
-  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-  for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscInt nv;
-    PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
-    PetscCall(MatSetValuesLocal(pre, 3 * nv, idx, 3 * nv, idx, zeros, INSERT_VALUES));
-  }
-  PetscCall(VecRestoreArrayRead(coords, &x));
-  PetscCall(MatAssemblyBegin(pre, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(pre, MAT_FINAL_ASSEMBLY));
+  PetscCall(MBCBodyAssembleElasticity(body, pre, NULL)); /* the pattern only */
   PetscCall(MatPreallocatorPreallocate(pre, PETSC_TRUE, *K));
   PetscCall(MatDestroy(&pre));
   PetscFunctionReturn(0);
 }
 
 /* Assembles K (and M, unit factors times density, when M != NULL) over the body's cells, with
-   the vertices of each cell in closure order for both coordinates and DOFs. */
+   the vertices of each cell in closure order for both coordinates and DOFs; K a MATPREALLOCATOR:
+   the pattern alone. */
 PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
 {
   Vec                coords;
@@ -328,8 +315,10 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
   PetscInt           cStart, cEnd;
   PetscReal          Ke[576], Me[576], X[24];
   PetscInt           idx[24];
+  PetscBool          pattern;
 
   PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)K, MATPREALLOCATOR, &pattern));
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(VecGetArrayRead(coords, &x));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
@@ -338,6 +327,10 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
 
     PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
     PetscCall(PetscArrayzero(Ke, 9 * nv * nv));
+    if (pattern) {
+      PetscCall(MatSetValuesLocal(K, 3 * nv, idx, 3 * nv, idx, Ke, INSERT_VALUES));
+      continue;
+    }
     if (M) PetscCall(PetscArrayzero(Me, 9 * nv * nv));
     if (nv == 4) MBCElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     else if (body->element == MBC_ELEMENT_HEX8I) PetscCheck(MBCElementHex8I(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': cell %" PetscInt_FMT " is degenerate (hex8i: its incompatible-mode stiffness is not positive definite)", body->name, c);
