@@ -863,7 +863,7 @@ static PetscErrorCode BodyInverseEntries(Mat F, MPI_Comm comm, IS isC, PetscInt 
    (A^-1)_CC, with S = A_CC - A_CI A_II^-1 A_IC the Schur complement onto C, from the body's own
    factor (BodyInverseEntries; on the body's first rank), kept while the operator is the same
    object in the same state; then D_b = H_C^T S^-1 H_C for the pairs of each build: the same D as
-   the multi-right-hand-side route, and a rebuild for new pairs costs two dense products, no solve.
+   the multi-right-hand-side route, and a rebuild for new pairs costs two products with the sparse H_C, no solve.
    A restart computes S^-1 from the same operator and the same C, so it builds the same D.
    Collective on the body. */
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *ok)
