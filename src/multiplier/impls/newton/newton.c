@@ -93,6 +93,61 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
   PetscFunctionReturn(0);
 }
 
+/* The PC that factors: the Newton KSP's own, or the inner one under PCREDUNDANT */
+static PetscErrorCode NewtonFactorPC(MBC_Newton *nt, PC *pc)
+{
+  PetscBool redundant;
+
+  PetscFunctionBegin;
+  PetscCall(KSPGetPC(nt->ksp, pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)*pc, PCREDUNDANT, &redundant));
+  if (redundant) {
+    KSP inner;
+    PetscCall(PCRedundantGetKSP(*pc, &inner));
+    PetscCall(KSPGetPC(inner, pc));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCNewtonSetFactorSolver(MBCMultiplier m, PetscBool dense)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+  PC          pc;
+
+  PetscFunctionBegin;
+  PetscCall(NewtonFactorPC(nt, &pc));
+  if (!nt->sparse_solver[0]) { /* the first factorization: keep the sparse package (MUMPS, or the options') */
+    MatSolverType st = NULL;
+    PetscCall(PCFactorGetMatSolverType(pc, &st));
+    PetscCall(PetscStrncpy(nt->sparse_solver, st ? st : "none", sizeof(nt->sparse_solver)));
+  }
+  if (dense) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERPETSC));
+  else if (strcmp(nt->sparse_solver, "none")) PetscCall(PCFactorSetMatSolverType(pc, nt->sparse_solver));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCNewtonFactor(MBCMultiplier m, PetscBool dense, PetscBool *failed)
+{
+  MBC_Newton    *nt = (MBC_Newton *)m->data;
+  PetscErrorCode ierr;
+  PetscMPIInt    bad;
+
+  PetscFunctionBegin;
+  if (dense) PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = KSPSetUp(nt->ksp);
+  if (dense) PetscCall(PetscPopErrorHandler());
+  PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT, PETSC_COMM_SELF, ierr, "The Newton matrix's factorization failed");
+  bad = ierr ? 1 : 0; /* every rank factors the same matrix, yet the fallback must be taken by all */
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_MAX, PetscObjectComm((PetscObject)m)));
+  *failed = (PetscBool)bad;
+  if (bad) {
+    PetscCall(PetscInfo(m, "Newton matrix: a zero pivot in its dense LU\n"));
+    PetscCall(KSPReset(nt->ksp));
+  }
+  nt->factors++;
+  PetscFunctionReturn(0);
+}
+
 /* The Newton step at the current iterate (A, B, active from ACResidual): dr on every row,
    dalpha with equilibrium constraints. Rows of separated contacts: dr = -phi = -r. The active
    rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
@@ -107,7 +162,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
   PetscInt            nA = 0, NA, rstart, ng = 0, nglocal = 0, gstart = 0, *rows, nloc, Nloc;
   IS                  isA;
   Vec                 b, x;
-  PetscBool           reuse = PETSC_FALSE;
+  PetscBool           reuse = PETSC_FALSE, failed = PETSC_FALSE;
   KSPConvergedReason  reason;
 
   PetscFunctionBegin;
@@ -200,7 +255,8 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     if (!reuse) {
       Mat          J, Ws, GTs = NULL, Gs = NULL;
       PetscInt    *dnz, *onz, jstart, jend, nmark;
-      PetscReal    dmax = 0;
+      PetscReal    dmax = 0, nnz = 0;
+      PetscBool    dense = PETSC_FALSE;
       PetscScalar *vals;
       PetscCall(MatCreateSubMatrix(fp->W, isA, isA, MAT_INITIAL_MATRIX, &Ws));
       if (fp->G) {
@@ -227,13 +283,24 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       PetscCall(PetscMalloc3(nloc + 1, &dnz, nloc + 1, &onz, Nloc + 1, &vals));
       /* two passes over the active contacts: the row patterns (preallocation), then the values */
       for (PetscInt pass = 0; pass < 2; pass++) {
-        if (pass == 1) {
+        if (pass == 1) { /* dense storage and LAPACK's LU when J is mostly nonzero: a dam's
+                            interface couples every contact with every other through its bodies
+                            (99 % of the 198k dam's J), where MUMPS's sparse LU ran 2 x slower */
+          for (PetscInt k = 0; k < nloc; k++) nnz += (PetscReal)(dnz[k] + onz[k]);
+          PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nnz, 1, MPIU_REAL, MPIU_SUM, comm));
+          dense = (PetscBool)(nnz >= nt->dense_fill * (PetscReal)Nloc * (PetscReal)Nloc);
+          PetscCall(PetscInfo(m, "Newton matrix %" PetscInt_FMT ": %.3g of its entries nonzero, %s\n", Nloc, (double)(nnz / ((PetscReal)Nloc * Nloc)), dense ? "dense (LAPACK LU)" : "sparse"));
           PetscCall(MatCreate(comm, &J));
           PetscCall(MatSetSizes(J, nloc, nloc, Nloc, Nloc));
-          PetscCall(MatSetType(J, MATAIJ));
-          PetscCall(MatSeqAIJSetPreallocation(J, 0, dnz));
-          PetscCall(MatMPIAIJSetPreallocation(J, 0, dnz, 0, onz));
-          PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+          if (dense) {
+            PetscCall(MatSetType(J, MATDENSE));
+            PetscCall(MatSetUp(J));
+          } else {
+            PetscCall(MatSetType(J, MATAIJ));
+            PetscCall(MatSeqAIJSetPreallocation(J, 0, dnz));
+            PetscCall(MatMPIAIJSetPreallocation(J, 0, dnz, 0, onz));
+            PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+          }
         }
         for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
           const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
@@ -312,17 +379,22 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       PetscCall(MatDestroy(&GTs));
       PetscCall(MatDestroy(&Gs));
       PetscCall(KSPReset(nt->ksp));
+      PetscCall(MBCNewtonSetFactorSolver(m, dense));
       PetscCall(KSPSetOperators(nt->ksp, J, J));
       PetscCall(MatDestroy(&J));
-      PetscCall(KSPSetUp(nt->ksp));
-      nt->factors++;
+      PetscCall(MBCNewtonFactor(m, dense, &failed));
       PetscCall(ISDestroy(&nt->isbuilt));
-      nt->isbuilt  = isA;
-      nt->keptslip = (PetscBool)(slips || fp->G);
-      isA          = NULL;
+      if (!failed) {
+        nt->isbuilt  = isA;
+        nt->keptslip = (PetscBool)(slips || fp->G);
+        isA          = NULL;
+      }
     }
-    PetscCall(KSPSolve(nt->ksp, b, x));
-    PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+    if (failed) reason = KSP_DIVERGED_PC_FAILED;
+    else {
+      PetscCall(KSPSolve(nt->ksp, b, x));
+      PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+    }
     if (reason >= 0) { /* iterative refinement against the shift and the factor's rounding: the
                           static saddle-point systems (free bodies) are conditioned enough that a plain
                           solve floored the merit near 1e-8 */
@@ -396,11 +468,13 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsInt("-newton_nonmonotone", "Memory of the non-monotone line search (1: monotone Armijo)", "MBCMultiplierSetFromOptions", nt->nonmonotone, &nt->nonmonotone, NULL));
   PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
   PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps (without sweeps: other rho)", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
+  PetscCall(PetscOptionsReal("-newton_dense_fill", "Fraction of nonzero entries from which the Newton matrix is stored and factored dense (LAPACK); > 1: never", "MBCMultiplierSetFromOptions", nt->dense_fill, &nt->dense_fill, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->rho_scale > 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_rho %g must be positive", (double)nt->rho_scale);
   PetscCheck(nt->pgs_warm >= 0 && nt->pgs_fallback >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_pgs_warm and -mbc_newton_pgs_fallback must be >= 0");
   PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
+  PetscCheck(nt->dense_fill >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_dense_fill %g must be >= 0", (double)nt->dense_fill);
   PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
   PetscCall(KSPSetFromOptions(nt->ksp));
   PetscCall(KSPSetFromOptions(nt->kmf));
@@ -735,6 +809,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->watchdog     = 10;
   nt->predictor    = PETSC_TRUE;
   nt->shift        = 1e-12;
+  nt->dense_fill   = 0.3;
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));

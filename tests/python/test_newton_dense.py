@@ -1,0 +1,52 @@
+"""The Newton matrix stored and factored dense (LAPACK's LU) once at least -mbc_newton_dense_fill
+(0.3) of its entries are nonzero, else sparse (MUMPS). A dam's interface couples nearly every
+contact with every other through the foundation, so its Newton matrix is dense by default: both
+storages solve the same step systems, so they give the same answer to the factors' rounding, on 1
+rank and on 2 (PCREDUNDANT: each rank factors the gathered matrix). The small static dam has three
+free monoliths, so its Newton matrix is the bordered saddle-point one [A + B W, B G^T; G, 0]."""
+import re
+
+import numpy as np
+import pytest
+
+from conftest import load_script, solve
+from mbcontact.results import read_body, read_contact
+
+dam = load_script("meshes/dam/build.py", "dam_build")
+
+STATIC = dict(h=15.0, monoliths=3, level=80.0, mu_base=1.0)
+BODIES = ("foundation", "m1", "m2", "m3")
+FILL = re.compile(r"Newton matrix (\d+): ([0-9.e+-]+) of its entries nonzero, (dense \(LAPACK LU\)|sparse)")
+
+
+def final(h5file):
+    u = np.concatenate([read_body(h5file, b, step=-1)["displacement"].ravel() for b in BODIES])
+    return u, read_contact(h5file, step=-1)["force"]
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+@pytest.mark.parametrize("joints", [False, True])
+def test_dense_and_sparse_newton_matrix_agree(tmp_path, joints, nproc):
+    """Without joints the first all-stick step is the answer (one factorization); with them the
+    joints slip and the solve takes 6 factorizations of changing active sets."""
+    h5 = dam.build(tmp_path, **STATIC, joints=joints)
+    d = solve(h5, "-mbc_output", str(tmp_path / "dense"), "-info", nproc=nproc)
+    s = solve(h5, "-mbc_output", str(tmp_path / "sparse"), "-mbc_newton_dense_fill", "2", "-info", nproc=nproc)
+    fd, fs = FILL.findall(d.stdout), FILL.findall(s.stdout)
+    assert fd and fs, d.stdout[-2000:]
+    # the default picks dense on this interface (its fill is measured, not assumed), the option sparse
+    assert all(kind.startswith("dense") for _, fill, kind in fd) and min(float(f) for _, f, _ in fd) >= 0.3
+    assert all(kind == "sparse" for _, _, kind in fs)
+    assert [n for n, _, _ in fd] == [n for n, _, _ in fs]  # the same step systems, iteration by iteration
+    assert len(fd) >= (5 if joints else 1)
+    u0, f0 = final(str(tmp_path / "sparse.h5"))
+    u1, f1 = final(str(tmp_path / "dense.h5"))
+    assert np.abs(f0).max() > 1e6 and np.abs(u0).max() > 1e-4
+    assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
+    assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
+
+
+def test_dense_fill_option_is_checked(tmp_path):
+    h5 = dam.build(tmp_path, **STATIC, joints=False)
+    r = solve(h5, "-mbc_newton_dense_fill", "-0.5", check=False)
+    assert r.returncode != 0 and "-mbc_newton_dense_fill -0.5 must be >= 0" in r.stderr, r.stderr
