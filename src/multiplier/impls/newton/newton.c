@@ -285,7 +285,8 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       for (PetscInt pass = 0; pass < 2; pass++) {
         if (pass == 1) { /* dense storage and LAPACK's LU when J is mostly nonzero: a dam's
                             interface couples every contact with every other through its bodies
-                            (99 % of the 198k dam's J), where MUMPS's sparse LU ran 2 x slower */
+                            (99 % of the 198k dam's J), where MUMPS's sparse LU ran 2 x slower;
+                            from about half full LAPACK wins (bench/newton_lu.py) */
           for (PetscInt k = 0; k < nloc; k++) nnz += (PetscReal)(dnz[k] + onz[k]);
           PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nnz, 1, MPIU_REAL, MPIU_SUM, comm));
           dense = (PetscBool)(nnz >= nt->dense_fill * (PetscReal)Nloc * (PetscReal)Nloc);
@@ -809,7 +810,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->watchdog     = 10;
   nt->predictor    = PETSC_TRUE;
   nt->shift        = 1e-12;
-  nt->dense_fill   = 0.3;
+  nt->dense_fill   = 0.5;
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));
