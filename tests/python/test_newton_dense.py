@@ -2,7 +2,8 @@
 (0.5) of its entries are nonzero, else sparse (MUMPS). A dam's interface couples nearly every
 contact with every other through the foundation, so its Newton matrix is dense by default: both
 storages solve the same step systems, so they give the same answer to the factors' rounding, on 1
-rank and on 2 (PCREDUNDANT: each rank factors the gathered matrix). The small static dam has three
+rank (LAPACK) and on 2 and 4 (ScaLAPACK on a 1 x 2 and a 2 x 2 grid; the sparse LU under
+PCREDUNDANT). The small static dam has three
 free monoliths, so its Newton matrix is the bordered saddle-point one [A + B W, B G^T; G, 0]."""
 import re
 
@@ -24,7 +25,7 @@ def final(h5file):
     return u, read_contact(h5file, step=-1)["force"]
 
 
-@pytest.mark.parametrize("nproc", [1, 2])
+@pytest.mark.parametrize("nproc", [1, 2, 4])
 @pytest.mark.parametrize("joints", [False, True])
 def test_dense_and_sparse_newton_matrix_agree(tmp_path, joints, nproc):
     """Without joints the first all-stick step is the answer (one factorization); with them the

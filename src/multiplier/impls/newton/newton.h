@@ -15,9 +15,11 @@ typedef struct {
   PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
   PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
   PetscReal     dense_fill;   /* a Newton matrix with at least this fraction of its entries nonzero is factored dense */
-  char          sparse_solver[64]; /* the factor package of a sparse Newton matrix (MUMPS, or the user's) */
   MBCMultiplier pgs;
-  KSP           ksp;
+  KSP           ksp;          /* the sparse LU (MUMPS; on several ranks under PCREDUNDANT) */
+  KSP           kdense;       /* the dense LU (LAPACK; on several ranks ScaLAPACK's), prefix -mbc_newton_dense_ */
+  MatType       densetype;    /* its matrix: MATDENSE, or MATSCALAPACK on several ranks */
+  KSP           klu;          /* the one holding the kept factor */
   /* per W */
   PetscReal *diag, *rho; /* 9, 2 per contact */
   PetscReal  rho_used;   /* the scale rho holds now (NewtonRhoScale but after a watchdog restart) */
@@ -36,10 +38,4 @@ typedef struct {
 
 /* The Newton system on the active rows isA (nA on this rank, then the ng rigid modes on the last
    rank) solved by GMRES with a preconditioner from W^-1's approximation (W a shell). */
-/* Sets the factor package of the Newton KSP's LU (the inner one under PCREDUNDANT): PETSc's dense
-   LAPACK LU when the matrix is dense, else the sparse package. */
-PETSC_INTERN PetscErrorCode MBCNewtonSetFactorSolver(MBCMultiplier, PetscBool);
-/* The Newton matrix's factorization; a zero pivot of the dense LU (an error in PETSc 3.18, not a
-   failed factor) is returned as *failed, collectively. */
-PETSC_INTERN PetscErrorCode MBCNewtonFactor(MBCMultiplier, PetscBool, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier, IS, PetscInt, Vec, Vec, KSPConvergedReason *);

@@ -241,7 +241,6 @@ static PetscErrorCode NewtonKrylovSetUpPJ(NewtonKrylov *nk)
   PetscCall(MatDestroy(&Ab));
   PetscCall(MatDestroy(&Bb));
   PetscCall(KSPReset(nt->ksp));
-  PetscCall(MBCNewtonSetFactorSolver(m, PETSC_FALSE));
   PetscCall(KSPSetOperators(nt->ksp, M, M));
   PetscCall(MatDestroy(&M));
   PetscCall(KSPSetUp(nt->ksp));
