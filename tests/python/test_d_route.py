@@ -62,8 +62,11 @@ def test_schur_inverse_serves_every_rebuild(tmp_path):
 @pytest.mark.parametrize("save, load", [(1, 1), (2, 1)])
 def test_schur_restart_equals_uninterrupted(tmp_path, save, load):
     """A restart computes S^-1 from the same operator on the same contact-surface DOFs (a set fixed
-    by the scene, not by the pairs), so it builds the same D: the last step bitwise as the
-    uninterrupted run's."""
+    by the scene, not by the pairs), so it builds the same D: the last step as the uninterrupted
+    run's to 1e-12 on the same ranks. From 2 ranks to 1 the Newton step's dense LU is ScaLAPACK's
+    before the restart and LAPACK's after (docs/performance.md 3d): their rounding differs, and
+    the last step's forces differ by 1.8e-12 of the largest (measured); 1e-10 still sees any lost
+    state (a replayed search that finds other faces moves forces by 1e-4 and more)."""
     h5 = dam.build(tmp_path, "dynamic", dt=0.02, ramp=0.5, eq_start=1.0, eq_duration=0.5, record_from=3.0, h=15.0, monoliths=3)
     opt = ("-mbc_d_route", "schur", "-info")
     full = solve(h5, *opt, "-mbc_output", str(tmp_path / "full"), nproc=save)
@@ -74,8 +77,9 @@ def test_schur_restart_equals_uninterrupted(tmp_path, save, load):
     assert "restarted from" in r.stdout
     ua, fa = final(str(tmp_path / "full.h5"))
     ub, fb = final(part + "_restart.h5")
-    assert np.abs(ua - ub).max() <= 1e-12 * np.abs(ua).max() and np.abs(ua).max() > 1e-3
-    assert np.abs(fa - fb).max() <= 1e-12 * np.abs(fa).max()
+    tol = 1e-12 if save == load else 1e-10
+    assert np.abs(ua - ub).max() <= tol * np.abs(ua).max() and np.abs(ua).max() > 1e-3
+    assert np.abs(fa - fb).max() <= tol * np.abs(fa).max()
 
 
 def test_auto_route_takes_schur_where_it_fits(tmp_path):

@@ -52,7 +52,9 @@ def test_restart_keeps_the_stable_faces(tmp_path, save, load):
     instead of 12 (twice at 1e-4), the last build before step 30 with kept faces; a checkpoint at step
     30 restarts (the build's search replayed with the built pairs' faces preferred, as the run
     searched; without it the replayed search finds other faces and the restart stops) and ends
-    bitwise where the uninterrupted run ends."""
+    where the uninterrupted run ends: to 1e-12 on the same ranks, to 1e-10 from 2 ranks to 1, where
+    the Newton step's dense LU changes from ScaLAPACK's to LAPACK's (their rounding: 2.2e-12 of the
+    largest force, measured; test_d_route.py's restart)."""
     h5 = dam.build(tmp_path, "dynamic", dt=0.02, ramp=0.5, eq_start=1.0, eq_duration=0.5, record_from=3.0, **SMALL)
     opt = ("-mbc_contact_stable_normal", "3e-5", "-mbc_monitor")
     full = solve(h5, *opt, "-mbc_output", str(tmp_path / "full"), nproc=save)
@@ -64,5 +66,6 @@ def test_restart_keeps_the_stable_faces(tmp_path, save, load):
     ta, ua, fa = final(str(tmp_path / "full.h5"))
     tb, ub, fb = final(part + "_restart.h5")
     assert ta == tb and np.abs(ua).max() > 1e-3
-    assert np.abs(ua - ub).max() <= 1e-12 * np.abs(ua).max()
-    assert np.abs(fa - fb).max() <= 1e-12 * np.abs(fa).max()
+    tol = 1e-12 if save == load else 1e-10
+    assert np.abs(ua - ub).max() <= tol * np.abs(ua).max()
+    assert np.abs(fa - fb).max() <= tol * np.abs(fa).max()
