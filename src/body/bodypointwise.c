@@ -17,28 +17,8 @@ void MBCPointwiseElasticity_g3(PetscInt dim, PetscInt Nf, PetscInt NfAux, const 
   }
 }
 
-/* Volume load: force per volume in constants[2..4]. */
-void MBCPointwiseBodyForce_f0(PetscInt dim, PetscInt Nf, PetscInt NfAux, const PetscInt uOff[], const PetscInt uOff_x[], const PetscScalar u[], const PetscScalar u_t[], const PetscScalar u_x[], const PetscInt aOff[], const PetscInt aOff_x[], const PetscScalar a[], const PetscScalar a_t[], const PetscScalar a_x[], PetscReal t, const PetscReal x[], PetscInt numConstants, const PetscScalar constants[], PetscScalar f0[])
-{
-  for (PetscInt c = 0; c < dim; ++c) f0[c] = constants[2 + c];
-}
-
 /* Surface load: traction constants[2..4] minus pressure constants[5] along the outward normal n. */
 void MBCPointwiseTraction_f0(PetscInt dim, PetscInt Nf, PetscInt NfAux, const PetscInt uOff[], const PetscInt uOff_x[], const PetscScalar u[], const PetscScalar u_t[], const PetscScalar u_x[], const PetscInt aOff[], const PetscInt aOff_x[], const PetscScalar a[], const PetscScalar a_t[], const PetscScalar a_x[], PetscReal t, const PetscReal x[], const PetscReal n[], PetscInt numConstants, const PetscScalar constants[], PetscScalar f0[])
 {
   for (PetscInt c = 0; c < dim; ++c) f0[c] = constants[2 + c] - constants[5] * n[c];
-}
-
-/* Cauchy stress from the displacement gradient, Voigt order xx yy zz xy yz xz. */
-void MBCPointwiseStress(PetscInt dim, PetscInt Nf, PetscInt NfAux, const PetscInt uOff[], const PetscInt uOff_x[], const PetscScalar u[], const PetscScalar u_t[], const PetscScalar u_x[], const PetscInt aOff[], const PetscInt aOff_x[], const PetscScalar a[], const PetscScalar a_t[], const PetscScalar a_x[], PetscReal t, const PetscReal x[], PetscInt numConstants, const PetscScalar constants[], PetscScalar s[])
-{
-  const PetscReal lambda = PetscRealPart(constants[0]), mu = PetscRealPart(constants[1]);
-  const PetscScalar tr   = u_x[0] + u_x[4] + u_x[8];
-
-  s[0] = lambda * tr + 2 * mu * u_x[0];
-  s[1] = lambda * tr + 2 * mu * u_x[4];
-  s[2] = lambda * tr + 2 * mu * u_x[8];
-  s[3] = mu * (u_x[1] + u_x[3]);
-  s[4] = mu * (u_x[5] + u_x[7]);
-  s[5] = mu * (u_x[2] + u_x[6]);
 }

@@ -35,42 +35,42 @@ static PetscErrorCode BodySurfaceSize(MBCBody body, PetscInt id, PetscInt *n)
   PetscFunctionReturn(0);
 }
 
-/* The load vector of one scene load for a unit time factor, in a clone of the body's DM whose
-   discrete system holds only that load; the clone shares topology, section and layout. */
+/* The load vector of one scene load for a unit time factor: volume and hydrostatic loads by hand,
+   the other surface loads in a clone of the body's DM whose discrete system holds only that load
+   (the clone shares topology, section and layout). */
 static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
 {
-  DM          dm;
-  PetscDS     ds;
-  Vec         zero, Floc;
-  PetscScalar c[MBC_NUM_CONSTANTS] = {0};
+  DM            dm;
+  PetscDS       ds;
+  Vec           zero, Floc;
+  DMLabel       label;
+  PetscWeakForm wf;
+  PetscInt      bd, id = load->surface_id;
+  PetscScalar   c[MBC_NUM_CONSTANTS] = {0};
 
   PetscFunctionBegin;
   if (load->kind == MBC_LOAD_HYDROSTATIC) { /* a linear field cut at the level: integrated by hand */
     PetscCall(MBCBodyAssembleHydrostatic(body, load, F));
     PetscFunctionReturn(0);
   }
+  if (load->kind == MBC_LOAD_GRAVITY || load->kind == MBC_LOAD_BODY_FORCE) { /* by hand, as K */
+    PetscReal f[3];
+    for (PetscInt d = 0; d < 3; d++) f[d] = PetscRealPart(load->vector[d]) * (load->kind == MBC_LOAD_GRAVITY ? body->desc.density : 1.0);
+    PetscCall(MBCBodyAssembleVolumeLoad(body, f, F));
+    PetscFunctionReturn(0);
+  }
   c[0] = body->lambda;
   c[1] = body->mu;
   for (PetscInt d = 0; d < 3; d++) c[2 + d] = load->vector[d];
-  if (load->kind == MBC_LOAD_GRAVITY)
-    for (PetscInt d = 0; d < 3; d++) c[2 + d] *= body->desc.density;
   if (load->kind == MBC_LOAD_PRESSURE) c[5] = load->value;
   PetscCall(DMClone(body->dm, &dm));
   PetscCall(DMSetField(dm, 0, NULL, (PetscObject)body->fe));
   PetscCall(DMCreateDS(dm));
   PetscCall(DMGetDS(dm, &ds));
-  if (load->kind == MBC_LOAD_GRAVITY || load->kind == MBC_LOAD_BODY_FORCE) {
-    PetscCall(PetscDSSetResidual(ds, 0, MBCPointwiseBodyForce_f0, NULL));
-  } else {
-    DMLabel       label;
-    PetscWeakForm wf;
-    PetscInt      bd, id = load->surface_id;
-
-    PetscCall(DMGetLabel(dm, "Face Sets", &label));
-    PetscCall(DMAddBoundary(dm, DM_BC_NATURAL, load->surface, label, 1, &id, 0, 0, NULL, NULL, NULL, NULL, &bd));
-    PetscCall(PetscDSGetBoundary(ds, bd, &wf, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
-    PetscCall(PetscWeakFormSetIndexBdResidual(wf, label, id, 0, 0, 0, MBCPointwiseTraction_f0, 0, NULL));
-  }
+  PetscCall(DMGetLabel(dm, "Face Sets", &label));
+  PetscCall(DMAddBoundary(dm, DM_BC_NATURAL, load->surface, label, 1, &id, 0, 0, NULL, NULL, NULL, NULL, &bd));
+  PetscCall(PetscDSGetBoundary(ds, bd, &wf, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(PetscWeakFormSetIndexBdResidual(wf, label, id, 0, 0, 0, MBCPointwiseTraction_f0, 0, NULL));
   PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, c));
   PetscCall(DMGetLocalVector(dm, &zero));
   PetscCall(DMGetLocalVector(dm, &Floc));

@@ -78,6 +78,7 @@ PETSC_INTERN PetscErrorCode MBCBodyAssembleLoads(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody, MBCLoadDesc *, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyLoadResultant(MBCBody, Vec, PetscReal[6]);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleElasticity(MBCBody, Mat, Mat);
+PETSC_INTERN PetscErrorCode MBCBodyAssembleVolumeLoad(MBCBody, const PetscReal[3], Vec);
 PETSC_INTERN PetscErrorCode MBCBodyCreateOperator(MBCBody, Mat *);
 PETSC_INTERN PetscErrorCode MBCBodyCellVertices(MBCBody, PetscInt, const PetscScalar[], PetscReal[24], PetscInt[24], PetscInt *);
 PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);

@@ -14,3 +14,5 @@ PETSC_EXTERN PetscBool MBCElementHex8I(const PetscReal[], PetscReal, PetscReal, 
    &mean): div u at the centre and its cell mean over the 2x2x2 rule (hex8b's stress). */
 PETSC_EXTERN void MBCElementHex8B(const PetscReal[], PetscReal, PetscReal, PetscReal, PetscReal *, PetscReal *);
 PETSC_EXTERN void MBCElementHex8Dilatation(const PetscReal[], const PetscReal[], PetscReal *, PetscReal *);
+/* MBCElementCentreGradient(nv, X, U, gu): grad u at the cell's reference centre, gu[3 i + k] = d u_i / d x_k. */
+PETSC_EXTERN void MBCElementCentreGradient(PetscInt, const PetscReal[], const PetscReal[], PetscReal[9]);
