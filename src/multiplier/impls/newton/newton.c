@@ -800,13 +800,40 @@ static PetscErrorCode MBCMultiplierView_Newton(MBCMultiplier m, PetscViewer view
   PetscFunctionReturn(0);
 }
 
+/* A direct solve of the Newton matrix, options prefix <m's prefix><name>: PREONLY and an LU by the
+   package solver, under PCREDUNDANT when every rank factors the whole matrix */
+static PetscErrorCode NewtonLUCreate(MBCMultiplier m, const char name[], PetscBool redundant, MatSolverType solver, KSP *ksp)
+{
+  const char *prefix;
+  char        p[256];
+  PC          pc;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));
+  PetscCall(PetscSNPrintf(p, sizeof(p), "%s%s", prefix ? prefix : "", name));
+  PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), ksp));
+  PetscCall(KSPSetOptionsPrefix(*ksp, p));
+  PetscCall(KSPSetType(*ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(*ksp, &pc));
+  if (redundant) {
+    KSP inner;
+    PetscCall(PCSetType(pc, PCREDUNDANT));
+    PetscCall(PCRedundantGetKSP(pc, &inner));
+    PetscCall(KSPSetType(inner, KSPPREONLY));
+    PetscCall(KSPGetPC(inner, &pc));
+  }
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(PCFactorSetMatSolverType(pc, solver));
+  PetscCall(KSPSetErrorIfNotConverged(*ksp, PETSC_FALSE));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
 {
   MBC_Newton *nt;
   const char *prefix;
   char        p[256];
-  PC          pc;
-  PetscBool   mumps;
+  PetscBool   mumps, scalapack;
   PetscMPIInt size;
 
   PetscFunctionBegin;
@@ -824,47 +851,18 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));
-  PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_", prefix ? prefix : ""));
-  PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), &nt->ksp));
-  PetscCall(KSPSetOptionsPrefix(nt->ksp, p));
-  PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
-  PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PetscHasExternalPackage("mumps", &mumps));
+  PetscCall(PetscHasExternalPackage("scalapack", &scalapack));
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)m), &size));
-  if (size > 1) { /* the Newton system is the contact problem's size: each rank factors all of it
-                     (PCREDUNDANT). MUMPS on distributed input skips its maximum-transversal
-                     permutation, and the zero block of the free bodies' equilibrium rows then
-                     gave infinite steps (a static dam on 2 ranks) */
-    KSP inner;
-    PetscCall(PCSetType(pc, PCREDUNDANT));
-    PetscCall(PCRedundantGetKSP(pc, &inner));
-    PetscCall(KSPSetType(inner, KSPPREONLY));
-    PetscCall(KSPGetPC(inner, &pc));
-  }
-  PetscCall(PCSetType(pc, PCLU));
-  if (mumps) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-  PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
-  { /* the dense LU: on several ranks ScaLAPACK's, 4 x faster at n = 3000 on 2 ranks than every
-       rank factoring the whole matrix (PCREDUNDANT), and it holds the matrix once, not per rank */
-    PetscBool scalapack;
-    PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_dense_", prefix ? prefix : ""));
-    PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), &nt->kdense));
-    PetscCall(KSPSetOptionsPrefix(nt->kdense, p));
-    PetscCall(KSPSetType(nt->kdense, KSPPREONLY));
-    PetscCall(KSPGetPC(nt->kdense, &pc));
-    PetscCall(PetscHasExternalPackage("scalapack", &scalapack));
-    nt->densetype = size > 1 && scalapack ? MATSCALAPACK : MATDENSE;
-    if (size > 1 && !scalapack) {
-      KSP inner;
-      PetscCall(PCSetType(pc, PCREDUNDANT));
-      PetscCall(PCRedundantGetKSP(pc, &inner));
-      PetscCall(KSPSetType(inner, KSPPREONLY));
-      PetscCall(KSPGetPC(inner, &pc));
-    }
-    PetscCall(PCSetType(pc, PCLU));
-    PetscCall(PCFactorSetMatSolverType(pc, size > 1 && scalapack ? MATSOLVERSCALAPACK : MATSOLVERPETSC));
-    PetscCall(KSPSetErrorIfNotConverged(nt->kdense, PETSC_FALSE));
-  }
+  /* the sparse LU: the Newton system is the contact problem's size, so on several ranks each
+     factors all of it (PCREDUNDANT). MUMPS on distributed input skips its maximum-transversal
+     permutation, and the zero block of the free bodies' equilibrium rows then gave infinite steps
+     (a static dam on 2 ranks) */
+  PetscCall(NewtonLUCreate(m, "newton_", size > 1, mumps ? MATSOLVERMUMPS : MATSOLVERPETSC, &nt->ksp));
+  /* the dense LU: on several ranks ScaLAPACK's, 4 x faster at n = 3000 on 2 ranks than every rank
+     factoring the whole matrix (PCREDUNDANT), and it holds the matrix once, not per rank */
+  nt->densetype = size > 1 && scalapack ? MATSCALAPACK : MATDENSE;
+  PetscCall(NewtonLUCreate(m, "newton_dense_", size > 1 && !scalapack, size > 1 && scalapack ? MATSOLVERSCALAPACK : MATSOLVERPETSC, &nt->kdense));
   { /* the steps with a matrix-free W: right-preconditioned GMRES, so its residual is J's own; 1e-4
        leaves the outer iteration linear convergence at that rate near the solution */
     PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_mf_", prefix ? prefix : ""));
