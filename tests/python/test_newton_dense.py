@@ -7,8 +7,10 @@ PCREDUNDANT). The small static dam has three
 free monoliths, so its Newton matrix is the bordered saddle-point one [A + B W, B G^T; G, 0]."""
 import re
 
+import h5py
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from conftest import load_script, solve
 from mbcontact.results import read_body, read_contact
@@ -51,3 +53,35 @@ def test_dense_fill_option_is_checked(tmp_path):
     h5 = dam.build(tmp_path, **STATIC, joints=False)
     r = solve(h5, "-mbc_newton_dense_fill", "-0.5", check=False)
     assert r.returncode != 0 and "-mbc_newton_dense_fill -0.5 must be >= 0" in r.stderr, r.stderr
+
+
+def singular_problem(path):
+    """An FCLIB local problem whose W is exactly singular: two contacts with the same flexibility
+    (W = [[I, I], [I, I]]), both pressed (q_n = -1) and sticking (q_t = 0). Its solutions have
+    r_n1 + r_n2 = 1; with -mbc_newton_shift 0 the all-stick Newton matrix B W has exactly equal
+    rows, so the dense LU meets an exact zero pivot."""
+    W = sp.csr_matrix(np.kron(np.ones((2, 2)), np.eye(3)))
+    with h5py.File(path, "w") as f:
+        g = f.create_group("fclib_local")
+        w = g.create_group("W")
+        for k, v in (("m", 6), ("n", 6), ("nz", -2)):
+            w[k] = np.array([v], dtype=np.int32)
+        w["p"], w["i"], w["x"] = W.indptr.astype(np.int32), W.indices.astype(np.int32), W.data
+        g["vectors/q"] = np.array([-1.0, 0, 0, -1.0, 0, 0])
+        g["vectors/mu"] = np.array([0.5, 0.5])
+        g["spacedim"] = np.array([3], dtype=np.int32)
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_zero_pivot_is_a_failed_step(tmp_path, nproc):
+    """PETSc 3.18's LAPACK LU raises an error on a zero pivot ("Bad LU factorization") and its
+    ScaLAPACK LU another (info > 0), where MUMPS flags a failed factor: either must be a failed
+    Newton step (the fallback dr = -phi), agreed by every rank, and the solve goes on to the
+    answer, not a crash."""
+    path = tmp_path / "singular.hdf5"
+    singular_problem(path)
+    r = solve("", "-fclib", str(path), "-mbc_newton_shift", "0", "-info", nproc=nproc)
+    assert "dense (LAPACK LU)" in r.stdout and "a zero pivot in its dense LU" in r.stdout, r.stdout[-3000:]
+    assert "DIVERGED_PC_FAILED; falling back to dr = -phi" in r.stdout
+    m = re.search(r"newton CONVERGED_RTOL in \d+ iterations, .* FCLIB merit ([0-9.e+-]+)", r.stdout)
+    assert m and float(m.group(1)) < 1e-8, r.stdout[-2000:]
