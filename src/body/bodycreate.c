@@ -264,6 +264,7 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(DMDestroy(&b->dmStress));
   PetscCall(DMDestroy(&b->dm));
   PetscCall(PetscFree2(b->vnum, b->cnum));
+  PetscCall(PetscFree2(b->cellvoff, b->cellv));
   PetscCall(MBCSceneDestroy(&b->scene));
   comm = b->comm; /* split by the solver for this body: freed after the header lets go of it */
   PetscCall(PetscHeaderDestroy(body));

@@ -298,34 +298,57 @@ static void ElementNodalWeights(PetscInt nv, const PetscReal X[], PetscReal w[])
   }
 }
 
+/* Every local cell's vertices in closure order, once: DMPlexGetTransitiveClosure looks up the cell
+   type of every point of the closure (DMLabelGetValue, 2-3 % of a whole dam run), and the cells'
+   vertices serve K's pattern and values, the volume loads and every output's stress. */
+static PetscErrorCode BodyCellVerticesSetUp(MBCBody body)
+{
+  PetscInt cStart, cEnd, vStart, vEnd, n = 0;
+
+  PetscFunctionBegin;
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(PetscMalloc2(cEnd - cStart + 1, &body->cellvoff, 8 * (cEnd - cStart) + 1, &body->cellv));
+  body->cellvoff[0] = 0;
+  for (PetscInt c = cStart; c < cEnd; c++) {
+    PetscInt nv = 0, *closure = NULL, nclosure;
+    PetscCall(DMPlexGetTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
+    for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+      if (closure[p] < vStart || closure[p] >= vEnd) continue;
+      PetscCheck(++nv <= 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with more than 8 vertices", body->name);
+      body->cellv[n++] = closure[p];
+    }
+    PetscCall(DMPlexRestoreTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
+    body->cellvoff[c - cStart + 1] = n;
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Cell c's vertices in closure order: their coordinates X (3 each, from the local coordinate
    array x) and the local DOF offsets idx of the displacement (3 each); *nv their count. */
 PetscErrorCode MBCBodyCellVertices(MBCBody body, PetscInt c, const PetscScalar x[], PetscReal X[24], PetscInt idx[24], PetscInt *nv)
 {
   DM           cdm;
   PetscSection lsec, csec;
-  PetscInt    *closure = NULL, nclosure, vStart, vEnd;
+  PetscInt     cStart;
 
   PetscFunctionBegin;
+  if (!body->cellvoff) PetscCall(BodyCellVerticesSetUp(body));
   PetscCall(DMGetLocalSection(body->dm, &lsec));
   PetscCall(DMGetCoordinateDM(body->dm, &cdm));
   PetscCall(DMGetLocalSection(cdm, &csec));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
-  *nv = 0;
-  PetscCall(DMPlexGetTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-  for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-    PetscInt v = closure[p], off, coff;
-    if (v < vStart || v >= vEnd) continue;
-    PetscCheck(*nv < 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with more than 8 vertices", body->name);
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, NULL));
+  *nv = body->cellvoff[c - cStart + 1] - body->cellvoff[c - cStart];
+  for (PetscInt a = 0; a < *nv; a++) {
+    const PetscInt v = body->cellv[body->cellvoff[c - cStart] + a];
+    PetscInt       off, coff;
     PetscCall(PetscSectionGetOffset(lsec, v, &off));
     PetscCall(PetscSectionGetOffset(csec, v, &coff));
     for (PetscInt i = 0; i < 3; i++) {
-      idx[3 * *nv + i] = off + i;
-      X[3 * *nv + i]   = PetscRealPart(x[coff + i]);
+      idx[3 * a + i] = off + i;
+      X[3 * a + i]   = PetscRealPart(x[coff + i]);
     }
-    (*nv)++;
   }
-  PetscCall(DMPlexRestoreTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
   PetscCheck(*nv == 4 || *nv == 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with %" PetscInt_FMT " vertices; only tet4 and hex8 are supported", body->name, *nv);
   PetscFunctionReturn(0);
 }

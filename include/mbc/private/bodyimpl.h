@@ -34,6 +34,8 @@ struct _n_MBCBody {
   DM      dm;             /* displacement field, Lagrange P1/Q1 */
   DM      dmStress;       /* cellwise stress, 6 components (xx yy zz xy yz xz) */
   PetscInt *vnum, *cnum;  /* scene index (the order mbcontact-prep wrote) of each local vertex and cell */
+  PetscInt *cellvoff, *cellv; /* each local cell's vertices in closure order, cellv[cellvoff[c]..]: kept
+                                 because a closure looks up every point's cell type (MBCBodyCellVertices) */
   PetscFE fe;
   PetscReal lambda, mu;   /* Lamé constants */
 
