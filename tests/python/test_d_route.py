@@ -100,3 +100,21 @@ def test_auto_route_takes_schur_where_it_fits(tmp_path):
     bad = solve(h5, "-mbc_d_schur_max_mb", "-1", check=False)
     assert bad.returncode != 0 and "-mbc_d_schur_max_mb" in bad.stdout + bad.stderr
 
+
+
+def test_out_of_core_factors_give_the_same_answer(tmp_path, monkeypatch):
+    """-body_mat_mumps_icntl_22 1 (README, docs/performance.md 3d): the bodies' factors on disk,
+    in MUMPS_OOC_TMPDIR; the Schur route's entries of the inverse and the body solves read them
+    back: the same answer as in core to 1e-9, and nothing left in the directory."""
+    h5 = dam.build(tmp_path, **STATIC)
+    ooc = tmp_path / "ooc"
+    ooc.mkdir()
+    monkeypatch.setenv("MUMPS_OOC_TMPDIR", str(ooc))
+    solve(h5, "-mbc_output", str(tmp_path / "core"))
+    r = solve(h5, "-mbc_output", str(tmp_path / "disk"), "-body_mat_mumps_icntl_22", "1", "-body_foundation_mat_mumps_icntl_4", "2")
+    assert re.search(r"ICNTL\(22\) Out-of-core option\s+=\s+1", r.stdout), r.stdout[-2000:]
+    u0, f0 = final(str(tmp_path / "core.h5"))
+    u1, f1 = final(str(tmp_path / "disk.h5"))
+    assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
+    assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
+    assert not list(ooc.iterdir())
