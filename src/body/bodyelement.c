@@ -1,8 +1,8 @@
 /* Element stiffness and mass of linear elasticity for tet4 and hex8 cells, volume loads, and their
    assembly. Hand-written because PETSc 3.18's generic PetscFE integration costs ~2 ms per hex8 cell
    for a 3-component field (measured; 12x the scalar cost), i.e. minutes per matrix at a million
-   DOFs; these kernels take microseconds. Surface loads, stress recovery and geometry checks stay
-   with PetscFE. */
+   DOFs; these kernels take microseconds. The cell stress uses them too (bodysolve.c); surface
+   loads and geometry checks stay with PetscFE. */
 #include <mbc/private/bodyimpl.h>
 #include <mbc/private/element.h>
 
@@ -52,16 +52,15 @@ static PetscReal Invert3(const PetscReal J[9], PetscReal Ji[9])
   return det;
 }
 
-/* tet4: constant gradients; the mass integrand is quadratic, so use the 4-point rule of degree 2. */
-void MBCElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
+/* The linear tet with vertices X: the constant physical gradients G of its 4 functions; returns
+   its volume. */
+static PetscReal Tet4Gradients(const PetscReal X[], PetscReal G[][3])
 {
-  PetscReal       J[9], Ji[9], G[4][3], det, vol;
-  const PetscReal a = 0.5854101966249685, b = 0.1381966011250105; /* (5 + 3 sqrt 5)/20, (5 - sqrt 5)/20 */
+  PetscReal J[9], Ji[9], det;
 
   for (PetscInt i = 0; i < 3; i++)
     for (PetscInt k = 0; k < 3; k++) J[i * 3 + k] = X[3 * (k + 1) + i] - X[i]; /* J_ik = d x_i / d xi_k */
   det = Invert3(J, Ji);
-  vol = PetscAbsReal(det) / 6.0;
   for (PetscInt k = 0; k < 3; k++) {
     G[0][k] = 0;
     for (PetscInt c = 1; c < 4; c++) {
@@ -69,6 +68,15 @@ void MBCElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscRe
       G[0][k] -= G[c][k];
     }
   }
+  return PetscAbsReal(det) / 6.0;
+}
+
+/* tet4: constant gradients; the mass integrand is quadratic, so use the 4-point rule of degree 2. */
+void MBCElementTet4(const PetscReal X[], PetscReal lambda, PetscReal mu, PetscReal rho, PetscReal *Ke, PetscReal *Me)
+{
+  PetscReal       G[4][3], vol = Tet4Gradients(X, G);
+  const PetscReal a = 0.5854101966249685, b = 0.1381966011250105; /* (5 + 3 sqrt 5)/20, (5 - sqrt 5)/20 */
+
   AddPoint(4, G, NULL, vol, lambda, mu, rho, Ke, NULL);
   if (Me) {
     for (PetscInt q = 0; q < 4; q++) {
@@ -186,23 +194,12 @@ void MBCElementHex8Dilatation(const PetscReal X[], const PetscReal U[], PetscRea
    gradients vanish there, so it is the element's compatible part). */
 void MBCElementCentreGradient(PetscInt nv, const PetscReal X[], const PetscReal U[], PetscReal gu[9])
 {
-  PetscReal G[8][3], Ji[9];
+  PetscReal G[8][3];
 
-  if (nv == 4) {
-    PetscReal J[9];
-    for (PetscInt i = 0; i < 3; i++)
-      for (PetscInt k = 0; k < 3; k++) J[i * 3 + k] = X[3 * (k + 1) + i] - X[i];
-    (void)Invert3(J, Ji);
-    for (PetscInt k = 0; k < 3; k++) {
-      G[0][k] = 0;
-      for (PetscInt c = 1; c < 4; c++) {
-        G[c][k] = Ji[(c - 1) * 3 + k];
-        G[0][k] -= G[c][k];
-      }
-    }
-  } else {
+  if (nv == 4) (void)Tet4Gradients(X, G);
+  else {
     const PetscReal xi[3] = {0, 0, 0};
-    PetscReal       N[8], dN[8][3];
+    PetscReal       N[8], dN[8][3], Ji[9];
     (void)HexMap(X, xi, N, dN, Ji);
     PhysicalGradients(8, dN, Ji, 1.0, G);
   }
@@ -284,10 +281,8 @@ static void ElementNodalWeights(PetscInt nv, const PetscReal X[], PetscReal w[])
   PetscReal Ji[9];
 
   if (nv == 4) {
-    PetscReal J[9];
-    for (PetscInt i = 0; i < 3; i++)
-      for (PetscInt k = 0; k < 3; k++) J[i * 3 + k] = X[3 * (k + 1) + i] - X[i];
-    for (PetscInt a = 0; a < 4; a++) w[a] = PetscAbsReal(Invert3(J, Ji)) / 24.0;
+    PetscReal G[4][3], vol = Tet4Gradients(X, G);
+    for (PetscInt a = 0; a < 4; a++) w[a] = vol / 4.0;
     return;
   }
   for (PetscInt a = 0; a < 8; a++) w[a] = 0;
