@@ -324,7 +324,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
           for (PetscInt k = 0; k < nloc; k++) nnz += (PetscReal)(dnz[k] + onz[k]);
           PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nnz, 1, MPIU_REAL, MPIU_SUM, comm));
           dense = (PetscBool)(nnz >= nt->dense_fill * (PetscReal)Nloc * (PetscReal)Nloc);
-          PetscCall(PetscInfo(m, "Newton matrix %" PetscInt_FMT ": %.3g of its entries nonzero, %s\n", Nloc, (double)(nnz / ((PetscReal)Nloc * Nloc)), dense ? "dense (LAPACK LU)" : "sparse"));
+          PetscCall(PetscInfo(m, "Newton matrix %" PetscInt_FMT ": %.3g of its entries nonzero, %s\n", Nloc, (double)(nnz / ((PetscReal)Nloc * Nloc)), !dense ? "sparse" : strcmp(nt->densetype, MATDENSE) ? "dense (ScaLAPACK LU)" : "dense (LAPACK LU)"));
           if (dense && strcmp(nt->densetype, MATDENSE)) { /* ScaLAPACK's own row layout (NewtonLUSolve) */
             PetscCall(MatCreateScaLAPACK(comm, PETSC_DECIDE, PETSC_DECIDE, Nloc, Nloc, 0, 0, &J));
           } else if (dense) {
