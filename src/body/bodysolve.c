@@ -21,6 +21,59 @@ static PetscErrorCode BodyMumpsWorkspace(PC pc, PetscInt *infog1, PetscInt *icnt
   PetscFunctionReturn(0);
 }
 
+/* Whether a MUMPS Cholesky factor of A fits in core, decided before it is computed: the machine's
+   memory, not MUMPS, is what runs out first (Linux overcommits, so a factor beyond it is killed,
+   not refused). A cheap bound first (8 bytes x 40 N^(4/3): the dams' factors hold 15.6-20
+   N^(4/3) entries, docs/performance.md); only a body beyond 3/4 of what this rank has left of
+   -mbc_memory_mb gets MUMPS's analysis ahead of the PC's (INFO(15), INFO(17): its estimates in and
+   out of core on this rank). Out of core (ICNTL(22) = 1) where in core does not fit; an error that
+   names the numbers where out of core does not either. The user's own -mat_mumps_icntl_22 wins.
+   Collective on the body. */
+static PetscErrorCode BodyFactorPlace(MBCBody body, Mat A, PC pc, const char prefix[])
+{
+  PetscBool      set;
+  PetscLogDouble rss;
+  PetscReal      left, bound, est[2] = {0, 0};
+  PetscInt       n, info[2];
+  PetscMPIInt    bsize, brank;
+  int            over[2];
+  MatSolverType  type;
+  Mat            F;
+  MatFactorInfo  finfo;
+
+  PetscFunctionBegin;
+  if (body->memory_mb <= 0) PetscFunctionReturn(0);
+  PetscCall(PCFactorGetMatSolverType(pc, &type));
+  PetscCall(PetscStrcmp(type, MATSOLVERMUMPS, &set));
+  if (!set) PetscFunctionReturn(0); /* the user's -pc_factor_mat_solver_type */
+  PetscCall(PetscOptionsHasName(NULL, prefix, "-mat_mumps_icntl_22", &set));
+  if (set) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
+  PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
+  PetscCall(PetscMemoryGetCurrentUsage(&rss));
+  left  = body->memory_mb - rss / 1048576.0;
+  PetscCall(MatGetSize(A, &n, NULL));
+  bound = 8.0 * 40.0 * PetscPowReal((PetscReal)n, 4.0 / 3.0) / bsize / 1048576.0;
+  over[0] = bound > 0.75 * left;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, over, 1, MPI_INT, MPI_MAX, body->comm));
+  if (!over[0]) PetscFunctionReturn(0);
+  PetscCall(PCFactorSetUpMatSolverType(pc));
+  PetscCall(PCFactorGetMatrix(pc, &F));
+  PetscCall(MatFactorInfoInitialize(&finfo));
+  PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &finfo)); /* the PC analyses again: the same ordering */
+  PetscCall(MatMumpsGetInfo(F, 15, &info[0]));
+  PetscCall(MatMumpsGetInfo(F, 17, &info[1]));
+  est[0]  = (PetscReal)info[0];
+  est[1]  = (PetscReal)info[1];
+  over[0] = est[0] > 0.75 * left;
+  over[1] = est[1] > left;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, over, 2, MPI_INT, MPI_MAX, body->comm));
+  PetscCheck(!over[1], body->comm, PETSC_ERR_MEM, "Body '%s': MUMPS estimates its factor (%" PetscInt_FMT " DOFs) at %.0f MB on a rank even out of core, and this rank has %.0f MB left of -mbc_memory_mb %.0f (default: its share of the node's available memory): more ranks or nodes, a coarser mesh, or a larger -mbc_memory_mb if the machine has it", body->name, n, (double)est[1], (double)left, (double)body->memory_mb);
+  if (over[0]) PetscCall(MatMumpsSetIcntl(F, 22, 1));
+  if (!brank) PetscCall(PetscInfo(NULL, "Body %s: MUMPS estimates its factor at %.0f MB in core, %.0f MB out of core on a rank with %.0f MB left of -mbc_memory_mb %.0f: %s\n", body->name, (double)est[0], (double)est[1], (double)left, (double)body->memory_mb, over[0] ? "out of core (ICNTL(22) = 1)" : "in core"));
+  PetscFunctionReturn(0);
+}
+
 /* A = aK K + aM M with the constrained rows and columns zeroed and 1 on the diagonal
    (MatZeroRowsColumns: eliminating DOFs or a big diagonal number would make the contact
    flexibility matrix singular or ill-conditioned), factored once by a KSP with the options
@@ -78,6 +131,7 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
     }
     PetscCall(KSPSetOptionsPrefix(ksp, prefix));
     PetscCall(KSPSetFromOptions(ksp));
+    if (aK != 0) PetscCall(BodyFactorPlace(body, A, pc, prefix));
     PetscCall(KSPSetUp(ksp));
     PetscCall(PCGetFailedReasonRank(pc, &reason));
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &reason, 1, MPI_INT, MPI_MAX, body->comm));

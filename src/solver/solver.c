@@ -25,6 +25,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->dense_max_mb     = 4096; /* up to ~15 000 multipliers (docs/performance.md) */
   s->coarse_points    = 16; /* the 200k static dam: 218 products became 155, 5 s of solves for 17 s of products saved (docs/performance.md) */
   s->coarse_max_mb    = 256;
+  s->memory_mb        = -1;
   s->solves_max       = 4096; /* a matrix-free multiplier solve took 60 to 100 products per static iteration (docs/performance.md) */
   *solver = s;
   PetscFunctionReturn(0);
@@ -97,6 +98,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   }
   PetscCall(PetscOptionsBool("-mbc_dt_cut", "A dynamic step whose contact solve fails, a static load step that does not converge, is done again as two half steps (down to -mbc_dt_min)", "MBCSolverSetFromOptions", s->dt_cut, &s->dt_cut, NULL));
   PetscCall(PetscOptionsReal("-mbc_dt_min", "The smallest step (or load step) a cut may reach (default dt / 1024)", "MBCSolverSetFromOptions", s->dt_min, &s->dt_min, NULL));
+  PetscCall(PetscOptionsReal("-mbc_memory_mb", "The memory, in MB, this rank may hold: a body's MUMPS factor that would not fit in what is left of it goes out of core (default: the rank's share of its node's available memory; 0: no check)", "MBCSolverSetFromOptions", s->memory_mb, &s->memory_mb, NULL));
+  PetscCheck(s->memory_mb >= 0 || s->memory_mb == -1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_memory_mb %g: must be >= 0", (double)s->memory_mb);
   PetscCall(PetscOptionsInt("-mbc_checkpoint_every", "Write the whole state to <output>_checkpoint.h5 every this many steps (0: only at SIGINT/SIGTERM)", "MBCSolverSetFromOptions", s->checkpoint_every, &s->checkpoint_every, NULL));
   PetscCall(PetscOptionsString("-mbc_restart", "Go on from this checkpoint (the outputs after it go to <output>_restart.h5)", "MBCSolverSetFromOptions", s->restart, s->restart, sizeof(s->restart), NULL));
   PetscCall(PetscOptionsInt("-mbc_static_max_it", "Static: maximum equilibrium iterations per step", "MBCSolverSetFromOptions", s->static_max_it, &s->static_max_it, NULL));
@@ -138,6 +141,31 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
 static PetscBool IsOptionValue(const char *tok)
 {
   return (PetscBool)(tok && (tok[0] != '-' || isdigit((unsigned char)tok[1]) || tok[1] == '.'));
+}
+
+/* *mb: this rank's share of its node's available memory (MemAvailable of /proc/meminfo over the
+   ranks on the node) plus what it holds now; 0 (no check) where the kernel does not say. Collective. */
+static PetscErrorCode SolverRankMemory(MPI_Comm comm, PetscReal *mb)
+{
+  MPI_Comm       node;
+  PetscMPIInt    nlocal;
+  PetscLogDouble rss;
+  double         kb = 0;
+  char           line[256];
+  FILE          *fp = fopen("/proc/meminfo", "r");
+
+  PetscFunctionBegin;
+  while (fp && fgets(line, sizeof(line), fp))
+    if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
+  if (fp) fclose(fp);
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  PetscCallMPI(MPI_Comm_size(node, &nlocal));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &kb, 1, MPI_DOUBLE, MPI_MIN, node)); /* read at once, one figure */
+  PetscCallMPI(MPI_Comm_free(&node));
+  PetscCall(PetscMemoryGetCurrentUsage(&rss));
+  *mb = kb > 0 ? kb / 1024.0 / nlocal + rss / 1048576.0 : 0;
+  PetscCall(PetscInfo(NULL, "-mbc_memory_mb %g: this rank's share of its node's available memory (%g MB over %d ranks)\n", (double)*mb, kb / 1024.0, (int)nlocal));
+  PetscFunctionReturn(0);
 }
 
 /* Does option name rest (what follows "-<prefix>body_") already belong to one body ("<name>_...")? */
@@ -202,6 +230,9 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCallMPI(MPI_Comm_split(s->comm, mine ? 0 : MPI_UNDEFINED, rank, &comm));
     if (mine) PetscCall(MBCBodyCreate(comm, scene, b, ((PetscObject)s)->prefix, &s->bodies[b]));
   }
+  if (s->memory_mb < 0) PetscCall(SolverRankMemory(s->comm, &s->memory_mb));
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) s->bodies[b]->memory_mb = s->memory_mb;
   if (!s->search_only)
     for (PetscInt b = 0; b < s->nbodies; b++)
       if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));

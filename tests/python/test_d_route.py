@@ -118,3 +118,39 @@ def test_out_of_core_factors_give_the_same_answer(tmp_path, monkeypatch):
     assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
     assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
     assert not list(ooc.iterdir())
+
+
+@pytest.mark.parametrize("nproc", [1, 4])
+def test_factors_go_out_of_core_where_memory_is_short(tmp_path, monkeypatch, nproc):
+    """-mbc_memory_mb (default: the rank's share of its node's available memory): a body whose MUMPS
+    factor would not fit in core in what the rank has left is factored out of core (ICNTL(22) = 1),
+    decided from MUMPS's own estimates before the factorization; one that would not fit even out
+    of core is refused, naming the body, the estimate and the option, instead of being killed by
+    the kernel. The memory a rank holds before its factors differs by machine, so the test reads
+    it from the refusal and then shrinks the budget until some body goes out of core (on 4 ranks
+    the foundation spans 3: the decision is theirs together): the answer is the in-core one. h 6:
+    the foundation's factor is ~57 MB in core, 21 out of core, well above the noise of what a rank
+    holds (the coarser dam's factors are below 1 MB)."""
+    h5 = dam.build(tmp_path, **dict(STATIC, h=6.0))
+    ooc = tmp_path / "ooc"
+    ooc.mkdir()
+    monkeypatch.setenv("MUMPS_OOC_TMPDIR", str(ooc))
+    solve(h5, "-mbc_output", str(tmp_path / "core"), nproc=nproc)
+    bad = solve(h5, "-mbc_memory_mb", "1", check=False, nproc=nproc)
+    msg = bad.stdout + bad.stderr
+    m = re.search(r"Body '\w+': MUMPS estimates its factor \(\d+ DOFs\) at \d+ MB on a rank even out of core, and this rank has (-?\d+) MB left of -mbc_memory_mb 1 ", msg)
+    assert bad.returncode != 0 and m, msg[-2000:]
+    held = 1 - int(m.group(1))  # MB this rank held when its first factor came
+    u0, f0 = final(str(tmp_path / "core.h5"))
+    for extra in (300, 200, 150, 100, 75, 50, 35, 25):
+        r = solve(h5, "-mbc_output", str(tmp_path / "disk"), "-mbc_memory_mb", str(held + extra), "-info", check=False, nproc=nproc)
+        if r.returncode == 0 and "out of core (ICNTL(22) = 1)" in r.stdout:
+            break
+    else:
+        pytest.fail("no budget sent a factor out of core")
+    for est_in, left, where in re.findall(r"MUMPS estimates its factor at (\d+) MB in core, \d+ MB out of core on a rank with (-?\d+) MB left of -mbc_memory_mb \d+: (in core|out of core)", r.stdout):
+        assert (where == "out of core") == (int(est_in) > 0.75 * int(left) + 1)  # the rule, rounded as printed
+    u1, f1 = final(str(tmp_path / "disk.h5"))
+    assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
+    assert np.abs(f1 - f0).max() <= 1e-9 * np.abs(f0).max()
+    assert not list(ooc.iterdir())

@@ -48,6 +48,7 @@ struct _n_MBCBody {
   PetscReal a0, a1;       /* coefficients of A = aK K + aM M */
   PetscReal aK, aM;
   PetscReal stab;         /* static: A = K + stab diag(K), a spring to the last iterate */
+  PetscReal memory_mb;    /* -mbc_memory_mb: what this rank may hold; a factor MUMPS estimates beyond goes out of core (0: no check) */
   PetscReal wext, wdamp;  /* external work and damping dissipation so far (dynamic) */
 
   PetscInt  stage;        /* the analysis stage under way: loads of later stages do not act yet */

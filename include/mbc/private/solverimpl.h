@@ -88,6 +88,7 @@ struct _n_MBCSolver {
   PetscReal  solves_max;   /* -mbc_d_solves_max */
   PetscInt   coarse_points; /* -mbc_d_coarse_points */
   PetscReal  coarse_max_mb; /* -mbc_d_coarse_max_mb */
+  PetscReal  memory_mb;     /* -mbc_memory_mb: what this rank may hold (-1: its share of the node's available memory; 0: no check) */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
