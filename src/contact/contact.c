@@ -4,7 +4,7 @@
 #include <petscsf.h>
 #include <stdlib.h>
 
-PetscLogEvent MBC_RankWait, MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch;
+PetscLogEvent MBC_RankWait, MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch, MBC_ContactIntegrate;
 
 PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *contact)
 {
@@ -429,7 +429,9 @@ static PetscErrorCode ContactReference(MBCContact c, PetscInt nbodies, MBCBody b
     cp->extension = c->extension;
     PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
+    PetscCall(PetscLogEventBegin(MBC_ContactIntegrate, 0, 0, 0, 0));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
+    PetscCall(PetscLogEventEnd(MBC_ContactIntegrate, 0, 0, 0, 0));
     PetscCall(PetscMalloc1(cp->npoints + 1, &qmin));
     PetscCall(MBCCoupleInterference(cp, c->nquad, qmin));
     if (c->adjust > 0) {
@@ -509,7 +511,9 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     cp->stable    = c->stable_normal;
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
+    PetscCall(PetscLogEventBegin(MBC_ContactIntegrate, 0, 0, 0, 0));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
+    PetscCall(PetscLogEventEnd(MBC_ContactIntegrate, 0, 0, 0, 0));
     if (cp->g0n)
       for (PetscInt k = 0; k < cp->npoints; k++) { /* -mbc_contact_adjust: the initial gaps subtracted */
         cp->points[k].gap -= cp->g0n[cp->points[k].master];

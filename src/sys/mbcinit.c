@@ -28,6 +28,7 @@ PetscErrorCode MBCInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCContactGather", classid, &MBC_ContactGather));
   PetscCall(PetscLogEventRegister("MBCGlobalSearch", classid, &MBC_GlobalSearch));
   PetscCall(PetscLogEventRegister("MBCLocalSearch", classid, &MBC_LocalSearch));
+  PetscCall(PetscLogEventRegister("MBCContactIntegrate", classid, &MBC_ContactIntegrate));
   PetscCall(PetscLogEventRegister("MBCFlexibilityAssemble", classid, &MBC_FlexibilityAssemble));
   PetscCall(PetscLogEventRegister("MBCFlexibilityMult", classid, &MBC_FlexibilityMult));
   PetscCall(PetscLogEventRegister("MBCFlexibilityCoarse", classid, &MBC_FlexibilityCoarse));

@@ -88,7 +88,7 @@ struct _n_MBCContact {
   Vec       *usearch;       /* per body: displacement at the last global search (NULL off the body) */
 };
 
-PETSC_EXTERN PetscLogEvent MBC_RankWait, MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch;
+PETSC_EXTERN PetscLogEvent MBC_RankWait, MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch, MBC_ContactIntegrate;
 
 PETSC_INTERN PetscErrorCode MBCContactCreate(MPI_Comm, MBCScene, MBCContact *);
 PETSC_INTERN PetscErrorCode MBCContactSetFromOptions(MBCContact, const char[]);
