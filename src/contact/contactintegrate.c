@@ -20,75 +20,80 @@
 #include <mbc/private/contactimpl.h>
 
 typedef struct {
-  PetscInt64 key; /* point * nnodes + node */
+  PetscInt64 key; /* point * nnodes + node; -1: an empty slot */
   PetscReal  w;
 } Entry;
 
+/* The weights summed per key as they come (open addressing). A point gets a handful of distinct
+   nodes but thousands of contributions: every quadrature point of every piece, 16 per point on
+   quads. Until stop 31 they were kept as a list and merged at the end: 4 M entries, about 250 MB
+   with the merge's copies, on the 198k dam. That grows with the contact surface and is held
+   while a dynamic step's re-search runs beside the factors. Each key's sum takes its terms in the
+   order they came, as the list's merge did, so the bits are the same. The 198k run's wall did
+   not change: its later phases fault the same pages. */
 typedef struct {
-  Entry  *e;
-  size_t  n, cap;
+  Entry *e;
+  size_t n, cap; /* keys held, slots (a power of 2) */
 } EntryList;
+
+static size_t EntrySlot(const EntryList *l, PetscInt64 key)
+{
+  size_t i = (size_t)(((uint64_t)key * 0x9E3779B97F4A7C15ULL) >> 20) & (l->cap - 1);
+  while (l->e[i].key >= 0 && l->e[i].key != key) i = (i + 1) & (l->cap - 1);
+  return i;
+}
 
 static PetscErrorCode EntryAdd(EntryList *l, PetscInt64 key, PetscReal w)
 {
+  size_t i;
+
   PetscFunctionBegin;
-  if (l->n == l->cap) {
-    Entry *e;
-    l->cap = PetscMax(2 * l->cap, 1024);
-    PetscCall(PetscMalloc1(l->cap, &e));
-    if (l->n) PetscCall(PetscArraycpy(e, l->e, l->n));
+  if (2 * (l->n + 1) > l->cap) { /* at most half full */
+    EntryList grown = {NULL, 0, PetscMax(2 * l->cap, 1024)};
+    PetscCall(PetscMalloc1(grown.cap, &grown.e));
+    for (size_t j = 0; j < grown.cap; j++) grown.e[j].key = -1;
+    for (size_t j = 0; j < l->cap; j++)
+      if (l->e[j].key >= 0) grown.e[EntrySlot(&grown, l->e[j].key)] = l->e[j];
+    grown.n = l->n;
     PetscCall(PetscFree(l->e));
-    l->e = e;
+    *l = grown;
   }
-  l->e[l->n].key = key;
-  l->e[l->n].w   = w;
-  l->n++;
+  i = EntrySlot(l, key);
+  if (l->e[i].key < 0) l->e[i].key = key, l->e[i].w = w, l->n++;
+  else l->e[i].w += w;
   PetscFunctionReturn(0);
 }
 
-/* The entries merged into CSR rows (one per point, its nodes ascending) scaled by 1 / area: a
-   stable counting sort by point, then each point's few distinct nodes merged by a linear search,
-   duplicates summed in the order they came (as the stable sort of all entries by key did before:
-   glibc's qsort took 1.6 s of the 198k dam's contact updates). */
+/* The sums into CSR rows (one per point, its nodes ascending) scaled by 1 / area: a counting sort
+   by point, then each point's few nodes sorted. */
 static PetscErrorCode EntryCSR(EntryList *l, PetscInt npoints, PetscInt nnodes, const PetscReal area[], PetscInt **off, PetscInt **node, PetscReal **w)
 {
-  PetscInt  *start, *fill, *nd, n = 0;
-  PetscReal *wt;
-  Entry     *byp;
+  PetscInt *fill;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1(npoints + 1, &start));
-  for (size_t i = 0; i < l->n; i++) start[l->e[i].key / nnodes + 1]++;
-  for (PetscInt k = 0; k < npoints; k++) start[k + 1] += start[k];
-  PetscCall(PetscMalloc4(npoints + 1, &fill, l->n + 1, &byp, l->n + 1, &nd, l->n + 1, &wt));
-  PetscCall(PetscArraycpy(fill, start, npoints + 1));
-  for (size_t i = 0; i < l->n; i++) byp[fill[l->e[i].key / nnodes]++] = l->e[i];
   PetscCall(PetscCalloc1(npoints + 1, off));
-  for (PetscInt k = 0; k < npoints; k++) {
-    const PetscInt first = n;
-    for (PetscInt z = start[k]; z < start[k + 1]; z++) {
-      const PetscInt node_z = (PetscInt)(byp[z].key % nnodes);
-      PetscInt       j      = first;
-      while (j < n && nd[j] != node_z) j++;
-      if (j == n) nd[n] = node_z, wt[n++] = byp[z].w;
-      else wt[j] += byp[z].w;
+  PetscCall(PetscMalloc1(npoints + 1, &fill));
+  PetscCall(PetscMalloc1(l->n + 1, node));
+  PetscCall(PetscMalloc1(l->n + 1, w));
+  for (size_t i = 0; i < l->cap; i++)
+    if (l->e[i].key >= 0) (*off)[l->e[i].key / nnodes + 1]++;
+  for (PetscInt k = 0; k < npoints; k++) (*off)[k + 1] += (*off)[k];
+  PetscCall(PetscArraycpy(fill, *off, npoints + 1));
+  for (size_t i = 0; i < l->cap; i++)
+    if (l->e[i].key >= 0) {
+      const PetscInt k = (PetscInt)(l->e[i].key / nnodes), z = fill[k]++;
+      (*node)[z] = (PetscInt)(l->e[i].key % nnodes);
+      (*w)[z]    = l->e[i].w / area[k];
     }
-    for (PetscInt j = first + 1; j < n; j++) { /* a handful per point: insertion sort */
-      const PetscInt  a = nd[j];
-      const PetscReal b = wt[j];
+  for (PetscInt k = 0; k < npoints; k++) /* a handful per point: insertion sort */
+    for (PetscInt j = (*off)[k] + 1; j < (*off)[k + 1]; j++) {
+      const PetscInt  a = (*node)[j];
+      const PetscReal b = (*w)[j];
       PetscInt        i = j;
-      for (; i > first && nd[i - 1] > a; i--) nd[i] = nd[i - 1], wt[i] = wt[i - 1];
-      nd[i] = a, wt[i] = b;
+      for (; i > (*off)[k] && (*node)[i - 1] > a; i--) (*node)[i] = (*node)[i - 1], (*w)[i] = (*w)[i - 1];
+      (*node)[i] = a, (*w)[i] = b;
     }
-    for (PetscInt j = first; j < n; j++) wt[j] /= area[k];
-    (*off)[k + 1] = n;
-  }
-  PetscCall(PetscMalloc1(n + 1, node));
-  PetscCall(PetscMalloc1(n + 1, w));
-  PetscCall(PetscArraycpy(*node, nd, n));
-  PetscCall(PetscArraycpy(*w, wt, n));
-  PetscCall(PetscFree4(fill, byp, nd, wt));
-  PetscCall(PetscFree(start));
+  PetscCall(PetscFree(fill));
   PetscFunctionReturn(0);
 }
 
@@ -486,9 +491,9 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
   PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
   /* a point kept at its node (PointIntegrated): its integrated entries are dropped */
-  for (size_t e = 0; e < sl.n; e++) {
-    const PetscInt k = (PetscInt)(sl.e[e].key / s->nnodes);
-    if (!PointIntegrated(covered[k], area[k])) sl.e[e].w = 0;
+  for (size_t e = 0; e < sl.cap; e++) {
+    const PetscInt k = sl.e[e].key < 0 ? -1 : (PetscInt)(sl.e[e].key / s->nnodes);
+    if (k >= 0 && !PointIntegrated(covered[k], area[k])) sl.e[e].w = 0;
   }
   for (PetscInt k = 0; k < c->npoints; k++) { /* master side: the node alone (dual basis) */
     MBCContactPoint *p = &c->points[k];
