@@ -429,9 +429,7 @@ static PetscErrorCode ContactReference(MBCContact c, PetscInt nbodies, MBCBody b
     cp->extension = c->extension;
     PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
-    PetscCall(PetscLogEventBegin(MBC_ContactIntegrate, 0, 0, 0, 0));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
-    PetscCall(PetscLogEventEnd(MBC_ContactIntegrate, 0, 0, 0, 0));
     PetscCall(PetscMalloc1(cp->npoints + 1, &qmin));
     PetscCall(MBCCoupleInterference(cp, c->nquad, qmin));
     if (c->adjust > 0) {
@@ -511,9 +509,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     cp->stable    = c->stable_normal;
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
-    PetscCall(PetscLogEventBegin(MBC_ContactIntegrate, 0, 0, 0, 0));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
-    PetscCall(PetscLogEventEnd(MBC_ContactIntegrate, 0, 0, 0, 0));
     if (cp->g0n)
       for (PetscInt k = 0; k < cp->npoints; k++) { /* -mbc_contact_adjust: the initial gaps subtracted */
         cp->points[k].gap -= cp->g0n[cp->points[k].master];

@@ -487,6 +487,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   EntryList   ml = {NULL, 0, 0}, sl = {NULL, 0, 0};
 
   PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_ContactIntegrate, 0, 0, 0, 0));
   PetscCall(MBCCoupleIntegrateReset(c));
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
   PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
@@ -513,6 +514,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   PetscCall(PetscFree(ml.e));
   PetscCall(PetscFree(sl.e));
   PetscCall(PetscFree4(area, covered, gsum, nsum));
+  PetscCall(PetscLogEventEnd(MBC_ContactIntegrate, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 

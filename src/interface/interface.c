@@ -196,7 +196,6 @@ static PetscInt NumContacts(MBCContact c)
   return n;
 }
 
-
 /* Does the constraint of point j of cp involve body b? */
 PetscBool MBCInterfacePointTouches(const MBCCouple *cp, PetscInt j, PetscInt b)
 {
@@ -207,36 +206,21 @@ PetscBool MBCInterfacePointTouches(const MBCCouple *cp, PetscInt j, PetscInt b)
   return PETSC_FALSE;
 }
 
-/* Calls f(b, ctx) once for each body whose nodes carry point j of cp (its master node's, then its
-   slave face's): the bodies its row of W couples. */
-static void PointBodies(const MBCCouple *cp, PetscInt j, void (*f)(PetscInt, void *), void *ctx)
+/* The distinct bodies whose nodes carry point j of cp (its master node's, then its slave nodes':
+   the bodies its row of W couples) in bodies[] (room for every body), their number returned. */
+static PetscInt PointBodies(const MBCCouple *cp, PetscInt j, PetscInt bodies[])
 {
-  PetscInt seen[8], n = 0;
+  PetscInt n = 0;
   for (PetscInt side = 0; side < 2; side++) {
     const PetscInt  lo = side ? cp->soff[j] : cp->moff[j], hi = side ? cp->soff[j + 1] : cp->moff[j + 1];
     const PetscInt *node = side ? cp->snode : cp->mnode, *nbody = side ? cp->slave.nbody : cp->master.nbody;
     for (PetscInt l = lo; l < hi; l++) {
-      const PetscInt b = nbody[node[l]];
-      PetscInt       i = 0;
-      while (i < n && seen[i] != b) i++;
-      if (i < n) continue;
-      if (n < 8) seen[n++] = b;
-      f(b, ctx);
+      PetscInt i = 0;
+      while (i < n && bodies[i] != nbody[node[l]]) i++;
+      if (i == n) bodies[n++] = nbody[node[l]];
     }
   }
-}
-
-typedef struct {
-  const PetscInt *count; /* points touching each body */
-  PetscInt        home;
-} PointHome;
-
-static void CountTouch(PetscInt b, void *ctx) { ((PetscInt *)ctx)[b]++; }
-
-static void LargestBody(PetscInt b, void *ctx)
-{
-  PointHome *h = (PointHome *)ctx;
-  if (h->home < 0 || h->count[b] > h->count[h->home]) h->home = b;
+  return n;
 }
 
 /* Rank order: each point on a rank of the body, among those its constraint couples, that the most
@@ -249,22 +233,26 @@ static void LargestBody(PetscInt b, void *ctx)
 static PetscErrorCode InterfaceRankOrder(MBCInterface ifc, const PetscInt dims[])
 {
   MBCContact  c  = ifc->contact;
-  PetscInt    nc = ifc->ncontact, *owner, *count, *seen, *touch, *home;
+  PetscInt    nc = ifc->ncontact, *owner, *count, *seen, *touch, *home, *bodies;
   PetscMPIInt P, rank;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_size(ifc->comm, &P));
   PetscCallMPI(MPI_Comm_rank(ifc->comm, &rank));
   PetscCall(PetscMalloc3(nc + 1, &owner, ifc->nbodies, &count, ifc->nbodies, &seen));
-  PetscCall(PetscCalloc2(ifc->nbodies, &touch, nc + 1, &home));
+  PetscCall(PetscCalloc3(ifc->nbodies, &touch, nc + 1, &home, ifc->nbodies, &bodies));
   PetscCall(PetscArrayzero(count, ifc->nbodies));
   PetscCall(PetscArrayzero(seen, ifc->nbodies));
-  for (PetscInt k = 0; k < nc; k++) PointBodies(&c->couples[ifc->kcouple[k]], ifc->kpoint[k], CountTouch, touch);
+  for (PetscInt k = 0; k < nc; k++) {
+    const PetscInt n = PointBodies(&c->couples[ifc->kcouple[k]], ifc->kpoint[k], bodies);
+    for (PetscInt i = 0; i < n; i++) touch[bodies[i]]++;
+  }
   for (PetscInt k = 0; k < nc; k++) {
     const MBCCouple *cp = &c->couples[ifc->kcouple[k]];
-    PointHome        h  = {touch, cp->master.nbody[cp->points[ifc->kpoint[k]].master]};
-    PointBodies(cp, ifc->kpoint[k], LargestBody, &h);
-    home[k] = h.home;
+    const PetscInt   n  = PointBodies(cp, ifc->kpoint[k], bodies);
+    home[k] = cp->master.nbody[cp->points[ifc->kpoint[k]].master];
+    for (PetscInt i = 0; i < n; i++)
+      if (touch[bodies[i]] > touch[home[k]]) home[k] = bodies[i];
     count[home[k]]++;
   }
   for (PetscInt k = 0; k < nc; k++) {
@@ -287,7 +275,7 @@ static PetscErrorCode InterfaceRankOrder(MBCInterface ifc, const PetscInt dims[]
   for (PetscInt p = 0; p < nc; p++) ifc->poff[p + 1] = ifc->poff[p] + dims[ifc->order[p]];
   if (P > 1) PetscCall(PetscInfo(NULL, "%" PetscInt_FMT " of %" PetscInt_FMT " contact points on this rank\n", ifc->plast - ifc->pfirst, nc));
   PetscCall(PetscFree3(owner, count, seen));
-  PetscCall(PetscFree2(touch, home));
+  PetscCall(PetscFree3(touch, home, bodies));
   PetscFunctionReturn(0);
 }
 
