@@ -330,11 +330,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
           } else if (dense) {
             PetscCall(MatCreateDense(comm, nloc, nloc, Nloc, Nloc, NULL, &J));
           } else {
-            PetscCall(MatCreate(comm, &J));
-            PetscCall(MatSetSizes(J, nloc, nloc, Nloc, Nloc));
-            PetscCall(MatSetType(J, MATAIJ));
-            PetscCall(MatSeqAIJSetPreallocation(J, 0, dnz));
-            PetscCall(MatMPIAIJSetPreallocation(J, 0, dnz, 0, onz));
+            PetscCall(MatCreateAIJ(comm, nloc, nloc, Nloc, Nloc, 0, dnz, 0, onz, &J));
             PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
           }
         }

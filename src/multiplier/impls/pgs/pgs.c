@@ -233,11 +233,7 @@ static PetscErrorCode ActiveSetStep(MBCMultiplier m, MBC_PGS *pgs, MBCFrictionPr
       }
     }
     PetscCall(PetscMalloc2(rowmax + 1, &acols, rowmax + 1, &avals));
-    PetscCall(MatCreate(comm, &A));
-    PetscCall(MatSetSizes(A, n, n, N, N));
-    PetscCall(MatSetType(A, MATAIJ));
-    PetscCall(MatSeqAIJSetPreallocation(A, 0, nnz));
-    PetscCall(MatMPIAIJSetPreallocation(A, 0, nnz, 0, onz));
+    PetscCall(MatCreateAIJ(comm, n, n, N, N, 0, nnz, 0, onz, &A));
     PetscCall(MatSetOption(A, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
     PetscCall(PetscFree2(nnz, onz));
     PetscCall(VecGetArrayRead(colv, (const PetscScalar **)&cv));
