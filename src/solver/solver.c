@@ -44,6 +44,7 @@ PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
   s->scene        = scene;
   s->analysis     = scene->analysis;
   s->mass         = scene->mass;
+  s->has_dynamic  = scene->has_dynamic;
   s->dt           = scene->dt;
   s->final_time   = scene->final_time;
   s->beta         = scene->newmark_beta;
@@ -106,9 +107,9 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
   s->mass     = (MBCMassType)mass;
-  s->scene->analysis = s->analysis; /* the bodies read these from the scene */
-  s->scene->mass     = s->mass;
-  if (!s->scene->nstages) s->scene->has_dynamic = (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
+  /* the solver's own settings, handed to its bodies: the scene stays as its file says, so other
+     solvers on it see the same */
+  s->has_dynamic = s->scene->nstages ? s->scene->has_dynamic : (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
   PetscCheck(s->dt > 0 && PetscIsNormalReal(s->dt), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive and finite", (double)s->dt);
   PetscCheck(s->final_time >= s->dt * (1 - 1e-12) && PetscIsNormalReal(s->final_time), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be finite and at least one step (%g)", (double)s->final_time, (double)s->dt);
   /* checked before the cast to an integer below (undefined beyond its range); the output
@@ -235,7 +236,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     if (s->bodies[b]) s->bodies[b]->memory_mb = s->memory_mb;
   if (!s->search_only)
     for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));
+      if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b], s->has_dynamic, s->mass));
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact, ((PetscObject)s)->prefix));

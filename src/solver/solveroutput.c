@@ -199,7 +199,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       fprintf(s->points_csv, "\n");
     }
   }
-  if (scene->output_energy && scene->has_dynamic && !rank) { /* written in the dynamic stages */
+  if (scene->output_energy && s->has_dynamic && !rank) { /* written in the dynamic stages */
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,friction_dissipation,contact_dissipation,total\n");

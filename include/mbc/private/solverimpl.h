@@ -51,6 +51,7 @@ struct _n_MBCSolver {
 
   MBCAnalysisType analysis; /* of the current stage, as dt, beta, gamma */
   MBCMassType     mass;
+  PetscBool       has_dynamic; /* some stage of this run is dynamic: the bodies need M */
   PetscReal       dt, final_time, beta, gamma;
   PetscInt        nsteps, step; /* of the whole run, over its stages */
   PetscReal       time;
