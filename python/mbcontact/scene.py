@@ -411,12 +411,20 @@ def _body(name, spec, meshes):
     return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"), element)
 
 
+MATERIAL_RANGE = (1e-100, 1e100)  # the solver's MBC_MATERIAL_MIN/MAX: squares stay normal doubles
+
+
 def _material(value, where):
     spec = mapping(value, where, ("E",) + tuple(MATERIAL_DEFAULTS), required=("E",))
     material = dict(E=real(spec["E"], f"{where}.E", gt=0))
     for key, default in MATERIAL_DEFAULTS.items():
         bounds = dict(gt=-1, lt=0.5) if key == "nu" else dict(ge=0)
         material[key] = real(spec.get(key, default), f"{where}.{key}", **bounds)
+    lo, hi = MATERIAL_RANGE
+    for key, v in material.items():
+        if key != "nu" and v != 0 and not lo <= v <= hi:
+            raise InputError(f"{where}.{key}: {v:g} lies outside [{lo:g}, {hi:g}]: no material in any unit "
+                             f"system, and the stiffness, mass and energies made from it leave double precision")
     return material
 
 

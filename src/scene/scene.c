@@ -263,6 +263,11 @@ static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
   PetscCheck(b->nu > -1.0 && b->nu < 0.5, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': Poisson's ratio nu = %g must lie in (-1, 0.5)", e->file, b->name, (double)b->nu);
   PetscCheck(b->density >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': density %g must not be negative", e->file, b->name, (double)b->density);
   PetscCheck(b->damping >= 0 && b->rayleigh_alpha >= 0 && b->rayleigh_beta >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': damping coefficients must not be negative", e->file, b->name);
+  {
+    const char     *key[5] = {"E", "density", "damping", "rayleigh_alpha", "rayleigh_beta"};
+    const PetscReal val[5] = {b->E, b->density, b->damping, b->rayleigh_alpha, b->rayleigh_beta};
+    for (PetscInt i = 0; i < 5; i++) PetscCheck(val[i] == 0 || (val[i] >= MBC_MATERIAL_MIN && val[i] <= MBC_MATERIAL_MAX), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': material %s = %g lies outside [%g, %g]: no material in any unit system, and the stiffness, mass and energies made from it leave double precision", e->file, b->name, key[i], (double)val[i], (double)MBC_MATERIAL_MIN, (double)MBC_MATERIAL_MAX);
+  }
   PetscFunctionReturn(0);
 }
 

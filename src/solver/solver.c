@@ -14,7 +14,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->comm             = comm;
   s->h5               = -1;
   s->fclib_step       = -1;
-  s->static_stabilize = -1;
+  s->static_stabilize = 0; /* off: the free bodies' exact rigid modes */
   s->static_rtol      = 1e-6;
   s->static_max_it    = 50;
   s->dt_cut           = PETSC_TRUE;
@@ -78,8 +78,13 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsBool("-mbc_view", "Print the scene and the decomposition", "MBCSolverSetFromOptions", s->view, &s->view, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_search_only", "Search contact on the undeformed bodies, report, stop", "MBCSolverSetFromOptions", s->search_only, &s->search_only, NULL));
   PetscCall(PetscOptionsString("-mbc_fclib_write", "Write the contact multiplier problem of step -mbc_fclib_write_step to this FCLIB file", "MBCSolverSetFromOptions", s->fclib_file, s->fclib_file, sizeof(s->fclib_file), NULL));
-  PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, NULL));
-  PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
+  {
+    PetscBool set_step, set_stab;
+    PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, &set_step));
+    PetscCheck(!set_step || s->fclib_step >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT ": must be a step number >= 1 (without it, the last step)", s->fclib_step);
+    PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default, or 0)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, &set_stab));
+    PetscCheck(!set_stab || (s->static_stabilize >= 0 && !PetscIsInfOrNanReal(s->static_stabilize)), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_stabilize %g: must be >= 0 and finite (0: the exact rigid-body modes, the default)", (double)s->static_stabilize);
+  }
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   {
