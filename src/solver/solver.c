@@ -359,13 +359,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) MBCInterfaceContactWork(s->iface, &s->wfriction, &s->wcontact);
   PetscCall(MBCInterfaceGetSize(s->iface, &npoints, NULL));
   PetscCall(MBCInterfaceGetMultiplier(s->iface, &mult));
-  if (s->monitor && npoints) {
-    PetscInt count[3] = {0, 0, 0};
-    PetscCall(MBCInterfaceStates(s->iface, count, NULL, NULL));
-    MBCMultiplierType type;
-    PetscCall(MBCMultiplierGetType(mult, &type));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s %s in %" PetscInt_FMT " iterations (merit %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, type, MBCMultiplierConvergedReasonName(mult->reason), mult->its, (double)mult->merit, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
-  }
+  if (s->monitor && npoints) PetscCall(MBCSolverMonitorContact(s, mult));
   PetscFunctionReturn(0);
 }
 
@@ -375,6 +369,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   char      timing[192];
 
   PetscFunctionBegin;
+  PetscCall(MBCSolverMonitorContact(s, NULL)); /* the step's last contact line, with the states the output writes */
   if (s->usermonitor) PetscCall((*s->usermonitor)(s, s->step, s->time, s->monitorctx));
   if (!s->monitor) PetscFunctionReturn(0);
   for (PetscInt b = 0; b < s->nbodies; b++) {
@@ -505,7 +500,7 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
 
   PetscFunctionBegin;
   s->contact_failed = PETSC_FALSE;
-  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface));
+  if (s->iface) PetscCall(MBCInterfaceLoadStepBegin(s->iface));
   for (s->static_its = 1;; s->static_its++) {
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody body = s->bodies[b];
@@ -566,6 +561,7 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
       fmax = mx[0], kumax = mx[1], kufloor = mx[2];
     }
     PetscCall(SolverContact(s));
+    PetscCall(MBCSolverMonitorContact(s, NULL));
     if (s->monitor && (s->contact || stabilized || floating)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
     if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax || (fmax <= kufloor && !s->contact_rebuilt)) break; /* new pairs: not yet in balance */
     if (s->static_its == s->static_max_it && s->contact_may_fail) {
@@ -597,6 +593,7 @@ static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t
   s->contact_may_fail = PETSC_FALSE;
   if (!s->contact_failed) PetscFunctionReturn(0);
   s->ncuts++;
+  PetscCall(MBCSolverMonitorContact(s, NULL));
   if (s->iface && s->iface->mult->reason < 0) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s: the load step from t %g is cut to two\n", s->step, (double)t1, ((PetscObject)s->iface->mult)->type_name, MBCMultiplierConvergedReasonName(s->iface->mult->reason), (double)t0));
   else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static: no equilibrium after %" PetscInt_FMT " iterations: the load step from t %g is cut to two\n", s->step, (double)t1, s->static_its, (double)t0));
   for (PetscInt b = 0; b < s->nbodies; b++)
@@ -615,6 +612,7 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
   const PetscInt k = s->step - s->stages[s->istage].step0;
 
   PetscFunctionBegin;
+  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface)); /* the states report the whole step */
   PetscCall(SolverStaticAdvance(s, MBCSolverStageTime(s, k - 1), MBCSolverStageTime(s, k), 0));
   PetscCall(SolverMonitor(s));
   PetscCall(SolverCheckDisplacementSize(s));
@@ -936,6 +934,7 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
     PetscFunctionReturn(0);
   }
   s->ncuts++;
+  PetscCall(MBCSolverMonitorContact(s, NULL));
   {
     MBCMultiplier mult;
     PetscCall(MBCInterfaceGetMultiplier(s->iface, &mult));
@@ -958,6 +957,7 @@ static PetscErrorCode SolverDynamicStep(MBCSolver s)
   const PetscReal t0    = MBCSolverStageTime(s, k - 1);
 
   PetscFunctionBegin;
+  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface)); /* the states report the whole step */
   s->deepest = start;
   for (PetscInt k = 0; k < n; k++) {
     s->time = t0 + k * (s->dt / n);

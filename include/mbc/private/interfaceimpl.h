@@ -72,7 +72,9 @@ struct _n_MBCInterface {
   PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
   PetscReal *frames;      /* (n, t1, t2) of each point when D was built */
   PetscReal *slip;        /* per point: (0, t1, t2) components of its tangential relative displacement so far (frictional couples) */
-  PetscReal *stepslip;    /* per point, static: the same since the load step began (its earlier equilibrium iterations) */
+  PetscReal *stepslip;    /* per point: the same since the step began (a static step's equilibrium iterations, a step's cut steps) */
+  PetscReal *cutslip;     /* per point, static: stepslip where the load step under way began (a step cut in two: the first half's) */
+  PetscReal  stepres, cutres; /* what the step's multiplier solves resolve of stepslip, 2 rtol |q| summed over its (cut) steps (MBCInterfaceStates); stepres where the load step under way began */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
@@ -122,6 +124,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceRigidMotion(MBCInterface);
 /* interfacesolve.c: the multipliers of a step */
 PETSC_INTERN PetscErrorCode MBCInterfaceSolve(MBCInterface, PetscInt, PetscReal, PetscBool, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceStepBegin(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceLoadStepBegin(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceStepAbandon(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceStates(MBCInterface, PetscInt[3], PetscInt[], PetscReal[]);
 PETSC_INTERN void           MBCInterfaceContactWork(MBCInterface, PetscReal *, PetscReal *);
