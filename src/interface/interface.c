@@ -353,11 +353,11 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
     MBCCouple  *cp = &c->couples[i];
     MBCSurface *m = &cp->master, *sl = &cp->slave;
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
-      const MBCContactPoint *p = &cp->points[j];
-      const PetscReal       *e[3] = {p->n, p->t1, p->t2};
+      const PetscReal *e[3] = {&ifc->frames[9 * k], &ifc->frames[9 * k + 3], &ifc->frames[9 * k + 6]};
       if (brank || first[k] < 0) continue; /* rank 0 of the body inserts; assembly sends rows to their owners */
       for (PetscInt a = 0; a < ifc->coff[k + 1] - ifc->coff[k]; a++) {
         const PetscInt col = first[k] + a;
+        if (ifc->held[k] & (1 << a)) continue; /* held on both sides: no multiplier acts along it */
         for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
           const PetscInt node = cp->mnode[l];
           if (m->nbody[node] != body->index) continue;
@@ -1245,6 +1245,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
       }
     }
   PetscCall(InterfaceRankOrder(ifc, dims));
+  PetscCall(MBCInterfaceHeldDirections(ifc)); /* before H: the frames' held tangents */
   m = ifc->coff[nc];
   mloc = ifc->poff[ifc->plast] - ifc->poff[ifc->pfirst];
   { /* this rank's contacts of the multiplier problem */
@@ -1328,6 +1329,7 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(PetscFree6(ifc->H, ifc->Hu, ifc->lam, ifc->Hl, ifc->Xl, ifc->nbcols));
   PetscCall(PetscFree(ifc->bcols));
   PetscCall(PetscFree(ifc->frames));
+  PetscCall(PetscFree(ifc->held));
   PetscCall(PetscFree(ifc->slip));
   PetscCall(PetscFree(ifc->stepslip));
   PetscCall(PetscFree(ifc->cutslip));

@@ -357,7 +357,7 @@ PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt 
       const PetscInt o = ifc->coff[k], dim = ifc->coff[k + 1] - o;
       PetscReal      lam[3] = {0, 0, 0};
       PetscInt       st;
-      for (PetscInt d = 0; d < dim; d++) lam[d] = ifc->theta * ifc->rall[o + d] / ifc->dscale;
+      for (PetscInt d = 0; d < dim; d++) lam[d] = ifc->held[k] & (1 << d) ? 0 : ifc->theta * ifc->rall[o + d] / ifc->dscale; /* a held direction's r acts on no body */
       if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
       else if (dim == 3 && PetscSqrtReal(PetscSqr(ifc->stepslip[3 * k + 1]) + PetscSqr(ifc->stepslip[3 * k + 2])) <= ifc->stepres) st = MBC_CONTACT_STICK;
       else st = MBC_CONTACT_SLIP;
