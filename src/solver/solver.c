@@ -245,6 +245,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact, ((PetscObject)s)->prefix));
+    PetscCall(MBCSolverContactExclusions(s));
     PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
     PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb, s->solves_max));

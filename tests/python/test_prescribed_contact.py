@@ -79,3 +79,72 @@ def test_no_traction_across_a_symmetry_plane_on_a_curved_surface(tmp_path, nproc
     p = q["pressure"][on].max()
     assert np.abs(q["traction"][on, 1]).max() < 1e-8 * mu * p, q["traction"][on]
     assert np.abs(q["traction"][on, 0]).max() > 1e-3 * mu * p  # the shear along the plane is there
+
+
+def plate(tmp_path, exclude):
+    """A plate 4 x 1 x 0.5 (8 x 2 x 2 hex) on a base 5 x 1 x 0.5 (7 x 2 x 1, non-matching, its
+    bottom fixed), mu = 1, both with u_y = 0 on y = 0; the plate pressed by p = 1 MPa on its top
+    and by 0.5 p on its side x = 0 against a wall at x = 4 (u_x = 0 on its face x = 4, whose bottom
+    edge, 3 master nodes, lies on the contact surface and on no base node). Returns the scene file
+    and the loads' resultant on the plate."""
+    meshgen.boxes(str(tmp_path / "plate.msh"),
+                  [dict(lo=(0, 0, 0), hi=(5, 1, 0.5), n=(7, 2, 1), name="base"),
+                   dict(lo=(0, 0, 0.5), hi=(4, 1, 1.0), n=(8, 2, 2), name="plate")])
+    p = 1.0e6
+    couple = {"master": "plate_zmin", "slave": "base_zmax", "mu": 1.0}
+    if exclude:
+        couple["exclude"] = "plate_xmax"  # its nodes on the master surface: the corner edge
+    material = {"E": 2.0e10, "nu": 0.2}
+    scene = {"meshes": {"m": "plate.msh"},
+             "bodies": {b: {"mesh": "m", "regions": b, "material": material} for b in ("base", "plate")},
+             "couples": [couple],
+             "dirichlet": [{"surface": "base_zmin", "components": "all"}, {"surface": "base_ymin", "components": ["y"]},
+                           {"surface": "plate_ymin", "components": ["y"]}, {"surface": "plate_xmax", "components": ["x"]}],
+             "loads": [{"kind": "pressure", "surface": "plate_zmax", "value": p},
+                       {"kind": "pressure", "surface": "plate_xmin", "value": 0.5 * p}],
+             "analysis": {"type": "static"}}
+    return prep(tmp_path, scene, name="plate"), np.array([0.5 * p * 0.5, 0, -p * 4])
+
+
+def balance(h5, loads):
+    """The plate's loads + its supports' reactions + the contact resultant on it (the CSV's, on the
+    master side), and the base's reactions - that resultant: both 0 in equilibrium."""
+    import csv
+    c = read_csv(result(h5, "_contact.csv"))
+    with open(result(h5, "_reactions.csv")) as f:
+        R = {row["surface"]: np.array([float(row[k]) for k in ("fx", "fy", "fz")]) for row in csv.DictReader(f)}
+    F = np.array([c["fx"][-1], c["fy"][-1], c["fz"][-1]])
+    return loads + R["plate_ymin"] + R["plate_xmax"] + F, R["base_zmin"] + R["base_ymin"] - F, c
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_plate_corner_taken_out_of_contact(tmp_path, nproc):
+    """The couple's `exclude` (as Code_Aster's SANS_GROUP_NO) takes the plate's corner edge out of
+    contact: 24 points instead of 27, none on the wall's plane, no warning, and the contact
+    resultant balances the plate's loads and reactions and the base's reactions to 1e-8 of the load
+    p A; -mbc_contact_check_search, which checks every master node by brute force, passes over the
+    excluded ones."""
+    h5, loads = plate(tmp_path, exclude=True)
+    r = solve(h5, "-mbc_contact_check_search", nproc=nproc)
+    assert "warning" not in r.stdout, r.stdout
+    q = read_contact(result(h5, ".h5"))
+    assert len(q["state"]) == 24 and np.all(q["reference"][:, 0] < 4 - 1e-12) and np.all(q["state"] > 0)
+    on_plate, on_base, c = balance(h5, loads)
+    assert np.abs(on_plate).max() < 1e-8 * 4e6 and np.abs(on_base).max() < 1e-8 * 4e6, (on_plate, on_base)
+
+
+def test_prescribed_contact_node_is_named_and_reactions_balance(tmp_path):
+    """The same plate with its corner edge in contact: those 3 master nodes are x-prescribed on
+    the plate's side only (no base node on the wall's plane), so their contact force along x goes
+    into the wall, not into the plate: a warning names them. The reactions count that force on
+    the prescribed rows (R = K u - F - H lambda with the contact force H leaves out there), so
+    the plate's loads, reactions and contact resultant still balance to 1e-8 of p A; before, the
+    wall's reaction missed it and the plate was 2.2e-2 p out of balance along x."""
+    h5, loads = plate(tmp_path, exclude=False)
+    r = solve(h5)
+    warn = [line for line in r.stdout.splitlines() if "warning" in line]
+    assert len(warn) == 1 and "3 contact points lie on master nodes prescribed on their side only" in warn[0], r.stdout
+    assert "node (4., 0., 0.5) of body 'plate' (x prescribed)" in warn[0] and "`exclude`" in warn[0], warn
+    on_plate, on_base, c = balance(h5, loads)
+    assert c["points"][-1] == 27
+    assert np.abs(on_plate).max() < 1e-8 * 4e6 and np.abs(on_base).max() < 1e-8 * 4e6, (on_plate, on_base)

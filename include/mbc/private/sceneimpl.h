@@ -55,6 +55,7 @@ typedef struct {
   PetscReal mu;
   char     *master, *slave; /* surface names joined by "," */
   PetscReal *master_faces, *slave_faces; /* per body: its faces on each side (weights of the decomposition) */
+  PetscInt   nexclude, *exclude; /* master nodes taken out of contact: (body, vertex in scene order) each */
 } MBCCoupleDesc;
 
 typedef struct {

@@ -139,6 +139,7 @@ struct _n_MBCSolver {
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactExclusions(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
