@@ -318,3 +318,39 @@ def _union_faces(names, faces):
         for i, index in faces[name].items():
             union[i] = np.union1d(union.get(i, []), index).astype(np.int64)
     return union
+
+
+def couple_exclusions(scene, bodies, labels):
+    """Per couple (in scene order), the master nodes its `exclude` regions take out of contact, as
+    an (n, 2) int32 array of (body index, body vertex): the vertices of the named regions (of
+    any dimension below 3: node sets, lines, surfaces) that are nodes of the couple's master faces."""
+    meshes = {b.mesh.name: b.mesh for b in bodies}
+    out = []
+    for ci, c in enumerate(scene.couples):
+        pairs = set()
+        for name in c.exclude:
+            where = f"couples[{ci}].exclude (couple k={c.k})"
+            found = [m for m in meshes.values() if name in m.regions]
+            if not found:
+                lists = "; ".join(f"{m.describe()}: {', '.join(m.regions)}" for m in meshes.values())
+                raise InputError(f"{where}: region '{name}' not found in the meshes of the bodies ({lists})")
+            hit = 0
+            for mesh in found:
+                region = mesh.regions[name]
+                if region.dim == 3:
+                    raise InputError(f"{where}: region '{name}' of {mesh.describe()} is a volume; name the "
+                                     "nodes by a node set, a line or a surface region")
+                vertices = np.unique(np.concatenate([cells.ravel() for cells in region.blocks.values()]))
+                for i, body in enumerate(bodies):
+                    master = labels[i][:, 1] == c.k
+                    if body.mesh is not mesh or not master.any():
+                        continue
+                    local = body.vertex_map[vertices]
+                    chosen = np.intersect1d(local[local >= 0], body.boundary_faces[master])
+                    pairs.update((i, int(v)) for v in chosen)
+                    hit += len(chosen)
+            if not hit:
+                raise InputError(f"{where}: region '{name}' has no node on the couple's master surfaces "
+                                 f"({', '.join(c.master)}); the contact points are the master nodes")
+        out.append(np.array(sorted(pairs), dtype=np.int32).reshape(-1, 2))
+    return out

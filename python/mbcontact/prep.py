@@ -18,7 +18,7 @@ import tempfile
 import numpy as np
 
 from . import __version__
-from .bodies import build_bodies, face_labels, read_mesh
+from .bodies import build_bodies, couple_exclusions, face_labels, read_mesh
 from .scene import InputError, load_yaml, parse_scene, warn
 
 PROG = "mbcontact-prep"
@@ -70,14 +70,15 @@ def _run(args):
     meshes = {name: read_mesh(name, path) for name, path in scene.meshes.items() if name in used}
     bodies = build_bodies(scene, meshes)
     labels, face_counts = face_labels(scene, bodies)
+    exclude = couple_exclusions(scene, bodies, labels)
 
     if not args.check:
-        _write(output, scene, bodies, labels, face_counts)
+        _write(output, scene, bodies, labels, face_counts, exclude)
     if not args.quiet:
-        _print_summary(output, args.check, scene, bodies, face_counts)
+        _print_summary(output, args.check, scene, bodies, face_counts, exclude)
 
 
-def _print_summary(output, check_only, scene, bodies, face_counts):
+def _print_summary(output, check_only, scene, bodies, face_counts, exclude):
     if scene.stages:
         print(f"{'checked' if check_only else 'wrote ' + output}: {len(scene.stages)} stages: "
               + ", ".join(f"{st.name} ({st.analysis.type}, t {st.start_time:g} to {st.analysis.final_time:g})"
@@ -89,12 +90,13 @@ def _print_summary(output, check_only, scene, bodies, face_counts):
     for sid, (name, count) in enumerate(face_counts.items(), start=1):
         print(f"  surface {sid} {name}: {count} faces")
     for c in scene.couples:
-        print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}")
+        out = f", {len(exclude[scene.couples.index(c)])} master nodes out of contact" if c.exclude else ""
+        print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{out}")
 
 
 # ---------------------------------------------------------------- writing
 
-def _write(output, scene, bodies, labels, face_counts):
+def _write(output, scene, bodies, labels, face_counts, exclude):
     """Write meshes (subprocess) then metadata into a temporary file, then rename."""
     folder = os.path.dirname(os.path.abspath(output))
     with tempfile.TemporaryDirectory(prefix="mbcontact-prep-") as tmp:
@@ -108,7 +110,7 @@ def _write(output, scene, bodies, labels, face_counts):
             os.umask(mask)
             os.chmod(partial, 0o666 & ~mask)
             _write_meshes(npz, partial)
-            write_metadata(partial, scene, bodies, face_counts, labels)
+            write_metadata(partial, scene, bodies, face_counts, labels, exclude)
             os.replace(partial, output)
         except OSError as err:
             raise InputError(f"cannot write {output}: {err.strerror or err}") from None
@@ -143,7 +145,7 @@ def _write_meshes(npz, h5):
                             + done.stderr.strip()[:6000])
 
 
-def write_metadata(path, scene, bodies, face_counts, labels=None):
+def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
     """Add the /mbcontact group (docs/scene-h5.md) to an existing HDF5 file."""
     import h5py
 
@@ -173,9 +175,14 @@ def write_metadata(path, scene, bodies, face_counts, labels=None):
                 return np.zeros(len(bodies), dtype=np.int32)
             return np.array([np.count_nonzero(lab[:, column] == c.k) for lab in labels], dtype=np.int32)
 
-        _list(root, "couples", scene.couples, lambda g, c: _attrs(
-            g, k=c.k, mu=c.mu, master=",".join(c.master), slave=",".join(c.slave),
-            master_faces=side_faces(c, 1), slave_faces=side_faces(c, 2)))
+        def couple(g, item):
+            i, c = item
+            _attrs(g, k=c.k, mu=c.mu, master=",".join(c.master), slave=",".join(c.slave),
+                   master_faces=side_faces(c, 1), slave_faces=side_faces(c, 2))
+            if exclude is not None and len(exclude[i]):  # (body, vertex) of the master nodes out of contact
+                g.create_dataset("exclude", data=exclude[i].astype(np.int32))
+
+        _list(root, "couples", enumerate(scene.couples), couple)
 
         dirichlet = []
         for d in scene.dirichlet:

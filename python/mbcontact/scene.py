@@ -280,6 +280,7 @@ class Couple:
     master: list
     slave: list
     mu: float
+    exclude: list = field(default_factory=list)  # regions whose nodes carry no contact point
 
 
 @dataclass
@@ -411,12 +412,20 @@ def _body(name, spec, meshes):
     return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"), element)
 
 
+MATERIAL_RANGE = (1e-100, 1e100)  # the solver's MBC_MATERIAL_MIN/MAX: squares stay normal doubles
+
+
 def _material(value, where):
     spec = mapping(value, where, ("E",) + tuple(MATERIAL_DEFAULTS), required=("E",))
     material = dict(E=real(spec["E"], f"{where}.E", gt=0))
     for key, default in MATERIAL_DEFAULTS.items():
         bounds = dict(gt=-1, lt=0.5) if key == "nu" else dict(ge=0)
         material[key] = real(spec.get(key, default), f"{where}.{key}", **bounds)
+    lo, hi = MATERIAL_RANGE
+    for key, v in material.items():
+        if key != "nu" and v != 0 and not lo <= v <= hi:
+            raise InputError(f"{where}.{key}: {v:g} lies outside [{lo:g}, {hi:g}]: no material in any unit "
+                             f"system, and the stiffness, mass and energies made from it leave double precision")
     return material
 
 
@@ -424,14 +433,15 @@ def _couples(value):
     couples, seen = [], {}
     for i, spec in enumerate(entries(value, "couples")):
         where = f"couples[{i}]"
-        spec = mapping(spec, where, ("k", "master", "slave", "mu"), required=("master", "slave"))
+        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude"), required=("master", "slave"))
         k = integer(spec.get("k", i + 1), f"{where}.k", ge=1)
         if k in seen:
             raise InputError(f"{where}.k: couple k={k} is already defined by couples[{seen[k]}]")
         seen[k] = i
         couples.append(Couple(k, name_list(spec["master"], f"{where}.master (couple k={k})"),
                               name_list(spec["slave"], f"{where}.slave (couple k={k})"),
-                              real(spec.get("mu", 0.0), f"{where}.mu", ge=0)))
+                              real(spec.get("mu", 0.0), f"{where}.mu", ge=0),
+                              name_list(spec["exclude"], f"{where}.exclude (couple k={k})") if "exclude" in spec else []))
         if couples[-1].mu > MAX_MU:
             raise InputError(f"{where}.mu: {couples[-1].mu:g} is not a friction coefficient (at most "
                              f"{MAX_MU:g}, a friction angle of 89.94 degrees)")

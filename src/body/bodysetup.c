@@ -220,14 +220,15 @@ static PetscErrorCode BodySetUpConstraints(MBCBody body)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode MBCBodySetUp(MBCBody body)
+/* dynamic: some analysis stage of the solver's run needs M, of type mass. The solver hands these
+   over: the scene is shared by every solver on it and holds only what its file says. */
+PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
 {
-  MBCScene scene   = body->scene;
-  PetscBool dynamic = (PetscBool)(scene->has_dynamic || scene->analysis == MBC_ANALYSIS_DYNAMIC); /* some stage needs M */
+  MBCScene scene = body->scene;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_BodyAssemble, 0, 0, 0, 0));
-  PetscCall(BodyAssembleOperators(body, dynamic, scene->mass));
+  PetscCall(BodyAssembleOperators(body, dynamic, mass));
   body->cM = body->desc.damping + body->desc.rayleigh_alpha;
   body->cK = body->desc.rayleigh_beta;
   PetscCall(MBCBodyAssembleLoads(body));

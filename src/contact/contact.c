@@ -631,10 +631,31 @@ PetscErrorCode MBCContactDestroy(MBCContact *contact)
     PetscCall(PetscFree(c->couples[i].prefer));
     PetscCall(MBCCoupleIntegrateReset(&c->couples[i]));
     PetscCall(PetscFree2(c->couples[i].g0n, c->couples[i].g0i));
+    PetscCall(PetscFree(c->couples[i].exclude));
   }
   for (PetscInt b = 0; b < c->scene->nbodies; b++) PetscCall(VecDestroy(&c->usearch[b]));
   PetscCall(PetscFree(c->usearch));
   PetscCall(PetscFree(c->couples));
   PetscCall(PetscFree(*contact));
+  PetscFunctionReturn(0);
+}
+
+static int ComparePair(const void *a, const void *b)
+{
+  const PetscInt *p = (const PetscInt *)a, *q = (const PetscInt *)b;
+  return p[0] != q[0] ? (p[0] < q[0] ? -1 : 1) : (p[1] != q[1] ? (p[1] < q[1] ? -1 : 1) : 0);
+}
+
+/* Couple i's master nodes taken out of contact: n of them, (body, first global row) each. */
+PetscErrorCode MBCContactSetExcluded(MBCContact c, PetscInt i, PetscInt n, const PetscInt pairs[])
+{
+  MBCCouple *cp = &c->couples[i];
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree(cp->exclude));
+  PetscCall(PetscMalloc1(2 * n + 1, &cp->exclude));
+  PetscCall(PetscArraycpy(cp->exclude, pairs, 2 * n));
+  qsort(cp->exclude, (size_t)n, 2 * sizeof(PetscInt), ComparePair);
+  cp->nexclude = n;
   PetscFunctionReturn(0);
 }

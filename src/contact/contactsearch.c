@@ -446,7 +446,7 @@ PetscErrorCode MBCCoupleLocalSearch(MBCCouple *c)
     }
 #undef TRY
     if (found && MBCCoupleKeepsFace(c, xm, nm, pair->master, best.face, &cp)) best = cp;
-    if (!found || best.gap < -c->h) continue;
+    if (!found || best.gap < -c->h || MBCCoupleExcludes(c, pair->master)) continue;
     best.master = pair->master;
     Frame(&best);
     c->points[c->npoints++] = best;
@@ -481,7 +481,7 @@ PetscErrorCode MBCCoupleCheckSearch(MBCCouple *c, PetscInt *missed, PetscInt *fa
         bestq = q;
         found = PETSC_TRUE;
       }
-    if (!found) continue;
+    if (!found || MBCCoupleExcludes(c, v)) continue;
     if (pointOf[v] >= 0) (void)MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], c->points[pointOf[v]].face, PETSC_FALSE, &cp, &qs);
     if (pointOf[v] >= 0 && c->points[pointOf[v]].face != best.face && MBCCoupleKeepsFace(c, &m->x[3 * v], &m->nnormal[3 * v], v, best.face, &cp) && cp.face == c->points[pointOf[v]].face) continue; /* its stable face */
     if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9)) {

@@ -353,11 +353,11 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
     MBCCouple  *cp = &c->couples[i];
     MBCSurface *m = &cp->master, *sl = &cp->slave;
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
-      const MBCContactPoint *p = &cp->points[j];
-      const PetscReal       *e[3] = {p->n, p->t1, p->t2};
+      const PetscReal *e[3] = {&ifc->frames[9 * k], &ifc->frames[9 * k + 3], &ifc->frames[9 * k + 6]};
       if (brank || first[k] < 0) continue; /* rank 0 of the body inserts; assembly sends rows to their owners */
       for (PetscInt a = 0; a < ifc->coff[k + 1] - ifc->coff[k]; a++) {
         const PetscInt col = first[k] + a;
+        if (ifc->held[k] & (1 << a)) continue; /* held on both sides: no multiplier acts along it */
         for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
           const PetscInt node = cp->mnode[l];
           if (m->nbody[node] != body->index) continue;
@@ -640,6 +640,7 @@ PetscErrorCode MBCInterfaceSetState(MBCInterface ifc, const PetscReal lamprev[],
   PetscCall(PetscArraycpy(ifc->rall, r, ifc->coff[ifc->ncontact]));
   PetscCall(PetscArraycpy(ifc->slip, slip, 3 * ifc->ncontact));
   PetscCall(PetscArrayzero(ifc->stepslip, 3 * ifc->ncontact));
+  PetscCall(PetscArrayzero(ifc->cutslip, 3 * ifc->ncontact));
   PetscFunctionReturn(0);
 }
 
@@ -1205,7 +1206,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
 {
   MBCContact c  = ifc->contact;
   PetscInt   nc = NumContacts(c), nold = ifc->npairs_built, *oldpairs = ifc->pairs_built, *oldoff = NULL, *dims, m, mloc;
-  PetscReal *oldframes = ifc->frames, *oldlam = NULL, *oldr = NULL, *oldslip = ifc->slip, *oldstepslip = ifc->stepslip;
+  PetscReal *oldframes = ifc->frames, *oldlam = NULL, *oldr = NULL, *oldslip = ifc->slip, *oldstepslip = ifc->stepslip, *oldcutslip = ifc->cutslip;
 
   PetscFunctionBegin;
   PetscCheck(n == nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact pairs and points disagree");
@@ -1220,6 +1221,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
   ifc->frames = NULL;
   ifc->slip     = NULL;
   ifc->stepslip = NULL;
+  ifc->cutslip  = NULL;
   PetscCall(InterfaceReset(ifc));
   ifc->pairs_built  = pairs;
   ifc->npairs_built = n;
@@ -1230,6 +1232,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
   PetscCall(PetscMalloc1(9 * nc + 1, &ifc->frames));
   PetscCall(PetscCalloc1(3 * nc + 1, &ifc->slip));
   PetscCall(PetscCalloc1(3 * nc + 1, &ifc->stepslip));
+  PetscCall(PetscCalloc1(3 * nc + 1, &ifc->cutslip));
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const MBCContactPoint *p = &c->couples[i].points[j];
@@ -1242,6 +1245,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
       }
     }
   PetscCall(InterfaceRankOrder(ifc, dims));
+  PetscCall(MBCInterfaceHeldDirections(ifc)); /* before H: the frames' held tangents */
   m = ifc->coff[nc];
   mloc = ifc->poff[ifc->plast] - ifc->poff[ifc->pfirst];
   { /* this rank's contacts of the multiplier problem */
@@ -1296,18 +1300,19 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
     PetscCall(PetscFree2(v[0], v[1]));
     if (oldslip && nold) { /* the slip so far and in this load step, (0, t1, t2) in each point's frame */
       PetscInt        *off3;
-      const PetscReal *old[2]     = {oldslip, oldstepslip};
-      PetscReal       *carried[2] = {ifc->slip, ifc->stepslip};
+      const PetscReal *old[3]     = {oldslip, oldstepslip, oldcutslip};
+      PetscReal       *carried[3] = {ifc->slip, ifc->stepslip, ifc->cutslip};
       PetscCall(PetscMalloc1(PetscMax(nold, nc) + 1, &off3));
       for (PetscInt i = 0; i <= PetscMax(nold, nc); i++) off3[i] = 3 * i;
-      PetscCall(CarryFields(2, nold, oldpairs, oldframes, off3, old, nc, pairs, ifc->frames, off3, carried));
-      for (PetscInt k = 0; k < nc; k++) ifc->slip[3 * k] = ifc->stepslip[3 * k] = 0;
+      PetscCall(CarryFields(3, nold, oldpairs, oldframes, off3, old, nc, pairs, ifc->frames, off3, carried));
+      for (PetscInt k = 0; k < nc; k++) ifc->slip[3 * k] = ifc->stepslip[3 * k] = ifc->cutslip[3 * k] = 0;
       PetscCall(PetscFree(off3));
     }
   }
   PetscCall(PetscFree3(oldoff, oldlam, oldr));
   PetscCall(PetscFree(oldslip));
   PetscCall(PetscFree(oldstepslip));
+  PetscCall(PetscFree(oldcutslip));
   PetscCall(PetscFree(oldframes));
   PetscCall(PetscFree(oldpairs));
   PetscCall(PetscLogEventEnd(MBC_FlexibilityAssemble, 0, 0, 0, 0));
@@ -1324,8 +1329,10 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(PetscFree6(ifc->H, ifc->Hu, ifc->lam, ifc->Hl, ifc->Xl, ifc->nbcols));
   PetscCall(PetscFree(ifc->bcols));
   PetscCall(PetscFree(ifc->frames));
+  PetscCall(PetscFree(ifc->held));
   PetscCall(PetscFree(ifc->slip));
   PetscCall(PetscFree(ifc->stepslip));
+  PetscCall(PetscFree(ifc->cutslip));
   PetscCall(PetscFree(ifc->pairs_built));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     PetscCall(MatDestroy(&ifc->sinv[b]));

@@ -191,10 +191,11 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
   PetscFunctionReturn(0);
 }
 
-/* Coulomb's law in a static load step holds for the slip over the whole step: the equilibrium
-   iterations after the first only correct it, so their tangential rates start from the slip the
-   step's earlier iterations made (else a point that slid in the first iteration and not in the
-   next would be taken to stick, its traction inside the cone while the block slides). */
+/* Coulomb's law in a static load step holds for the slip over the whole load step: the
+   equilibrium iterations after the first only correct it, so their tangential rates start from
+   the slip the load step's earlier iterations made (else a point that slid in the first iteration
+   and not in the next would be taken to stick, its traction inside the cone while the block
+   slides). A load step is the output step, or a half of it where a cut made two. */
 static PetscErrorCode InterfaceAddStepSlip(MBCInterface ifc, Vec q)
 {
   PetscScalar *a;
@@ -206,17 +207,30 @@ static PetscErrorCode InterfaceAddStepSlip(MBCInterface ifc, Vec q)
   for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) {
     const PetscInt k = ifc->order[p];
     if (ifc->coff[k + 1] - ifc->coff[k] == 3)
-      for (PetscInt d = 1; d < 3; d++) a[ifc->poff[p] + d - rstart] += ifc->stepslip[3 * k + d];
+      for (PetscInt d = 1; d < 3; d++) a[ifc->poff[p] + d - rstart] += ifc->stepslip[3 * k + d] - ifc->cutslip[3 * k + d];
   }
   PetscCall(VecRestoreArray(q, &a));
   PetscFunctionReturn(0);
 }
 
-/* A static load step begins: its slip counts from here. */
+/* A step (of the output: a static load step, a dynamic step with its cut steps) begins: the slip
+   its states are decided by counts from here. */
 PetscErrorCode MBCInterfaceStepBegin(MBCInterface ifc)
 {
   PetscFunctionBegin;
   if (ifc->stepslip) PetscCall(PetscArrayzero(ifc->stepslip, 3 * ifc->ncontact));
+  if (ifc->cutslip) PetscCall(PetscArrayzero(ifc->cutslip, 3 * ifc->ncontact));
+  ifc->stepres = ifc->cutres = 0;
+  PetscFunctionReturn(0);
+}
+
+/* A static load step (the step, or a half of it after a cut) begins: Coulomb's law counts its
+   slip from here. */
+PetscErrorCode MBCInterfaceLoadStepBegin(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  if (ifc->cutslip) PetscCall(PetscArraycpy(ifc->cutslip, ifc->stepslip, 3 * ifc->ncontact));
+  ifc->cutres = ifc->stepres;
   PetscFunctionReturn(0);
 }
 
@@ -224,8 +238,11 @@ PetscErrorCode MBCInterfaceStepBegin(MBCInterface ifc)
 PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
 {
   PetscFunctionBegin;
-  for (PetscInt i = 0; ifc->stepslip && i < 3 * ifc->ncontact; i++) ifc->slip[i] -= ifc->stepslip[i];
-  PetscCall(MBCInterfaceStepBegin(ifc));
+  for (PetscInt i = 0; ifc->stepslip && i < 3 * ifc->ncontact; i++) {
+    ifc->slip[i] -= ifc->stepslip[i] - ifc->cutslip[i];
+    ifc->stepslip[i] = ifc->cutslip[i];
+  }
+  ifc->stepres = ifc->cutres;
   PetscFunctionReturn(0);
 }
 
@@ -235,6 +252,7 @@ PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
 PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time, PetscBool may_fail, PetscBool *failed)
 {
   const PetscInt nc = ifc->ncontact;
+  PetscReal      qnorm = 0; /* |q|, the step's free motion at the contact points */
 
   PetscFunctionBegin;
   *failed = PETSC_FALSE;
@@ -258,6 +276,7 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
        unit, 1e-8 would be 10 nm in m and 10 pm in mm) */
     PetscReal L;
     PetscCall(VecNorm(ifc->fp.q, NORM_2, &L));
+    qnorm = L;
     if (!(L > 0)) L = 1;
     PetscCall(MBCInterfaceRigidRHS(ifc, step, time));
     if (ifc->fp.G) PetscCall(VecZeroEntries(ifc->fp.alpha)); /* the rigid motion of this increment */
@@ -288,15 +307,19 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
   PetscCall(VecAXPBY(ifc->lamprev, 1.0 / ifc->dscale, -ifc->carry, ifc->lambda)); /* lambda_n+1 = r - c lambda_n (physical) */
   PetscCall(MBCInterfaceGather(ifc, ifc->lambda, ifc->rall));
   PetscCall(MBCInterfaceGather(ifc, ifc->ucontact, ifc->uall));
-  /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the step's slip
-     (H's master weight is 1, so in length units); in a static step it counts from the step's
-     start (InterfaceAddStepSlip), and this iteration moved the points by u_t - stepslip */
+  /* u = D lambda_n+1 + H^T du_free (+ gap) is H^T du: its tangential part is the slip of this
+     solve (H's master weight is 1, so in length units); in a static step it counts from the step's
+     start (InterfaceAddStepSlip), and this iteration moved the points by u_t - stepslip; a dynamic
+     step's cut steps add theirs up */
   for (PetscInt k = 0; k < nc; k++)
     if (ifc->coff[k + 1] - ifc->coff[k] == 3)
       for (PetscInt d = 1; d < 3; d++) {
-        ifc->slip[3 * k + d] += ifc->uall[ifc->coff[k] + d] - ifc->stepslip[3 * k + d];
-        if (ifc->analysis == MBC_ANALYSIS_STATIC) ifc->stepslip[3 * k + d] = ifc->uall[ifc->coff[k] + d];
+        const PetscReal u = ifc->uall[ifc->coff[k] + d], before = ifc->analysis == MBC_ANALYSIS_STATIC ? ifc->stepslip[3 * k + d] - ifc->cutslip[3 * k + d] : 0;
+        ifc->slip[3 * k + d] += u - before;
+        ifc->stepslip[3 * k + d] += u - before;
       }
+  /* what the solve resolves of it: at most 2 rtol |q| of u_t at a sticking point (the merit's bound, MBCInterfaceStates) */
+  ifc->stepres = (ifc->analysis == MBC_ANALYSIS_STATIC ? ifc->cutres : ifc->stepres) + 2 * ifc->mult->rtol * qnorm;
   PetscCall(MBCInterfaceToBodies(ifc, ifc->lamprev));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     MBCBody body = ifc->bodies[b];
@@ -310,9 +333,18 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
   PetscFunctionReturn(0);
 }
 
-/* Per contact point (in couple order): its state and the step's mean contact force z = theta r
-   (in the frame n, t1, t2; tangents 0 where frictionless); counts of each state. state and
-   lambda may be NULL. The same on every rank. */
+/* Per contact point (in couple order): its state in the step and the step's mean contact force
+   z = theta r (in the frame n, t1, t2; tangents 0 where frictionless); counts of each state.
+   state and lambda may be NULL. The same on every rank. The state is what the point did in the
+   step (docs/design.md, "A point's state"): separated where it carries no normal force (its gap
+   open), else slip where its slip in the step (stepslip: over the static step's iterations, or
+   the dynamic step's cut steps) exceeds what the multiplier solves resolve of it, stick where it
+   does not (its traction then lies in the cone, or on it about to slip). The merit's bound, |u_t|
+   <= 2 rtol |q| at a sticking point (the natural map's residual there is u_t; the merit is it over
+   1 + sqrt|q| with |q| scaled to 1), summed over the step's solves, is that resolution (stepres);
+   a frictionless point in contact is "slip". (The state used to be read from the traction, inside
+   the cone by 1e-6 or not: points that slid in the step with their mean force inside the cone, a
+   reversal or the trapezoidal rule's period-2 oscillation, were "stick".) */
 PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt state[], PetscReal lambda[])
 {
   MBCContact c = ifc->contact;
@@ -323,12 +355,11 @@ PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt 
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const PetscInt o = ifc->coff[k], dim = ifc->coff[k + 1] - o;
-      PetscReal      lam[3] = {0, 0, 0}, rt;
+      PetscReal      lam[3] = {0, 0, 0};
       PetscInt       st;
-      for (PetscInt d = 0; d < dim; d++) lam[d] = ifc->theta * ifc->rall[o + d] / ifc->dscale;
-      rt = PetscSqrtReal(lam[1] * lam[1] + lam[2] * lam[2]);
+      for (PetscInt d = 0; d < dim; d++) lam[d] = ifc->held[k] & (1 << d) ? 0 : ifc->theta * ifc->rall[o + d] / ifc->dscale; /* a held direction's r acts on no body */
       if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
-      else if (dim == 3 && rt < c->couples[i].mu * lam[0] * (1 - 1e-6)) st = MBC_CONTACT_STICK;
+      else if (dim == 3 && PetscSqrtReal(PetscSqr(ifc->stepslip[3 * k + 1]) + PetscSqr(ifc->stepslip[3 * k + 2])) <= ifc->stepres) st = MBC_CONTACT_STICK;
       else st = MBC_CONTACT_SLIP;
       count[st]++;
       if (state) state[k] = st;

@@ -231,6 +231,41 @@ static PetscErrorCode ReadTimeTable(H5Node *entry, MBCTimeTable *table)
   PetscFunctionReturn(0);
 }
 
+/* The optional dataset `exclude` of a couple: (n, 2) integers, body and vertex (scene order) of
+   each node taken out of contact (docs/scene-h5.md). */
+static PetscErrorCode ReadCoupleExclude(H5Node *entry, MBCScene scene, MBCCoupleDesc *c)
+{
+  hid_t      dset, space, type;
+  hsize_t    dims[2] = {0, 0};
+  long long *buf;
+  PetscBool  isint;
+
+  PetscFunctionBegin;
+  if (H5Lexists(entry->obj, "exclude", H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
+  dset = H5Dopen2(entry->obj, "exclude", H5P_DEFAULT);
+  PetscCheck(dset >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot open dataset %s/exclude", entry->file, entry->path);
+  space = H5Dget_space(dset);
+  type  = H5Dget_type(dset);
+  isint = (PetscBool)(H5Tget_class(type) == H5T_INTEGER);
+  H5Tclose(type);
+  PetscCheck(isint && H5Sget_simple_extent_ndims(space) == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/exclude must be integers of shape (n, 2)", entry->file, entry->path);
+  H5Sget_simple_extent_dims(space, dims, NULL);
+  PetscCheck(dims[1] == 2 && dims[0] >= 1 && dims[0] <= (hsize_t)PETSC_MAX_INT / 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/exclude must have shape (n, 2), n >= 1", entry->file, entry->path);
+  PetscCall(PetscMalloc1(2 * dims[0], &buf));
+  PetscCheck(H5Dread(dset, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/exclude", entry->file, entry->path);
+  H5Sclose(space);
+  H5Dclose(dset);
+  c->nexclude = (PetscInt)dims[0];
+  PetscCall(PetscMalloc1(2 * c->nexclude, &c->exclude));
+  for (PetscInt i = 0; i < c->nexclude; i++) {
+    const long long b = buf[2 * i], v = buf[2 * i + 1];
+    PetscCheck(b >= 0 && b < scene->nbodies && v >= 0 && v < scene->bodies[b].num_vertices, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/exclude row %" PetscInt_FMT " names body %lld, vertex %lld, which do not exist", entry->file, entry->path, i, b, v);
+    c->exclude[2 * i] = (PetscInt)b, c->exclude[2 * i + 1] = (PetscInt)v;
+  }
+  PetscCall(PetscFree(buf));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode ReadTimeKind(H5Node *entry, MBCScene scene, MBCTimeKind *time, PetscInt *tf)
 {
   PetscInt kind = MBC_TIME_CONSTANT;
@@ -263,6 +298,11 @@ static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
   PetscCheck(b->nu > -1.0 && b->nu < 0.5, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': Poisson's ratio nu = %g must lie in (-1, 0.5)", e->file, b->name, (double)b->nu);
   PetscCheck(b->density >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': density %g must not be negative", e->file, b->name, (double)b->density);
   PetscCheck(b->damping >= 0 && b->rayleigh_alpha >= 0 && b->rayleigh_beta >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': damping coefficients must not be negative", e->file, b->name);
+  {
+    const char     *key[5] = {"E", "density", "damping", "rayleigh_alpha", "rayleigh_beta"};
+    const PetscReal val[5] = {b->E, b->density, b->damping, b->rayleigh_alpha, b->rayleigh_beta};
+    for (PetscInt i = 0; i < 5; i++) PetscCheck(val[i] == 0 || (val[i] >= MBC_MATERIAL_MIN && val[i] <= MBC_MATERIAL_MAX), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': material %s = %g lies outside [%g, %g]: no material in any unit system, and the stiffness, mass and energies made from it leave double precision", e->file, b->name, key[i], (double)val[i], (double)MBC_MATERIAL_MIN, (double)MBC_MATERIAL_MAX);
+  }
   PetscFunctionReturn(0);
 }
 
@@ -556,6 +596,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCall(H5ReadReals(&e, "slave_faces", s->nbodies, c->slave_faces, PETSC_TRUE));
     PetscCheck(c->k >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple %s has real constant k = %" PetscInt_FMT "; k must be at least 1", s->filename, e.path, c->k);
     PetscCheck(c->mu >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g < 0", s->filename, c->k, (double)c->mu);
+    PetscCall(ReadCoupleExclude(&e, s, c));
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -686,6 +727,7 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].master));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].slave));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree2(s->couples[i].master_faces, s->couples[i].slave_faces));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].exclude));
   for (PetscInt i = 0; i < s->ntables; i++) PetscCall(PetscFree2(s->tables[i].t, s->tables[i].f));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].bodies));
   PetscCall(PetscFree(s->bodies));
@@ -767,7 +809,7 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
     MBCBodyDesc *b = &s->bodies[i];
     PetscCall(PetscViewerASCIIPrintf(viewer, "body %s: %" PetscInt_FMT " %s cells, %" PetscInt_FMT " vertices, E %g nu %g density %g damping %g rayleigh %g %g\n", b->name, b->num_cells, b->cell_type, b->num_vertices, (double)b->E, (double)b->nu, (double)b->density, (double)b->damping, (double)b->rayleigh_alpha, (double)b->rayleigh_beta));
   }
-  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "couple %" PetscInt_FMT ": master %s (+k), slave %s (-k), mu %g\n", s->couples[i].k, s->couples[i].master, s->couples[i].slave, (double)s->couples[i].mu));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "couple %" PetscInt_FMT ": master %s (+k), slave %s (-k), mu %g, %" PetscInt_FMT " master nodes taken out of contact\n", s->couples[i].k, s->couples[i].master, s->couples[i].slave, (double)s->couples[i].mu, s->couples[i].nexclude));
   for (PetscInt i = 0; i < s->ndirichlet; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed u%c = %g on %s (%s)\n", "xyz"[s->dirichlet[i].component], (double)s->dirichlet[i].value, s->dirichlet[i].surface, MBCTimeKinds[s->dirichlet[i].time]));
   for (PetscInt i = 0; i < s->nloads; i++) {
     MBCLoadDesc *l = &s->loads[i];

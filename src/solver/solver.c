@@ -14,7 +14,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->comm             = comm;
   s->h5               = -1;
   s->fclib_step       = -1;
-  s->static_stabilize = -1;
+  s->static_stabilize = 0; /* off: the free bodies' exact rigid modes */
   s->static_rtol      = 1e-6;
   s->static_max_it    = 50;
   s->dt_cut           = PETSC_TRUE;
@@ -44,6 +44,7 @@ PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
   s->scene        = scene;
   s->analysis     = scene->analysis;
   s->mass         = scene->mass;
+  s->has_dynamic  = scene->has_dynamic;
   s->dt           = scene->dt;
   s->final_time   = scene->final_time;
   s->beta         = scene->newmark_beta;
@@ -77,8 +78,13 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsBool("-mbc_view", "Print the scene and the decomposition", "MBCSolverSetFromOptions", s->view, &s->view, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_search_only", "Search contact on the undeformed bodies, report, stop", "MBCSolverSetFromOptions", s->search_only, &s->search_only, NULL));
   PetscCall(PetscOptionsString("-mbc_fclib_write", "Write the contact multiplier problem of step -mbc_fclib_write_step to this FCLIB file", "MBCSolverSetFromOptions", s->fclib_file, s->fclib_file, sizeof(s->fclib_file), NULL));
-  PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, NULL));
-  PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, NULL));
+  {
+    PetscBool set_step, set_stab;
+    PetscCall(PetscOptionsInt("-mbc_fclib_write_step", "Step whose multiplier problem -mbc_fclib_write writes (default: the last)", "MBCSolverSetFromOptions", s->fclib_step, &s->fclib_step, &set_step));
+    PetscCheck(!set_step || s->fclib_step >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_fclib_write_step %" PetscInt_FMT ": must be a step number >= 1 (without it, the last step)", s->fclib_step);
+    PetscCall(PetscOptionsReal("-mbc_static_stabilize", "Static: bodies their supports leave free get a spring epsilon diag(K) to the last iterate (> 0) instead of their exact rigid-body modes (default, or 0)", "MBCSolverSetFromOptions", s->static_stabilize, &s->static_stabilize, &set_stab));
+    PetscCheck(!set_stab || (s->static_stabilize >= 0 && !PetscIsInfOrNanReal(s->static_stabilize)), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_stabilize %g: must be >= 0 and finite (0: the exact rigid-body modes, the default)", (double)s->static_stabilize);
+  }
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   {
@@ -106,9 +112,9 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscOptionsEnd();
   s->analysis = (MBCAnalysisType)analysis;
   s->mass     = (MBCMassType)mass;
-  s->scene->analysis = s->analysis; /* the bodies read these from the scene */
-  s->scene->mass     = s->mass;
-  if (!s->scene->nstages) s->scene->has_dynamic = (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
+  /* the solver's own settings, handed to its bodies: the scene stays as its file says, so other
+     solvers on it see the same */
+  s->has_dynamic = s->scene->nstages ? s->scene->has_dynamic : (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
   PetscCheck(s->dt > 0 && PetscIsNormalReal(s->dt), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive and finite", (double)s->dt);
   PetscCheck(s->final_time >= s->dt * (1 - 1e-12) && PetscIsNormalReal(s->final_time), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be finite and at least one step (%g)", (double)s->final_time, (double)s->dt);
   /* checked before the cast to an integer below (undefined beyond its range); the output
@@ -235,10 +241,11 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     if (s->bodies[b]) s->bodies[b]->memory_mb = s->memory_mb;
   if (!s->search_only)
     for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b]));
+      if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b], s->has_dynamic, s->mass));
   if (scene->ncouples) {
     PetscCall(MBCContactCreate(s->comm, scene, &s->contact));
     PetscCall(MBCContactSetFromOptions(s->contact, ((PetscObject)s)->prefix));
+    PetscCall(MBCSolverContactExclusions(s));
     PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
     PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb, s->solves_max));
@@ -353,13 +360,7 @@ static PetscErrorCode SolverContactForces(MBCSolver s)
   if (s->analysis == MBC_ANALYSIS_DYNAMIC) MBCInterfaceContactWork(s->iface, &s->wfriction, &s->wcontact);
   PetscCall(MBCInterfaceGetSize(s->iface, &npoints, NULL));
   PetscCall(MBCInterfaceGetMultiplier(s->iface, &mult));
-  if (s->monitor && npoints) {
-    PetscInt count[3] = {0, 0, 0};
-    PetscCall(MBCInterfaceStates(s->iface, count, NULL, NULL));
-    MBCMultiplierType type;
-    PetscCall(MBCMultiplierGetType(mult, &type));
-    PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s %s in %" PetscInt_FMT " iterations (merit %.2e); separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->step, (double)s->time, type, MBCMultiplierConvergedReasonName(mult->reason), mult->its, (double)mult->merit, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
-  }
+  if (s->monitor && npoints) PetscCall(MBCSolverMonitorContact(s, mult));
   PetscFunctionReturn(0);
 }
 
@@ -369,6 +370,7 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   char      timing[192];
 
   PetscFunctionBegin;
+  PetscCall(MBCSolverMonitorContact(s, NULL)); /* the step's last contact line, with the states the output writes */
   if (s->usermonitor) PetscCall((*s->usermonitor)(s, s->step, s->time, s->monitorctx));
   if (!s->monitor) PetscFunctionReturn(0);
   for (PetscInt b = 0; b < s->nbodies; b++) {
@@ -499,7 +501,7 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
 
   PetscFunctionBegin;
   s->contact_failed = PETSC_FALSE;
-  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface));
+  if (s->iface) PetscCall(MBCInterfaceLoadStepBegin(s->iface));
   for (s->static_its = 1;; s->static_its++) {
     for (PetscInt b = 0; b < s->nbodies; b++) {
       MBCBody body = s->bodies[b];
@@ -560,6 +562,7 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
       fmax = mx[0], kumax = mx[1], kufloor = mx[2];
     }
     PetscCall(SolverContact(s));
+    PetscCall(MBCSolverMonitorContact(s, NULL));
     if (s->monitor && (s->contact || stabilized || floating)) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static iteration %" PetscInt_FMT ": max|A du| %.3e max|K u| %.3e\n", s->step, (double)s->time, s->static_its, (double)fmax, (double)kumax));
     if ((!s->contact && !stabilized && !floating) || fmax <= s->static_rtol * kumax || (fmax <= kufloor && !s->contact_rebuilt)) break; /* new pairs: not yet in balance */
     if (s->static_its == s->static_max_it && s->contact_may_fail) {
@@ -591,6 +594,7 @@ static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t
   s->contact_may_fail = PETSC_FALSE;
   if (!s->contact_failed) PetscFunctionReturn(0);
   s->ncuts++;
+  PetscCall(MBCSolverMonitorContact(s, NULL));
   if (s->iface && s->iface->mult->reason < 0) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s: the load step from t %g is cut to two\n", s->step, (double)t1, ((PetscObject)s->iface->mult)->type_name, MBCMultiplierConvergedReasonName(s->iface->mult->reason), (double)t0));
   else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static: no equilibrium after %" PetscInt_FMT " iterations: the load step from t %g is cut to two\n", s->step, (double)t1, s->static_its, (double)t0));
   for (PetscInt b = 0; b < s->nbodies; b++)
@@ -609,6 +613,7 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
   const PetscInt k = s->step - s->stages[s->istage].step0;
 
   PetscFunctionBegin;
+  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface)); /* the states report the whole step */
   PetscCall(SolverStaticAdvance(s, MBCSolverStageTime(s, k - 1), MBCSolverStageTime(s, k), 0));
   PetscCall(SolverMonitor(s));
   PetscCall(SolverCheckDisplacementSize(s));
@@ -930,6 +935,7 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
     PetscFunctionReturn(0);
   }
   s->ncuts++;
+  PetscCall(MBCSolverMonitorContact(s, NULL));
   {
     MBCMultiplier mult;
     PetscCall(MBCInterfaceGetMultiplier(s->iface, &mult));
@@ -952,6 +958,7 @@ static PetscErrorCode SolverDynamicStep(MBCSolver s)
   const PetscReal t0    = MBCSolverStageTime(s, k - 1);
 
   PetscFunctionBegin;
+  if (s->iface) PetscCall(MBCInterfaceStepBegin(s->iface)); /* the states report the whole step */
   s->deepest = start;
   for (PetscInt k = 0; k < n; k++) {
     s->time = t0 + k * (s->dt / n);

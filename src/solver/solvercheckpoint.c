@@ -194,7 +194,7 @@ PetscErrorCode MBCSolverCheckpointWrite(MBCSolver s)
     PetscCall(PetscViewerHDF5PushGroup(v, group));
     PetscCall(CheckpointBodyVec(s, v, b, body ? body->u : NULL, "u", PETSC_FALSE));
     PetscCall(PetscViewerHDF5WriteAttribute(v, group, "num_vertices", PETSC_INT, &s->scene->bodies[b].num_vertices));
-    if (s->scene->has_dynamic) {
+    if (s->has_dynamic) {
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->v : NULL, "v", PETSC_FALSE));
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->a : NULL, "a", PETSC_FALSE));
     }
@@ -286,7 +286,7 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
     PetscCall(PetscSNPrintf(group, sizeof(group), "/bodies/%s", s->scene->bodies[b].name));
     PetscCall(PetscViewerHDF5PushGroup(v, group));
     PetscCall(CheckpointBodyVec(s, v, b, body ? body->u : NULL, "u", PETSC_TRUE));
-    if (s->scene->has_dynamic) {
+    if (s->has_dynamic) {
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->v : NULL, "v", PETSC_TRUE));
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->a : NULL, "a", PETSC_TRUE));
       if (body) PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->fold)); /* the energies' trapezoidal work */

@@ -15,6 +15,7 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
 {
   MBCScene    scene = s->scene;
   PetscMPIInt rank;
+  PetscReal  *box; /* per body: -min and max of its reference coordinates */
   struct {
     double d;
     int    rank;
@@ -24,6 +25,8 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PetscCalloc1(scene->npoints, &s->points));
   PetscCall(PetscMalloc1(scene->npoints, &best));
+  PetscCall(PetscMalloc1(6 * s->nbodies + 1, &box));
+  for (PetscInt i = 0; i < 6 * s->nbodies; i++) box[i] = PETSC_MIN_REAL;
   for (PetscInt p = 0; p < scene->npoints; p++) {
     s->points[p].distance = PETSC_MAX_REAL;
     s->points[p].body     = -1;
@@ -46,6 +49,10 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
       PetscCall(PetscSectionGetOffset(gsec, v, &off));
       if (off < 0) continue;
       PetscCall(PetscSectionGetOffset(csec, v, &coff));
+      for (PetscInt c = 0; c < 3; c++) {
+        box[6 * b + c]     = PetscMax(box[6 * b + c], -PetscRealPart(x[coff + c]));
+        box[6 * b + 3 + c] = PetscMax(box[6 * b + 3 + c], PetscRealPart(x[coff + c]));
+      }
       for (PetscInt p = 0; p < scene->npoints; p++) {
         PetscReal d = 0;
         PetscBool same = PETSC_TRUE;
@@ -68,8 +75,23 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
     best[p].rank = rank;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, best, (PetscMPIInt)scene->npoints, MPI_DOUBLE_INT, MPI_MINLOC, s->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, box, (PetscMPIInt)(6 * s->nbodies), MPIU_REAL, MPIU_MAX, s->comm));
   for (PetscInt p = 0; p < scene->npoints; p++) {
+    PetscReal size = 0; /* the diagonal of the box of the bodies the point may snap to */
     PetscCheck(best[p].d < 0.5 * PETSC_MAX_REAL, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: output point '%s' names body '%s', which does not exist", scene->filename, scene->points[p].name, scene->points[p].body);
+    {
+      PetscReal lo[3] = {PETSC_MAX_REAL, PETSC_MAX_REAL, PETSC_MAX_REAL}, hi[3] = {PETSC_MIN_REAL, PETSC_MIN_REAL, PETSC_MIN_REAL};
+      for (PetscInt b = 0; b < s->nbodies; b++) {
+        PetscBool same = PETSC_TRUE;
+        if (scene->points[p].body[0]) PetscCall(PetscStrcmp(scene->points[p].body, scene->bodies[b].name, &same));
+        for (PetscInt c = 0; same && c < 3; c++) lo[c] = PetscMin(lo[c], -box[6 * b + c]), hi[c] = PetscMax(hi[c], box[6 * b + 3 + c]);
+      }
+      for (PetscInt c = 0; c < 3; c++) size += PetscSqr(hi[c] - lo[c]);
+      size = PetscSqrtReal(size);
+    }
+    /* a point inside the bodies' box is nearer a vertex than the box's diagonal: one farther off
+       was meant elsewhere (another unit, a typo), and its history would be some vertex's */
+    PetscCheck(best[p].d <= size, s->comm, PETSC_ERR_USER_INPUT, "Scene file %s: output point '%s' at (%g, %g, %g) lies %g from the nearest vertex of %s%s%s, farther than the size of %s (%g): check its coordinates and their unit", scene->filename, scene->points[p].name, (double)scene->points[p].x[0], (double)scene->points[p].x[1], (double)scene->points[p].x[2], best[p].d, scene->points[p].body[0] ? "body '" : "every body", scene->points[p].body, scene->points[p].body[0] ? "'" : "", scene->points[p].body[0] ? "that body" : "the model", (double)size);
     s->points[p].rank = best[p].rank;
     if (best[p].rank != rank) s->points[p].row = -1;
     PetscCallMPI(MPI_Bcast(s->points[p].xv, 3, MPIU_REAL, best[p].rank, s->comm));
@@ -78,6 +100,7 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
     if (s->view) PetscCall(PetscPrintf(s->comm, "  output point %s at (%g, %g, %g): vertex (%g, %g, %g) of body %s, distance %g\n", scene->points[p].name, (double)scene->points[p].x[0], (double)scene->points[p].x[1], (double)scene->points[p].x[2], (double)s->points[p].xv[0], (double)s->points[p].xv[1], (double)s->points[p].xv[2], scene->bodies[s->points[p].body].name, (double)s->points[p].distance));
   }
   PetscCall(PetscFree(best));
+  PetscCall(PetscFree(box));
   PetscFunctionReturn(0);
 }
 
@@ -199,7 +222,7 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       fprintf(s->points_csv, "\n");
     }
   }
-  if (scene->output_energy && scene->has_dynamic && !rank) { /* written in the dynamic stages */
+  if (scene->output_energy && s->has_dynamic && !rank) { /* written in the dynamic stages */
     PetscCall(PetscSNPrintf(file, sizeof(file), "%s_energy.csv", s->output));
     PetscCall(MBCFileOpenWrite(file, &s->energy_csv));
     fprintf(s->energy_csv, "t,kinetic,strain,external_work,damping_dissipation,friction_dissipation,contact_dissipation,total\n");

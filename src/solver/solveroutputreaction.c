@@ -1,7 +1,8 @@
 /* Reactions: per prescribed (Dirichlet) surface, the resultant force the supports exert on the
    bodies, a CSV line per step and surface (<output>_reactions.csv). On a prescribed row the
    unconstrained equation of motion gives it: R = K u + M a + C v - F - H lambda (statics:
-   R = K u - F - H lambda), summed over the surface's prescribed rows, component by component.
+   R = K u - F - H lambda), summed over the surface's prescribed rows, component by component;
+   H lambda there is the contact force landing on a prescribed contact node.
    Engineers check the base shear and the equilibrium with it (sum of R = -(sum of loads) at
    rest). */
 #include <mbc/private/solverimpl.h>
@@ -40,9 +41,52 @@ PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* f: the contact force on body b's prescribed rows (this rank's), which H leaves out: a
+   prescribed DOF takes no contact force, its support does (H's rows are zeroed there). lam: the
+   multipliers lambda_n+1 in couple order. Without it a reaction missed the contact force on a
+   contact node that is also prescribed (a corner node of a plate on a wall: the contact resultant
+   and the reactions disagreed by it). */
+static PetscErrorCode BodyPrescribedContactForce(MBCSolver s, PetscInt b, const PetscReal lam[], Vec f)
+{
+  MBCInterface ifc  = s->iface;
+  MBCBody      body = s->bodies[b];
+  MBCContact   c    = s->contact;
+  PetscScalar *fv;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecZeroEntries(f));
+  if (!body->nbc) PetscFunctionReturn(0);
+  PetscCall(VecGetOwnershipRange(f, &rstart, NULL));
+  PetscCall(VecGetArray(f, &fv));
+  for (PetscInt k = 0; k < ifc->ncontact; k++) {
+    const MBCCouple *cp = &c->couples[ifc->kcouple[k]];
+    const PetscInt   j = ifc->kpoint[k], o = ifc->coff[k], dim = ifc->coff[k + 1] - o;
+    PetscReal        force[3] = {0, 0, 0}; /* the point's multiplier force in global axes, on its master side */
+    for (PetscInt a = 0; a < dim; a++)
+      for (PetscInt d = 0; d < 3 && !(ifc->held[k] & (1 << a)); d++) force[d] += lam[o + a] * ifc->frames[9 * k + 3 * a + d];
+    for (PetscInt side = 0; side < 2; side++) {
+      const PetscInt   lo = side ? cp->soff[j] : cp->moff[j], hi = side ? cp->soff[j + 1] : cp->moff[j + 1];
+      const PetscInt  *node = side ? cp->snode : cp->mnode;
+      const PetscReal *w    = side ? cp->sw : cp->mw;
+      const MBCSurface *sf  = side ? &cp->slave : &cp->master;
+      for (PetscInt l = lo; l < hi; l++) {
+        if (sf->nbody[node[l]] != b) continue;
+        for (PetscInt d = 0; d < 3; d++) {
+          PetscInt at;
+          PetscCall(PetscFindInt(sf->nrow[node[l]] + d, body->nbc, body->bc_rows, &at));
+          if (at >= 0) fv[sf->nrow[node[l]] + d - rstart] += (side ? -w[l] : w[l]) * force[d];
+        }
+      }
+    }
+  }
+  PetscCall(VecRestoreArray(f, &fv));
+  PetscFunctionReturn(0);
+}
+
 /* The internal, inertial and damping forces minus the loads and the contact forces, on every
    row of the body (only the prescribed rows are used). */
-static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, Vec r)
+static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, const PetscReal lam[], Vec r)
 {
   MBCBody body = s->bodies[b];
 
@@ -62,6 +106,8 @@ static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, Vec r)
   if (s->iface) { /* H lambda_n+1 of the step (MBCInterfaceMultipliersToBodies) */
     PetscCall(MBCInterfaceBodyForce(s->iface, b, body->work));
     PetscCall(VecAXPY(r, -1.0, body->work));
+    PetscCall(BodyPrescribedContactForce(s, b, lam, body->work));
+    PetscCall(VecAXPY(r, -1.0, body->work));
   }
   PetscFunctionReturn(0);
 }
@@ -71,14 +117,20 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
 {
   MBCScene   scene = s->scene;
   PetscInt  *first, nsurf;
-  PetscReal *sum;
+  PetscReal *sum, *lam = NULL;
 
   PetscFunctionBegin;
   if (!scene->ndirichlet) PetscFunctionReturn(0);
   PetscCall(PetscMalloc1(scene->ndirichlet, &first));
   PetscCall(PetscCalloc1(3 * scene->ndirichlet, &sum));
   PetscCall(ReactionSurfaces(scene, first, &nsurf));
-  if (s->iface) PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
+  if (s->iface) {
+    PetscInt m;
+    PetscCall(MBCInterfaceMultipliersToBodies(s->iface));
+    PetscCall(MBCInterfaceGetSize(s->iface, NULL, &m));
+    PetscCall(PetscCalloc1(m + 1, &lam));
+    if (m && s->iface->lamprev) PetscCall(MBCInterfaceGather(s->iface, s->iface->lamprev, lam)); /* lambda_n+1, couple order */
+  }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody            body = s->bodies[b];
     Vec                r;
@@ -86,7 +138,7 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
     PetscInt           rstart;
     if (!body) continue;
     PetscCall(VecDuplicate(body->u, &r));
-    PetscCall(BodyResidual(s, b, r));
+    PetscCall(BodyResidual(s, b, lam, r));
     PetscCall(VecGetOwnershipRange(r, &rstart, NULL));
     PetscCall(VecGetArrayRead(r, &rv));
     for (PetscInt i = 0; i < body->nbc; i++) {
@@ -102,5 +154,6 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
       if (first[d] == d) fprintf(s->reactions_csv, "%.17g,%s,%.17g,%.17g,%.17g\n", (double)s->time, scene->dirichlet[d].surface, (double)sum[3 * d], (double)sum[3 * d + 1], (double)sum[3 * d + 2]);
   PetscCall(PetscFree(first));
   PetscCall(PetscFree(sum));
+  PetscCall(PetscFree(lam));
   PetscFunctionReturn(0);
 }

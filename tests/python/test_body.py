@@ -256,9 +256,9 @@ def test_prescribed_base_motion_dynamic(tmp_path):
 
 def test_per_body_solver_options(tmp_path):
     """-body_* applies to every body's KSP, -body_<name>_* to one body only."""
-    meshgen.boxes(tmp_path / "two.msh", [dict(lo=(0, 0, 0), hi=(1, 1, 2), n=(1, 1, 2), cell="hex8", name="b1"),
-                                         dict(lo=(3, 0, 0), hi=(4, 1, 2), n=(1, 1, 2), cell="hex8", name="b2")])
-    scene = two_column_scene({"type": "static"})
+    meshgen.boxes(tmp_path / "two.msh", [dict(lo=(0, 0, 0), hi=(1, 1, L), n=(1, 1, 2), cell="hex8", name="b1"),
+                                         dict(lo=(3, 0, 0), hi=(4, 1, L), n=(1, 1, 2), cell="hex8", name="b2")])
+    scene = two_column_scene({"type": "static"})  # its history points at the columns' tops, z = L
     h5 = prep(tmp_path, scene)
     out = solve(h5, "-body_pc_factor_mat_solver_type", "petsc", "-body_b2_pc_factor_mat_solver_type", "mumps",
                 "-body_ksp_view").stdout

@@ -499,3 +499,25 @@ def test_unmatched_surface_faces_warn(case):
     status, _, err = case(scene, extra=["--check"])
     assert status == 0, err
     assert "warning" in err and "'mixed'" in err and "1 of 2 faces" in err
+
+
+def test_couple_exclude(case):
+    """A couple's `exclude` takes the master nodes of the named regions out of contact: b1_xmin
+    meets the master surface b1_zmax in the 4 nodes of the edge x = 0, z = 1 of b1 (3 x 3 x 2
+    cells), written as (body, vertex) rows; a region that is not there, one with no master node and
+    a volume are refused, naming the key."""
+    scene = base_scene()
+    scene["couples"][0]["exclude"] = "b1_xmin"
+    status, out, err = case(scene)
+    assert status == 0, err
+    assert "4 master nodes out of contact" in out
+    with h5py.File(case.dir / "scene.h5", "r") as f:
+        ex = f["mbcontact/couples/0/exclude"][...]
+        x = f["topologies/block1/dms/coordinateDM/vecs/coordinates/coordinates"][...].reshape(-1, 3)
+    assert ex.shape == (4, 2) and np.all(ex[:, 0] == 0)
+    assert np.allclose(x[ex[:, 1]][:, [0, 2]], [0, 1])
+    for region, words in (("nowhere", "region 'nowhere' not found"), ("b2_zmax", "no node on the couple's master surfaces"),
+                          ("b1", "is a volume")):
+        scene["couples"][0]["exclude"] = region
+        status, out, err = case(scene)
+        assert status == 1 and "couples[0].exclude (couple k=1)" in err and words in err, err

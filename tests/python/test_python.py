@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import BUILD, ROOT, env, load_script, result, solve
-from mbcontact.results import read_body, read_csv
+from mbcontact.results import output_times, read_body, read_csv
 
 blocks = load_script("meshes/blocks/build.py", "blocks_build_py")
 STATIC = ("-mbc_analysis", "static", "-mbc_dt", "1", "-mbc_final_time", "2")
@@ -169,3 +169,38 @@ def test_options_prefixes_reach_every_object(tmp_path):
         for name in ("block1", "block2"):
             assert f"{p} {name} ksp_prefix {p}body_{name}_" in lines, r.stdout
     assert "b_body_block1_ksp_type preonly" in lines and "a_body_block1_ksp_type " in lines, r.stdout
+
+
+def test_two_solvers_share_one_scene(tmp_path):
+    """One Scene object, two solvers in one process (a parametric study from Python): a_ static in
+    two load steps, b_ dynamic with a lumped mass, set from options in the order b, a and stepped
+    in turn. Each gives the result file it gives alone (the executable on the same scene with the
+    same options) to 1e-12 of the displacement's scale. Before, the solvers wrote their analysis
+    and mass into the shared scene and the bodies read them from there: b's bodies were built
+    static, without M, and its first step crashed (SIGSEGV)."""
+    from conftest import prep
+    from mbcontact import meshgen
+    meshgen.boxes(str(tmp_path / "two.msh"),
+                  [dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(2, 2, 2), name="base"),
+                   dict(lo=(0, 0, 1), hi=(1, 1, 1.5), n=(3, 3, 2), name="block")])
+    material = {"E": 1.0e9, "nu": 0.25, "density": 2000.0}
+    scene = {"meshes": {"m": "two.msh"},
+             "bodies": {b: {"mesh": "m", "regions": b, "material": material} for b in ("base", "block")},
+             "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.5}],
+             "dirichlet": [{"surface": "base_zmin"}, {"surface": "block_zmax", "components": ["x", "y"]}],
+             "loads": [{"kind": "pressure", "surface": "block_zmax", "value": 1.0e6, "time": {"table": [[0, 0], [1, 1]]}},
+                       {"kind": "traction", "surface": "block_xmax", "vector": [-2.0e5, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
+             "analysis": {"type": "static"}}
+    h5 = prep(tmp_path, scene, name="two")
+    opts = {"a_": ["-mbc_analysis", "static", "-mbc_dt", "0.5", "-mbc_final_time", "1"],
+            "b_": ["-mbc_analysis", "dynamic", "-mbc_mass", "lumped", "-mbc_dt", "0.01", "-mbc_final_time", "0.05"]}
+    for p, o in opts.items():
+        solve(h5, *o, "-mbc_output", str(tmp_path / f"{p}alone"))
+    run_python([os.path.join(ROOT, "tests", "python", "drive_two_solvers.py"), str(h5), str(tmp_path)])
+    for p in opts:
+        times = output_times(str(tmp_path / f"{p}alone.h5"))
+        assert list(output_times(str(tmp_path / f"{p}shared.h5"))) == list(times) and len(times) > 1
+        for name in ("base", "block"):
+            a = read_body(str(tmp_path / f"{p}alone.h5"), name)["displacement"]
+            b = read_body(str(tmp_path / f"{p}shared.h5"), name)["displacement"]
+            assert np.abs(a).max() > 0 and np.abs(a - b).max() <= 1e-12 * np.abs(a).max(), (p, name)

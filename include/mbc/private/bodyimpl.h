@@ -75,7 +75,7 @@ struct _n_MBCBody {
 };
 
 PETSC_INTERN PetscErrorCode MBCBodyCreate(MPI_Comm, MBCScene, PetscInt, const char[], MBCBody *);
-PETSC_INTERN PetscErrorCode MBCBodySetUp(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodySetUp(MBCBody, PetscBool, MBCMassType);
 PETSC_INTERN PetscErrorCode MBCBodyDestroy(MBCBody *);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleLoads(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody, MBCLoadDesc *, Vec);

@@ -61,7 +61,22 @@ typedef struct {
      reference geometry (0 beyond the distance, or without a point), subtracted from its gaps for
      the whole run (a strain-free adjustment of the initial geometry); NULL without the option */
   PetscReal *g0n, *g0i;
+  PetscInt   nexclude, *exclude; /* master nodes taken out of contact (the scene's `exclude`): (body, first global row), sorted */
 } MBCCouple;
+
+/* Is master node v of c taken out of contact? */
+static inline PetscBool MBCCoupleExcludes(const MBCCouple *c, PetscInt v)
+{
+  const PetscInt b = c->master.nbody[v], r = c->master.nrow[v];
+  PetscInt       lo = 0, hi = c->nexclude;
+  while (lo < hi) {
+    const PetscInt mid = (lo + hi) / 2, mb = c->exclude[2 * mid], mr = c->exclude[2 * mid + 1];
+    if (mb == b && mr == r) return PETSC_TRUE;
+    if (mb < b || (mb == b && mr < r)) lo = mid + 1;
+    else hi = mid;
+  }
+  return PETSC_FALSE;
+}
 
 typedef struct _n_MBCContact *MBCContact;
 struct _n_MBCContact {
@@ -97,6 +112,7 @@ PETSC_INTERN PetscErrorCode MBCContactView(MBCContact, PetscViewer);
 PETSC_INTERN PetscErrorCode MBCContactDump(MBCContact);
 PETSC_INTERN PetscErrorCode MBCContactDestroy(MBCContact *);
 PETSC_INTERN PetscErrorCode MBCContactSetPreferredFaces(MBCContact, PetscInt, const PetscInt[], PetscInt);
+PETSC_INTERN PetscErrorCode MBCContactSetExcluded(MBCContact, PetscInt, PetscInt, const PetscInt[]);
 
 /* the search on gathered surfaces (no MPI): contactsearch.c */
 PETSC_EXTERN PetscErrorCode MBCSurfaceSetUp(MBCSurface *);

@@ -70,9 +70,13 @@ struct _n_MBCInterface {
   Vec        lamsave;     /* the warm start, restored when a solve that may fail does */
   PetscReal  theta, carry; /* complementarity on z = theta lambda_n+1 + (1 - theta) lambda_n; carry = (1 - theta) / theta */
   PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
-  PetscReal *frames;      /* (n, t1, t2) of each point when D was built */
+  PetscReal *frames;      /* (n, t1, t2) of each point when D was built (turned where a tangent is held, interfaceheld.c) */
+  PetscInt  *held;        /* per point: bit a set where its direction a (n, t1, t2) is held on both sides: no multiplier, no H column */
+  PetscBool  held_warned; /* the master nodes prescribed on one side only were named (first build) */
   PetscReal *slip;        /* per point: (0, t1, t2) components of its tangential relative displacement so far (frictional couples) */
-  PetscReal *stepslip;    /* per point, static: the same since the load step began (its earlier equilibrium iterations) */
+  PetscReal *stepslip;    /* per point: the same since the step began (a static step's equilibrium iterations, a step's cut steps) */
+  PetscReal *cutslip;     /* per point, static: stepslip where the load step under way began (a step cut in two: the first half's) */
+  PetscReal  stepres, cutres; /* what the step's multiplier solves resolve of stepslip, 2 rtol |q| summed over its (cut) steps (MBCInterfaceStates); stepres where the load step under way began */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
@@ -119,9 +123,12 @@ PETSC_INTERN PetscErrorCode MBCInterfaceGather(MBCInterface, Vec, PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceRigidModes(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceRigidRHS(MBCInterface, PetscInt, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceRigidMotion(MBCInterface);
+/* interfaceheld.c: contact points on prescribed nodes */
+PETSC_INTERN PetscErrorCode MBCInterfaceHeldDirections(MBCInterface);
 /* interfacesolve.c: the multipliers of a step */
 PETSC_INTERN PetscErrorCode MBCInterfaceSolve(MBCInterface, PetscInt, PetscReal, PetscBool, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceStepBegin(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceLoadStepBegin(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceStepAbandon(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceStates(MBCInterface, PetscInt[3], PetscInt[], PetscReal[]);
 PETSC_INTERN void           MBCInterfaceContactWork(MBCInterface, PetscReal *, PetscReal *);

@@ -9,6 +9,11 @@
 #define MBC_NAME_LEN 256
 /* Friction coefficients above this are refused: mu = 1e3 is a friction angle of 89.94 degrees. */
 #define MBC_MAX_MU 1e3
+/* Nonzero material constants (E, density, damping) outside [MIN, MAX] are refused: no material in
+   any unit system, and K, M and the energies made from them (squares) would leave double precision
+   (E = 1e308 gave a "degenerate cell", E = 1e-308 ran to exit 0). */
+#define MBC_MATERIAL_MIN 1e-100
+#define MBC_MATERIAL_MAX 1e100
 /* Step counts above this are refused (one FE solve per step; the output reserves memory per step). */
 #define MBC_MAX_STEPS 1e7
 
@@ -50,6 +55,7 @@ typedef struct {
   PetscReal mu;
   char     *master, *slave; /* surface names joined by "," */
   PetscReal *master_faces, *slave_faces; /* per body: its faces on each side (weights of the decomposition) */
+  PetscInt   nexclude, *exclude; /* master nodes taken out of contact: (body, vertex in scene order) each */
 } MBCCoupleDesc;
 
 typedef struct {

@@ -51,6 +51,7 @@ struct _n_MBCSolver {
 
   MBCAnalysisType analysis; /* of the current stage, as dt, beta, gamma */
   MBCMassType     mass;
+  PetscBool       has_dynamic; /* some stage of this run is dynamic: the bodies need M */
   PetscReal       dt, final_time, beta, gamma;
   PetscInt        nsteps, step; /* of the whole run, over its stages */
   PetscReal       time;
@@ -123,6 +124,7 @@ struct _n_MBCSolver {
      of the last monitored step */
   PetscLogDouble t_start, t_last;
   PetscInt       step_its; /* contact solve iterations of the step so far (all its solves) */
+  char           contact_line[256]; /* the monitor's line of the last contact solve, printed with the states where they are final (MBCSolverMonitorContact) */
   PetscInt       step_begin; /* the step the stepping started from (a restart's) */
   PetscInt64     h5_size; /* bytes of the result file at its last commit */
   PetscInt       xmf_outputs; /* outputs in the XDMF index on disk */
@@ -137,6 +139,7 @@ struct _n_MBCSolver {
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverContactExclusions(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputStep(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputClose(MBCSolver);
@@ -153,6 +156,7 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverEnergy(MBCSolver, PetscReal[MBC_NENERGY]);
 PETSC_INTERN PetscErrorCode MBCSolverMonitorTiming(MBCSolver, char[], size_t);
+PETSC_INTERN PetscErrorCode MBCSolverMonitorContact(MBCSolver, MBCMultiplier);
 PETSC_INTERN PetscErrorCode MBCSolverStagesSetUp(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCBodyVertexMapCreate(MBCBody, MBCBodyOutput *, PetscInt **, PetscInt **);
 PETSC_INTERN PetscErrorCode MBCSolverCheckpointWrite(MBCSolver);
