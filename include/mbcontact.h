@@ -17,7 +17,8 @@ typedef struct _n_MBCSolver *MBCSolver;
 
 typedef enum {
   MBC_ANALYSIS_STATIC,
-  MBC_ANALYSIS_DYNAMIC
+  MBC_ANALYSIS_DYNAMIC,
+  MBC_ANALYSIS_MODAL /* the lowest natural frequencies and modes (SLEPc; src/solver/solvermodal.c) */
 } MBCAnalysisType;
 PETSC_EXTERN const char *const MBCAnalysisTypes[];
 

@@ -243,6 +243,9 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(MBCBodyRigidModesDestroy(b));
   PetscCall(MatDestroy(&b->K));
   PetscCall(MatDestroy(&b->M));
+  PetscCall(MatDestroy(&b->Cb));
+  PetscCall(MatDestroy(&b->Cin));
+  PetscCall(VecDestroy(&b->envelope));
   PetscCall(MatDestroy(&b->A));
   PetscCall(KSPDestroy(&b->ksp));
   for (PetscInt l = 0; l < MBC_MAX_CUTS; l++) {

@@ -99,6 +99,7 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
     PetscCall(MatDuplicate(body->M, MAT_COPY_VALUES, &A));
     if (aM != 1) PetscCall(MatScale(A, aM));
   }
+  if (aK != 0 && aM != 0 && body->aC != 0 && body->Cb) PetscCall(MatAXPY(A, body->aC, body->Cb, SUBSET_NONZERO_PATTERN)); /* Newmark's a1 Cb: the dashpots */
   if (aK != 0 && body->stab > 0) { /* static stabilisation: a spring stab K_ii on every DOF */
     Vec d;
     PetscCall(MatCreateVecs(A, &d, NULL));
@@ -223,7 +224,8 @@ PetscErrorCode MBCBodyExternalForce(MBCBody body, PetscReal t, PetscBool constan
 
     if (constantOnly && load->time != MBC_TIME_CONSTANT) continue;
     if (load->stage > body->stage) continue;
-    PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
+    /* absolute motion: a ground acceleration enters through the input surfaces with its velocity */
+    PetscCall(MBCTimeFactor(body->scene, load->time, load->kind == MBC_LOAD_GROUND_ACCELERATION && body->scene->absolute ? load->velocity_function : load->time_function, t, &factor));
     if (factor != 0) PetscCall(VecAXPY(F, factor, body->load[i]));
   }
   PetscFunctionReturn(0);

@@ -33,7 +33,7 @@ PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver s)
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-  if (!s->scene->ndirichlet || rank) PetscFunctionReturn(0);
+  if (!s->scene->ndirichlet || rank || s->analysis == MBC_ANALYSIS_MODAL) PetscFunctionReturn(0); /* a mode shape has no reactions */
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_reactions.csv", s->output));
   PetscCall(MBCFileOpenWrite(file, &s->reactions_csv));
   fprintf(s->reactions_csv, "t,surface,fx,fy,fz\n");
@@ -74,7 +74,7 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
   PetscReal *sum;
 
   PetscFunctionBegin;
-  if (!scene->ndirichlet) PetscFunctionReturn(0);
+  if (!scene->ndirichlet || s->analysis == MBC_ANALYSIS_MODAL) PetscFunctionReturn(0);
   PetscCall(PetscMalloc1(scene->ndirichlet, &first));
   PetscCall(PetscCalloc1(3 * scene->ndirichlet, &sum));
   PetscCall(ReactionSurfaces(scene, first, &nsurf));
