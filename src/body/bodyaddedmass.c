@@ -7,7 +7,8 @@
    -(M + M_a) a_g (bodyabsorbing.c): the pressure acts on the face's total normal acceleration.
 
    The integral is exact where the depth is affine along one parametric direction of the face
-   (every face of a structured mesh, any triangle): along that direction the integrand is a
+   (every face of a structured mesh; a triangle cut at its middle vertex's depth): along that
+   direction the integrand is a
    polynomial times sqrt(linear), integrated by Gauss in w = sqrt(s) (a polynomial there); across
    it Gauss on the pieces between the level's crossings of the face's edges. */
 #include <mbc/private/bodyimpl.h>
@@ -41,23 +42,16 @@ static void QuadPoint(const PetscReal Q[4][3], PetscReal xi, PetscReal eta, Pets
   *J   = PetscSqrtReal(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
 }
 
-/* w_i = integral of N_i coef sqrt(s) dA over the wet part (s > 0) of the face. */
-static PetscErrorCode WestergaardWeights(PetscInt nv, const PetscReal X[4][3], void *ctx, PetscReal w[4])
+/* wq_q = integral of N_q coef sqrt(s) dA over the wet part (s > 0) of the bilinear quad Q with
+   depths s at its vertices; inner: the parametric direction (0: xi, 1: eta) to integrate exactly,
+   -1: the one the depth varies most along. */
+static void QuadWestergaard(const Westergaard *wg, const PetscReal Q[4][3], const PetscReal s[4], PetscInt inner, PetscReal wq[4])
 {
-  const Westergaard *wg = (const Westergaard *)ctx;
-  PetscReal          Q[4][3], s[4], smax = 0, brk[4] = {-1, 1, 0, 0}, wq[4] = {0, 0, 0, 0};
-  PetscInt           inner, nbrk = 2;
+  PetscReal brk[4] = {-1, 1, 0, 0};
+  PetscInt  nbrk = 2;
 
-  PetscFunctionBegin;
-  for (PetscInt v = 0; v < 4; v++) {
-    for (PetscInt k = 0; k < 3; k++) Q[v][k] = X[PetscMin(v, nv - 1)][k];
-    s[v] = PetscMin(wg->level - Q[v][wg->axis], wg->H); /* the floor is the lowest wet point (prep) */
-    smax = PetscMax(smax, s[v]);
-  }
-  for (PetscInt v = 0; v < 4; v++) w[v] = 0;
-  if (smax <= 0) PetscFunctionReturn(0);
-  /* inner direction: the one the depth varies most along (0: xi, 1: eta) */
-  inner = PetscAbsReal(-s[0] + s[1] + s[2] - s[3]) >= PetscAbsReal(-s[0] - s[1] + s[2] + s[3]) ? 0 : 1;
+  for (PetscInt v = 0; v < 4; v++) wq[v] = 0;
+  if (inner < 0) inner = PetscAbsReal(-s[0] + s[1] + s[2] - s[3]) >= PetscAbsReal(-s[0] - s[1] + s[2] + s[3]) ? 0 : 1;
   { /* outer coordinate u where the level crosses the edges r = -1 and r = +1 */
     PetscReal ea[2], eb[2]; /* depth at u = -1 and u = +1 on the edges r = -1, +1 */
     if (inner == 0) ea[0] = s[0], eb[0] = s[3], ea[1] = s[1], eb[1] = s[2];
@@ -85,7 +79,7 @@ static PetscErrorCode WestergaardWeights(PetscInt nv, const PetscReal X[4][3], v
         for (PetscInt qi = 0; qi < 5; qi++) {
           const PetscReal r = g5x[qi], xi = inner == 0 ? r : u, eta = inner == 0 ? u : r;
           PetscReal       N[4], J;
-          QuadPoint((const PetscReal(*)[3])Q, xi, eta, N, &J);
+          QuadPoint(Q, xi, eta, N, &J);
           for (PetscInt v = 0; v < 4; v++) wq[v] += wu * g5w[qi] * N[v] * J * wg->coef * PetscSqrtReal(sm);
         }
         continue;
@@ -99,13 +93,59 @@ static PetscErrorCode WestergaardWeights(PetscInt nv, const PetscReal X[4][3], v
           const PetscReal ww = 0.5 * (w0 + w1) + 0.5 * (w1 - w0) * g5x[qi], r = (ww * ww - sm) / k;
           const PetscReal weight = wu * g5w[qi] * 0.5 * (w1 - w0) * 2 * ww / k, xi = inner == 0 ? r : u, eta = inner == 0 ? u : r;
           PetscReal       N[4], J;
-          QuadPoint((const PetscReal(*)[3])Q, xi, eta, N, &J);
+          QuadPoint(Q, xi, eta, N, &J);
           for (PetscInt v = 0; v < 4; v++) wq[v] += weight * N[v] * J * wg->coef * ww;
         }
       }
     }
   }
-  for (PetscInt v = 0; v < 4; v++) w[PetscMin(v, nv - 1)] += wq[v];
+}
+
+/* w_i = integral of N_i coef sqrt(s) dA over the wet part (s > 0) of the face. A triangle is cut
+   at its middle vertex's depth into two triangles with an edge of constant depth, each the quad
+   (edge, apex, apex) integrated exactly along the apex's direction; its shape functions are the
+   face's barycentrics, affine in the sub-triangles' too. */
+static PetscErrorCode WestergaardWeights(PetscInt nv, const PetscReal X[4][3], void *ctx, PetscReal w[4])
+{
+  const Westergaard *wg = (const Westergaard *)ctx;
+  PetscReal          s[4], smax = 0, wq[4];
+
+  PetscFunctionBegin;
+  for (PetscInt v = 0; v < 4; v++) w[v] = 0;
+  for (PetscInt v = 0; v < nv; v++) {
+    s[v] = PetscMin(wg->level - X[v][wg->axis], wg->H); /* the floor is the lowest wet point (prep) */
+    smax = PetscMax(smax, s[v]);
+  }
+  if (smax <= 0) PetscFunctionReturn(0);
+  if (nv == 4) {
+    QuadWestergaard(wg, X, s, -1, w);
+    PetscFunctionReturn(0);
+  }
+  {
+    PetscInt  o[3] = {0, 1, 2};
+    PetscReal P[3], sP, t, LP[3] = {0, 0, 0};
+    for (PetscInt i = 1; i < 3; i++) /* o: the vertices by depth */
+      for (PetscInt j = i; j > 0 && s[o[j]] < s[o[j - 1]]; j--) {
+        PetscInt tmp = o[j];
+        o[j] = o[j - 1], o[j - 1] = tmp;
+      }
+    /* P on edge o0-o2 at the depth of o1 */
+    t  = s[o[2]] > s[o[0]] ? (s[o[1]] - s[o[0]]) / (s[o[2]] - s[o[0]]) : 0.5;
+    sP = s[o[1]];
+    for (PetscInt k = 0; k < 3; k++) P[k] = (1 - t) * X[o[0]][k] + t * X[o[2]][k];
+    LP[o[0]] = 1 - t, LP[o[2]] = t;
+    for (PetscInt half = 0; half < 2; half++) { /* apex o0, then o2 */
+      const PetscInt apex = half ? o[2] : o[0];
+      PetscReal      Q[4][3], sq[4] = {s[o[1]], sP, s[apex], s[apex]}, L[4][3];
+      for (PetscInt k = 0; k < 3; k++) {
+        Q[0][k] = X[o[1]][k], Q[1][k] = P[k], Q[2][k] = Q[3][k] = X[apex][k];
+        L[0][k] = k == o[1], L[1][k] = LP[k], L[2][k] = L[3][k] = k == apex;
+      }
+      QuadWestergaard(wg, (const PetscReal(*)[3])Q, sq, 1, wq);
+      for (PetscInt q = 0; q < 4; q++)
+        for (PetscInt k = 0; k < 3; k++) w[k] += wq[q] * L[q][k];
+    }
+  }
   PetscFunctionReturn(0);
 }
 

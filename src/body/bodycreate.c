@@ -325,6 +325,15 @@ PetscErrorCode MBCBodyGetKSP(MBCBody body, KSP *ksp)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode MBCBodyGetOperators(MBCBody body, Mat *K, Mat *M, Mat *Cb)
+{
+  PetscFunctionBegin;
+  if (K) *K = body ? body->K : NULL;
+  if (M) *M = body ? body->M : NULL;
+  if (Cb) *Cb = body ? body->Cb : NULL;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCBodyGetVelocity(MBCBody body, Vec *v)
 {
   PetscFunctionBegin;
