@@ -224,8 +224,10 @@ PetscErrorCode MBCBodyExternalForce(MBCBody body, PetscReal t, PetscBool constan
 
     if (constantOnly && load->time != MBC_TIME_CONSTANT) continue;
     if (load->stage > body->stage) continue;
-    /* absolute motion: a ground acceleration enters through the input surfaces with its velocity */
-    PetscCall(MBCTimeFactor(body->scene, load->time, load->kind == MBC_LOAD_GROUND_ACCELERATION && body->scene->absolute ? load->velocity_function : load->time_function, t, &factor));
+    if (load->kind == MBC_LOAD_GROUND_ACCELERATION && body->scene->absolute) { /* through the input surfaces, with the record's velocity */
+      PetscReal d, a;
+      PetscCall(MBCSceneRecord(body->scene, load, t, &d, &factor, &a));
+    } else PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
     if (factor != 0) PetscCall(VecAXPY(F, factor, body->load[i]));
   }
   PetscFunctionReturn(0);

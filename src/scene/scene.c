@@ -841,6 +841,47 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
   PetscFunctionReturn(0);
 }
 
+/* A ground acceleration's record at time t: the acceleration linear between its rows, the
+   velocity and displacement its exact integrals (quadratic and cubic between the rows, from the
+   prep's tables of their values at the rows); before the first row at rest, after the last one
+   the acceleration held (0: the prep pads a record with zeros) and integrated on. */
+PetscErrorCode MBCSceneRecord(MBCScene s, MBCLoadDesc *l, PetscReal t, PetscReal *d, PetscReal *v, PetscReal *a)
+{
+  const MBCTimeTable *A = &s->tables[l->time_function], *V = &s->tables[l->velocity_function], *D = &s->tables[l->displacement_function];
+  PetscInt            i;
+  PetscReal           tau, h, slope;
+
+  PetscFunctionBegin;
+  PetscCheck(V->n == A->n && D->n == A->n, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: a ground acceleration's velocity and displacement tables must have its %" PetscInt_FMT " rows", s->filename, A->n);
+  if (t <= A->t[0]) {
+    *d = D->f[0], *v = V->f[0], *a = t < A->t[0] ? 0.0 : A->f[0];
+    PetscFunctionReturn(0);
+  }
+  if (t >= A->t[A->n - 1]) {
+    tau = t - A->t[A->n - 1];
+    *a  = A->f[A->n - 1];
+    *v  = V->f[A->n - 1] + *a * tau;
+    *d  = D->f[A->n - 1] + V->f[A->n - 1] * tau + 0.5 * *a * tau * tau;
+    PetscFunctionReturn(0);
+  }
+  { /* the row before t, by bisection (records have thousands of rows) */
+    PetscInt lo = 0, hi = A->n - 1;
+    while (hi - lo > 1) {
+      const PetscInt mid = (lo + hi) / 2;
+      if (A->t[mid] <= t) lo = mid;
+      else hi = mid;
+    }
+    i = lo;
+  }
+  tau   = t - A->t[i];
+  h     = A->t[i + 1] - A->t[i];
+  slope = (A->f[i + 1] - A->f[i]) / h;
+  *a    = A->f[i] + slope * tau;
+  *v    = V->f[i] + A->f[i] * tau + 0.5 * slope * tau * tau;
+  *d    = D->f[i] + V->f[i] * tau + 0.5 * A->f[i] * tau * tau + slope * tau * tau * tau / 6;
+  PetscFunctionReturn(0);
+}
+
 /* The base's displacement, velocity and acceleration at time t in stage `stage`: the sum of the
    ground accelerations acting by then, each along its vector (0 in a scene in absolute motion,
    whose bodies' own motion is absolute). */
@@ -853,9 +894,7 @@ PetscErrorCode MBCSceneGroundMotion(MBCScene s, PetscInt stage, PetscReal t, Pet
     MBCLoadDesc *l = &s->loads[i];
     PetscReal    f[3];
     if (l->kind != MBC_LOAD_GROUND_ACCELERATION || l->stage > stage) continue;
-    PetscCall(MBCTimeFactor(s, MBC_TIME_TABLE, l->displacement_function, t, &f[0]));
-    PetscCall(MBCTimeFactor(s, MBC_TIME_TABLE, l->velocity_function, t, &f[1]));
-    PetscCall(MBCTimeFactor(s, MBC_TIME_TABLE, l->time_function, t, &f[2]));
+    PetscCall(MBCSceneRecord(s, l, t, &f[0], &f[1], &f[2]));
     for (PetscInt c = 0; c < 3; c++) {
       d[c] += l->vector[c] * f[0];
       v[c] += l->vector[c] * f[1];

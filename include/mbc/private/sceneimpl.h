@@ -150,4 +150,5 @@ PETSC_EXTERN PetscErrorCode MBCTimeFactor(MBCScene, MBCTimeKind, PetscInt, Petsc
 PETSC_INTERN PetscErrorCode MBCSceneCheckMeshes(MBCScene, hid_t);
 PETSC_INTERN PetscErrorCode MBCSceneCheckStages(MBCScene);
 PETSC_INTERN PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *, const char[], PetscBool *);
+PETSC_INTERN PetscErrorCode MBCSceneRecord(MBCScene, MBCLoadDesc *, PetscReal, PetscReal *, PetscReal *, PetscReal *);
 PETSC_INTERN PetscErrorCode MBCSceneGroundMotion(MBCScene, PetscInt, PetscReal, PetscReal[3], PetscReal[3], PetscReal[3]);
