@@ -325,7 +325,9 @@ PetscErrorCode MBCSolverModalSolve(MBCSolver s)
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, K, B));
   PetscCall(EPSSetProblemType(eps, EPS_GHEP)); /* B semi-definite (the multipliers, the held rows): purified */
-  PetscCall(EPSSetDimensions(eps, s->modal_nev, PETSC_DEFAULT, PETSC_DEFAULT));
+  /* a wide subspace: the bodies alone have up to six rigid modes each at 0 Hz, a repeated
+     eigenvalue a narrow Krylov space misses (SLEPc's default ncv 21 found 5 of a floating block's 6) */
+  PetscCall(EPSSetDimensions(eps, s->modal_nev, s->modal_nev + PetscMax(s->modal_nev, 30), PETSC_DEFAULT));
   PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE));
   PetscCall(EPSSetTarget(eps, sigma));
   PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
