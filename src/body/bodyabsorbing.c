@@ -63,6 +63,117 @@ static PetscErrorCode NodalBlockMatrix(MBCBody body, Mat *A)
   PetscFunctionReturn(0);
 }
 
+/* The constrained set of the static states: the Dirichlet rows and every DOF of the absorbing
+   surfaces (entry -1: held at 0), sorted; the Dirichlet set alone is kept for the dynamic ones. */
+static PetscErrorCode BodyAbsorbingHeldSet(MBCBody body)
+{
+  MBCScene     scene = body->scene;
+  DMLabel      label;
+  PetscSection gsec;
+  PetscInt     vStart, vEnd, n = 0, cap = body->nbc + 64, *rows, *entry;
+
+  PetscFunctionBegin;
+  PetscCall(DMGetLabel(body->dm, "Face Sets", &label));
+  PetscCall(DMGetGlobalSection(body->dm, &gsec));
+  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(PetscMalloc1(cap, &rows));
+  PetscCall(PetscMalloc1(cap, &entry));
+  for (PetscInt i = 0; label && i < scene->nabsorbing; i++) {
+    IS              faceIS;
+    const PetscInt *faces;
+    PetscInt        nfaces;
+    PetscCall(DMLabelGetStratumIS(label, scene->absorbing[i].surface_id, &faceIS));
+    if (!faceIS) continue;
+    PetscCall(ISGetLocalSize(faceIS, &nfaces));
+    PetscCall(ISGetIndices(faceIS, &faces));
+    for (PetscInt f = 0; f < nfaces; f++) {
+      PetscInt *closure = NULL, nclosure;
+      PetscCall(DMPlexGetTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
+      for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+        PetscInt off;
+        if (closure[p] < vStart || closure[p] >= vEnd) continue;
+        PetscCall(PetscSectionGetOffset(gsec, closure[p], &off));
+        if (off < 0) continue; /* owned by another rank */
+        if (n + 3 > cap) {
+          cap = 2 * cap;
+          PetscCall(PetscRealloc(cap * sizeof(PetscInt), &rows));
+          PetscCall(PetscRealloc(cap * sizeof(PetscInt), &entry));
+        }
+        for (PetscInt c = 0; c < 3; c++) rows[n] = off + c, entry[n++] = -1;
+      }
+      PetscCall(DMPlexRestoreTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
+    }
+    PetscCall(ISRestoreIndices(faceIS, &faces));
+    PetscCall(ISDestroy(&faceIS));
+  }
+  if (n + body->nbc > cap) {
+    cap = n + body->nbc;
+    PetscCall(PetscRealloc(cap * sizeof(PetscInt), &rows));
+    PetscCall(PetscRealloc(cap * sizeof(PetscInt), &entry));
+  }
+  for (PetscInt i = 0; i < body->nbc; i++) rows[n] = body->bc_rows[i], entry[n++] = body->bc_entry[i];
+  PetscCall(PetscSortIntWithArray(n, rows, entry));
+  body->nbc_free      = body->nbc;
+  body->bc_rows_free  = body->bc_rows;
+  body->bc_entry_free = body->bc_entry;
+  PetscCall(PetscMalloc2(n, &body->bc_rows_held, n, &body->bc_entry_held));
+  body->nbc_held = 0;
+  for (PetscInt i = 0; i < n; i++) { /* one per row; a Dirichlet entry wins over the hold */
+    if (body->nbc_held && body->bc_rows_held[body->nbc_held - 1] == rows[i]) {
+      body->bc_entry_held[body->nbc_held - 1] = PetscMax(body->bc_entry_held[body->nbc_held - 1], entry[i]);
+      continue;
+    }
+    body->bc_rows_held[body->nbc_held]    = rows[i];
+    body->bc_entry_held[body->nbc_held++] = entry[i];
+  }
+  PetscCall(PetscFree(rows));
+  PetscCall(PetscFree(entry));
+  PetscFunctionReturn(0);
+}
+
+/* A static state (a static stage, the initial state of a dynamic analysis) holds the absorbing
+   surfaces: a truncated foundation has no other support under the dam's weight. */
+PetscErrorCode MBCBodyAbsorbingHold(MBCBody body)
+{
+  PetscFunctionBegin;
+  if (!body->bc_rows_held || body->held) PetscFunctionReturn(0);
+  body->nbc      = body->nbc_held;
+  body->bc_rows  = body->bc_rows_held;
+  body->bc_entry = body->bc_entry_held;
+  body->held     = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
+/* A dynamic stage frees them and puts the reactions they carried at time t, K u - F on their
+   rows, as a constant load in their place (as FLAC and 3DEC do when a quiet boundary replaces a
+   support): the static state stays in equilibrium and the dashpots see only the motion. */
+PetscErrorCode MBCBodyAbsorbingRelease(MBCBody body, PetscReal t)
+{
+  const PetscScalar *r;
+  PetscScalar       *h;
+  PetscInt           rstart;
+
+  PetscFunctionBegin;
+  if (!body->held) PetscFunctionReturn(0);
+  if (!body->fhold) PetscCall(VecDuplicate(body->u, &body->fhold));
+  PetscCall(MBCBodyExternalForce(body, t, PETSC_FALSE, body->work));
+  PetscCall(VecScale(body->work, -1.0));
+  PetscCall(MatMultAdd(body->K, body->u, body->work, body->work)); /* K u - F */
+  PetscCall(VecZeroEntries(body->fhold));
+  PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
+  PetscCall(VecGetArrayRead(body->work, &r));
+  PetscCall(VecGetArray(body->fhold, &h));
+  for (PetscInt i = 0; i < body->nbc_held; i++)
+    if (body->bc_entry_held[i] < 0) h[body->bc_rows_held[i] - rstart] = r[body->bc_rows_held[i] - rstart];
+  PetscCall(VecRestoreArray(body->fhold, &h));
+  PetscCall(VecRestoreArrayRead(body->work, &r));
+  body->nbc      = body->nbc_free;
+  body->bc_rows  = body->bc_rows_free;
+  body->bc_entry = body->bc_entry_free;
+  body->held     = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
 /* Cb and Cin of the body's absorbing surfaces (none: both NULL). Collective on the body. After
    the constraints: a prescribed DOF takes no dashpot force (its rows and columns are zeroed, so
    that Newmark's right side needs no Cb g term). */
@@ -103,6 +214,7 @@ PetscErrorCode MBCBodyAbsorbingSetUp(MBCBody body)
   PetscCall(MatAssemblyBegin(body->Cb, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(body->Cb, MAT_FINAL_ASSEMBLY));
   PetscCall(MatZeroRowsColumns(body->Cb, body->nbc, body->bc_rows, 0.0, NULL, NULL));
+  PetscCall(BodyAbsorbingHeldSet(body));
   PetscCall(MatSetOption(body->Cb, MAT_SYMMETRIC, PETSC_TRUE));
   if (body->Cin) {
     PetscCall(MatAssemblyBegin(body->Cin, MAT_FINAL_ASSEMBLY));

@@ -239,7 +239,12 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   }
   for (PetscInt i = 0; i < b->nloads; i++) PetscCall(VecDestroy(&b->load[i]));
   PetscCall(PetscFree2(b->load, b->load_index));
+  if (b->bc_rows_held) { /* bc_rows points at one of the two sets */
+    PetscCall(PetscFree2(b->bc_rows_held, b->bc_entry_held));
+    b->bc_rows = b->bc_rows_free, b->bc_entry = b->bc_entry_free;
+  }
   PetscCall(PetscFree2(b->bc_rows, b->bc_entry));
+  PetscCall(VecDestroy(&b->fhold));
   PetscCall(MBCBodyRigidModesDestroy(b));
   PetscCall(MatDestroy(&b->K));
   PetscCall(MatDestroy(&b->M));

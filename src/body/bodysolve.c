@@ -230,6 +230,7 @@ PetscErrorCode MBCBodyExternalForce(MBCBody body, PetscReal t, PetscBool constan
     } else PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
     if (factor != 0) PetscCall(VecAXPY(F, factor, body->load[i]));
   }
+  if (body->fhold && !body->held) PetscCall(VecAXPY(F, 1.0, body->fhold)); /* what the released absorbing surfaces carried */
   PetscFunctionReturn(0);
 }
 
@@ -244,11 +245,11 @@ PetscErrorCode MBCBodyPrescribed(MBCBody body, PetscReal t, Vec g)
   PetscCall(VecGetOwnershipRange(g, &rstart, NULL));
   PetscCall(VecGetArray(g, &gv));
   for (PetscInt i = 0; i < body->nbc; i++) {
-    MBCDirichletDesc *d = &body->scene->dirichlet[body->bc_entry[i]];
-    PetscReal         factor;
+    MBCDirichletDesc *d = body->bc_entry[i] >= 0 ? &body->scene->dirichlet[body->bc_entry[i]] : NULL; /* < 0: a held absorbing surface */
+    PetscReal         factor = 0;
 
-    PetscCall(MBCTimeFactor(body->scene, d->time, d->time_function, t, &factor));
-    gv[body->bc_rows[i] - rstart] = d->value * factor;
+    if (d) PetscCall(MBCTimeFactor(body->scene, d->time, d->time_function, t, &factor));
+    gv[body->bc_rows[i] - rstart] = d ? d->value * factor : 0.0;
   }
   PetscCall(VecRestoreArray(g, &gv));
   PetscFunctionReturn(0);

@@ -447,6 +447,7 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
+    PetscCall(MBCBodyAbsorbingHold(body)); /* a truncated foundation's support in a static state */
     PetscCall(MBCBodyRigidModes(body)); /* the free rigid modes, exact (FETI), unless a spring is asked for */
     body->stab = (s->static_stabilize > 0 && body->nrigid) ? s->static_stabilize : 0.0;
     if (body->stab > 0) {
@@ -657,6 +658,7 @@ static PetscErrorCode BodyDynamicInitialState(MBCBody body)
   PetscCall(VecZeroEntries(body->u));
   PetscCall(VecZeroEntries(body->v));
   PetscCall(VecZeroEntries(body->a));
+  PetscCall(MBCBodyAbsorbingHold(body));
   PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_TRUE, body->rhs));
   PetscCall(MBCBodyPrescribed(body, 0.0, body->g));
   PetscCall(VecNorm(body->rhs, NORM_INFINITY, &fnorm));
@@ -667,6 +669,7 @@ static PetscErrorCode BodyDynamicInitialState(MBCBody body)
     PetscCall(KSPDestroy(&ksp));
     PetscCall(MatDestroy(&A));
   }
+  PetscCall(MBCBodyAbsorbingRelease(body, 0.0)); /* the motion from here on through the dashpots */
   PetscCall(BodyAcceleration(body, 0.0, NULL));
   PetscCall(VecDot(body->fold, body->u, &body->wext)); /* so that total = T + U - F.u for constant F */
   body->wdamp = 0;
@@ -768,6 +771,7 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
     PetscCall(KSPDestroy(&body->ksp));
     PetscCall(MatDestroy(&body->A));
     if (after_static) PetscCall(VecZeroEntries(body->v));
+    PetscCall(MBCBodyAbsorbingRelease(body, s->time));
     PetscCall(BodyUseLevel(body, 0, Newmark(dt, beta, gamma)));
   }
   s->level = s->start_level = s->good_steps = 0;

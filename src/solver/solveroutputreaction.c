@@ -91,6 +91,7 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
     PetscCall(VecGetArrayRead(r, &rv));
     for (PetscInt i = 0; i < body->nbc; i++) {
       const PetscInt d = body->bc_entry[i];
+      if (d < 0) continue; /* an absorbing surface held in a static state (bodyabsorbing.c) */
       sum[3 * first[d] + scene->dirichlet[d].component] += PetscRealPart(rv[body->bc_rows[i] - rstart]);
     }
     PetscCall(VecRestoreArrayRead(r, &rv));

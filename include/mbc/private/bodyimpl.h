@@ -43,6 +43,10 @@ struct _n_MBCBody {
   Mat Cb;                 /* Lysmer-Kuhlemeyer dashpots on the absorbing surfaces (nodal 3 x 3 blocks; NULL: none), part of C */
   Mat Cin;                /* their input weights: 2 (incident) or 1 (outcrop) times the dashpots of the input surfaces (NULL: none) */
   PetscReal aC;           /* coefficient of Cb in A: Newmark's a1 while the Newmark operator is factored (BodyUseLevel), else 0 */
+  PetscBool held;         /* the absorbing surfaces are held (static states): bc_rows is the held set */
+  PetscInt  nbc_free, *bc_rows_free, *bc_entry_free; /* the Dirichlet set alone (dynamic) */
+  PetscInt  nbc_held, *bc_rows_held, *bc_entry_held; /* and with the absorbing surfaces' rows (entry -1: value 0) */
+  Vec       fhold;        /* the reactions the absorbing surfaces carried when released: a constant load */
   Vec envelope;           /* per cell (stress layout): the largest principal stress so far [0] and its time [1] (output field envelope) */
   PetscReal cM, cK;       /* damping C = cM M + cK K (never formed) */
   Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
@@ -104,6 +108,8 @@ typedef PetscErrorCode (*MBCFaceWeights)(PetscInt, const PetscReal[4][3], void *
 PETSC_INTERN PetscErrorCode MBCBodySurfaceBlocks(MBCBody, PetscInt, MBCFaceWeights, void *, PetscReal, PetscReal, Mat);
 PETSC_INTERN PetscErrorCode MBCBodyAddedMass(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyAbsorbingSetUp(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAbsorbingHold(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAbsorbingRelease(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyGroundLoad(MBCBody, MBCLoadDesc *, Vec, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyAddDamping(MBCBody, PetscReal, Vec, Vec);
