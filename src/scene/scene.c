@@ -725,6 +725,8 @@ PetscErrorCode MBCSceneCreateEmpty(MPI_Comm comm, MBCScene *scene)
   (*scene)->newmark_beta  = 0.25;
   (*scene)->newmark_gamma = 0.5;
   (*scene)->output_every  = 1;
+  (*scene)->modal_modes   = 6;
+  (*scene)->modal_tie     = PETSC_TRUE;
   PetscCall(PetscStrncpy((*scene)->filename, "scene.h5", sizeof((*scene)->filename)));
   PetscFunctionReturn(0);
 }

@@ -20,9 +20,8 @@ SMALL = dict(h=15.0, monoliths=3)
 
 def test_modal_dam_with_reservoir(tmp_path):
     """The small dam's first ten modes with the couples tied, dry and with Westergaard's added
-    mass: the reservoir lengthens the first period (by 10 to 40 %, the range of Fenves and
-    Chopra's R_r for full reservoirs) and leaves the modes along the dam's axis nearly alone; the
-    report prints the table."""
+    mass: the reservoir lengthens the first stream-direction period (measured R_r = 1.26; asserted
+    1.1 to 1.4) and leaves the mass along the dam's axis alone; the report prints the table."""
     dry = dam.build(tmp_path / "dry", "modal", **SMALL)
     wet = dam.build(tmp_path / "wet", "modal", added_mass=True, **SMALL)
     out = solve(wet).stdout
@@ -30,7 +29,9 @@ def test_modal_dam_with_reservoir(tmp_path):
     assert "couples tied" in out
     fd, fw = read_modes(result(dry, ".h5")), read_modes(result(wet, ".h5"))
     assert np.all(np.diff(fw["frequency"]) >= 0) and fw["frequency"][0] > 0
-    rr = fd["frequency"][0] / fw["frequency"][0]
+    def first_stream_mode(m):  # the first mode moving the dam upstream-downstream (> 5 % of the x mass)
+        return m["frequency"][np.flatnonzero(m["effective_mass"][:, 0] > 0.05 * m["total_mass"][0])[0]]
+    rr = first_stream_mode(fd) / first_stream_mode(fw)  # dry: 3.29 Hz (a cross-stream mode, 3.13 Hz, comes first)
     assert 1.1 < rr < 1.4, rr
     assert fw["total_mass"][0] > fd["total_mass"][0] and fw["total_mass"][1] == pytest.approx(fd["total_mass"][1], rel=1e-12)
     r = subprocess.run([sys.executable, REPORT, result(wet, "")], capture_output=True, text=True, env=env())
