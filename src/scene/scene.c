@@ -632,6 +632,12 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
       PetscCall(H5ReadInt(&e, "displacement_function", &l->displacement_function, PETSC_FALSE));
       PetscCheck(l->time == MBC_TIME_TABLE && l->velocity_function >= 0 && l->velocity_function < s->ntables && l->displacement_function >= 0 && l->displacement_function < s->ntables, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: ground acceleration %s needs a table and its velocity and displacement tables (time functions %" PetscInt_FMT ", %" PetscInt_FMT " of %" PetscInt_FMT ")", s->filename, e.path, l->velocity_function, l->displacement_function, s->ntables);
       PetscCheck(s->has_dynamic, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: ground acceleration %s needs a dynamic analysis", s->filename, e.path);
+      { /* the integrals' tables at the acceleration's rows (MBCSceneRecord interpolates within them) */
+        const MBCTimeTable *A = &s->tables[l->time_function], *V = &s->tables[l->velocity_function], *D = &s->tables[l->displacement_function];
+        PetscBool same = (PetscBool)(V->n == A->n && D->n == A->n && A->n >= 2);
+        for (PetscInt r = 0; same && r < A->n; r++) same = (PetscBool)(V->t[r] == A->t[r] && D->t[r] == A->t[r]);
+        PetscCheck(same, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: ground acceleration %s: its velocity and displacement tables must have the acceleration's rows (at least 2)", s->filename, e.path);
+      }
     }
     PetscCall(H5NodeClose(&e));
   }

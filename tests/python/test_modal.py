@@ -106,6 +106,8 @@ def test_reservoir_lengthens_the_period(tmp_path):
     solve(dry)
     solve(wet)
     fd, fw = read_modes(result(dry, ".h5"))["frequency"][0], read_modes(result(wet, ".h5"))["frequency"][0]
+    solve(wet, "-mbc_output", str(tmp_path / "wet2"), nproc=2)  # the added mass assembled over two ranks
+    assert read_modes(str(tmp_path / "wet2.h5"))["frequency"][0] == pytest.approx(fw, rel=1e-9)
     phi = read_body(result(dry, ".h5"), "dam", step=0)
     x = phi["vertices"]
     # the solver's nodal added masses: the wet run's total x mass minus the dry one's is their sum;
