@@ -18,6 +18,7 @@
 #include <mbc/private/solverimpl.h>
 #include <mbc/private/h5util.h>
 #include <slepceps.h>
+#include <math.h>
 
 PetscErrorCode MBCSolverModalSetFromOptions(MBCSolver s)
 {
@@ -273,7 +274,7 @@ static PetscErrorCode ModalWrite(MBCSolver s, PetscInt n, const PetscReal freq[]
   if (s->h5 < 0) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PetscMalloc1(n, &period));
-  for (PetscInt i = 0; i < n; i++) period[i] = freq[i] > 0 ? 1.0 / freq[i] : PETSC_INFINITY;
+  for (PetscInt i = 0; i < n; i++) period[i] = freq[i] > 0 ? 1.0 / freq[i] : (PetscReal)INFINITY; /* a rigid mode */
   PetscCall(MBCH5GroupCreate((hid_t)s->h5, "modes", PETSC_FALSE, &g));
   PetscCall(MBCH5WriteAttribute(g, "count", H5T_NATIVE_INT, 1, &count));
   PetscCall(MBCH5WriteAttribute(g, "total_mass", H5T_NATIVE_DOUBLE, 3, mtot));
@@ -394,17 +395,21 @@ PetscErrorCode MBCSolverModalSolve(MBCSolver s)
         cum[d] += mtot[d] > 0 ? meff[3 * i + d] / mtot[d] : 0;
       }
       s->modal_freq[i] = freq[i];
-      PetscCall(PetscPrintf(s->comm, "%5" PetscInt_FMT "  %14.6g  %12.6g  %6.2f  %6.2f  %6.2f  %6.2f  %6.2f  %6.2f\n", i + 1, (double)freq[i], freq[i] > 0 ? (double)(1 / freq[i]) : (double)PETSC_INFINITY, mtot[0] > 0 ? (double)(100 * meff[3 * i] / mtot[0]) : 0.0, mtot[1] > 0 ? (double)(100 * meff[3 * i + 1] / mtot[1]) : 0.0, mtot[2] > 0 ? (double)(100 * meff[3 * i + 2] / mtot[2]) : 0.0, (double)(100 * cum[0]), (double)(100 * cum[1]), (double)(100 * cum[2])));
+      PetscCall(PetscPrintf(s->comm, "%5" PetscInt_FMT "  %14.6g  %12.6g  %6.2f  %6.2f  %6.2f  %6.2f  %6.2f  %6.2f\n", i + 1, (double)freq[i], freq[i] > 0 ? (double)(1 / freq[i]) : (double)INFINITY, mtot[0] > 0 ? (double)(100 * meff[3 * i] / mtot[0]) : 0.0, mtot[1] > 0 ? (double)(100 * meff[3 * i + 1] / mtot[1]) : 0.0, mtot[2] > 0 ? (double)(100 * meff[3 * i + 2] / mtot[2]) : 0.0, (double)(100 * cum[0]), (double)(100 * cum[1]), (double)(100 * cum[2])));
       PetscCall(ModalToBodies(s, &L, x));
       s->step = i + 1;
       s->time = freq[i];
       PetscCall(MBCSolverOutputStep(s));
     }
   }
-  if (n >= 2 && freq[0] > 0 && freq[n - 1] > freq[0]) { /* a helper: 5 % at the first and the last mode found */
-    const PetscReal w1 = 2 * PETSC_PI * freq[0], w2 = 2 * PETSC_PI * freq[n - 1], z = 0.05;
+  {
+    PetscInt first = 0; /* the first elastic mode: rigid modes (free bodies) come out near 0 */
+    while (first < n && freq[first] <= 1e-3 * freq[n - 1]) first++;
+    if (first < n - 1 && freq[n - 1] > 1.001 * freq[first]) { /* a helper: 5 % at the first elastic and the last mode found */
+    const PetscReal w1 = 2 * PETSC_PI * freq[first], w2 = 2 * PETSC_PI * freq[n - 1], z = 0.05;
     const PetscReal beta = 2 * z / (w1 + w2), alpha = beta * w1 * w2;
-    PetscCall(PetscPrintf(s->comm, "Rayleigh damping of 5 %% at %g Hz and %g Hz: rayleigh_alpha %.6g, rayleigh_beta %.6g (mbcontact.records.rayleigh for others)\n", (double)freq[0], (double)freq[n - 1], (double)alpha, (double)beta));
+    PetscCall(PetscPrintf(s->comm, "Rayleigh damping of 5 %% at %g Hz and %g Hz: rayleigh_alpha %.6g, rayleigh_beta %.6g (mbcontact.records.rayleigh for others)\n", (double)freq[first], (double)freq[n - 1], (double)alpha, (double)beta));
+    }
   }
   PetscCall(ModalWrite(s, n, freq, gamma, meff, mtot));
   PetscCall(MBCSolverOutputClose(s));
