@@ -406,9 +406,9 @@ PetscErrorCode MBCSolverModalSolve(MBCSolver s)
     PetscInt first = 0; /* the first elastic mode: rigid modes (free bodies) come out near 0 */
     while (first < n && freq[first] <= 1e-3 * freq[n - 1]) first++;
     if (first < n - 1 && freq[n - 1] > 1.001 * freq[first]) { /* a helper: 5 % at the first elastic and the last mode found */
-    const PetscReal w1 = 2 * PETSC_PI * freq[first], w2 = 2 * PETSC_PI * freq[n - 1], z = 0.05;
-    const PetscReal beta = 2 * z / (w1 + w2), alpha = beta * w1 * w2;
-    PetscCall(PetscPrintf(s->comm, "Rayleigh damping of 5 %% at %g Hz and %g Hz: rayleigh_alpha %.6g, rayleigh_beta %.6g (mbcontact.records.rayleigh for others)\n", (double)freq[first], (double)freq[n - 1], (double)alpha, (double)beta));
+      const PetscReal w1 = 2 * PETSC_PI * freq[first], w2 = 2 * PETSC_PI * freq[n - 1], z = 0.05;
+      const PetscReal beta = 2 * z / (w1 + w2), alpha = beta * w1 * w2;
+      PetscCall(PetscPrintf(s->comm, "Rayleigh damping of 5 %% at %g Hz and %g Hz: rayleigh_alpha %.6g, rayleigh_beta %.6g (mbcontact.records.rayleigh for others)\n", (double)freq[first], (double)freq[n - 1], (double)alpha, (double)beta));
     }
   }
   PetscCall(ModalWrite(s, n, freq, gamma, meff, mtot));
