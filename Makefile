@@ -15,7 +15,7 @@ export MBC_BUILD_DIR := $(CURDIR)/$(BUILD)
 DEBS := build-essential cmake pkg-config petsc-dev python3-petsc4py libmetis-dev gmsh \
         libhdf5-openmpi-dev openmpi-bin python3-meshio python3-h5py python3-numpy \
         python3-yaml python3-pytest python3-matplotlib python3-scipy cython3 python3-dev python3-mpi4py python3-venv python3-pytest-xdist \
-        libopenblas0-serial
+        libopenblas0-serial slepc-dev python3-slepc4py
 
 .PHONY: all deps build run test test-c test-python fuzz sanitize clean vtk-reader
 all: build

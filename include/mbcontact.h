@@ -17,7 +17,8 @@ typedef struct _n_MBCSolver *MBCSolver;
 
 typedef enum {
   MBC_ANALYSIS_STATIC,
-  MBC_ANALYSIS_DYNAMIC
+  MBC_ANALYSIS_DYNAMIC,
+  MBC_ANALYSIS_MODAL /* the lowest natural frequencies and modes (SLEPc; src/solver/solvermodal.c) */
 } MBCAnalysisType;
 PETSC_EXTERN const char *const MBCAnalysisTypes[];
 
@@ -81,6 +82,9 @@ PETSC_EXTERN PetscErrorCode MBCBodyGetName(MBCBody, const char **);
 PETSC_EXTERN PetscErrorCode MBCBodyGetDM(MBCBody, DM *);
 PETSC_EXTERN PetscErrorCode MBCBodyGetDisplacement(MBCBody, Vec *);
 PETSC_EXTERN PetscErrorCode MBCBodyGetKSP(MBCBody, KSP *);
+/* The body's stiffness K, mass M (with the reservoir's added mass; NULL in a static analysis) and
+   absorbing boundaries' dashpots Cb (NULL without), unconstrained, after MBCSolverSetUp. */
+PETSC_EXTERN PetscErrorCode MBCBodyGetOperators(MBCBody, Mat *, Mat *, Mat *);
 PETSC_EXTERN PetscErrorCode MBCBodyView(MBCBody, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCBodyGetVelocity(MBCBody, Vec *);
 PETSC_EXTERN PetscErrorCode MBCBodyGetStressDM(MBCBody, DM *);

@@ -23,7 +23,9 @@ every master node lies inside the slave face. Size: element size `h`, or `target
 thousand to millions).
 
   meshes/dam/build.py OUTDIR [--h 5 | --dofs 1e6] [--monoliths 4] [--mu-base 0.8] [--mu-joint 0.8]
-                      [--level 95] [--dynamic [--eq-duration 20] | --quasi-static] [--[no-]joints] [--binary]
+                      [--level 95] [--dynamic [--eq-duration 20] | --quasi-static | --staged | --modal] [--[no-]joints]
+                      [--added-mass] [--foundation massed|massless|radiating] [--components x|xy|xyz]
+                      [--at2 X.AT2 [Y.AT2 [Z.AT2]]] [--binary]
 
 writes dam.msh, dam.yaml, dam.json (parameters, W, T for report.py), ground_motion.csv when
 dynamic, and dam.h5 (mbcontact-prep); then
@@ -80,6 +82,10 @@ class Dam:
     rock_E: float = 20e9
     rock_nu: float = 0.25
     rock_density: float = 2700.0  # used by dynamic analyses only (no rock self-weight)
+    added_mass: bool = False      # the reservoir's Westergaard added mass on the upstream faces (dynamic, modal)
+    foundation_model: str = "massed"  # massed (its inertia, base fixed) | massless | radiating (absorbing sides and base, the record entering as the outcrop motion)
+    components: str = "x"         # the ground motion's components: x | xy | xyz (y: another synthetic record, z: 2/3 of a third)
+    at2: tuple = ()               # PEER .AT2 records for x (and y, z) instead of the synthetic ones
 
     @property
     def z_knee(self):
@@ -112,6 +118,12 @@ class Dam:
                              f"the crest (crest / slope < height)")
         if self.sides not in ("normal", "all", "none"):
             raise ValueError(f"sides must be normal, all or none, got {self.sides!r}")
+        if self.foundation_model not in ("massed", "massless", "radiating"):
+            raise ValueError(f"foundation_model must be massed, massless or radiating, got {self.foundation_model!r}")
+        if self.components not in ("x", "xy", "xyz"):
+            raise ValueError(f"components must be x, xy or xyz, got {self.components!r}")
+        if len(self.at2) > 3:
+            raise ValueError("at most three .AT2 records (x, y, z)")
         return self
 
 
@@ -287,6 +299,19 @@ def rayleigh(p, zeta=0.05, ratio=5.0):
     return float(2 * zeta * w1 * w2 / (w1 + w2)), float(2 * zeta / (w1 + w2))
 
 
+def ground_motion(p, record, shift):
+    """The ground_acceleration load: the record along x (a CSV in m/s^2 or a PEER .AT2 in g), and
+    along y and z with `components` (record_y, record_z beside it)."""
+    load = {"kind": "ground_acceleration", "shift": shift}
+    for i, c in enumerate(p.components):
+        name = record if c == "x" else record.replace(".csv", f"_{c}.csv")
+        if i < len(p.at2):
+            load[c] = {"at2": os.path.basename(p.at2[i]), "g": G}
+        else:
+            load[c] = {"csv": name}
+    return load
+
+
 def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.0, record="ground_motion.csv",
           every=10):
     """The scene dict. Static: self-weight and water at once, one step, the monoliths held by
@@ -295,16 +320,28 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
     Staged: a static stage (self-weight and water, one step to t = 1), then a dynamic stage from
     that state with the record from its start (t = 1) for eq_duration s."""
     staged = analysis == "staged"
+    seismic = analysis in ("dynamic", "staged")
+    radiating = seismic and p.foundation_model == "radiating"
+    if radiating and not staged:
+        raise ValueError("a radiating foundation needs the staged analysis (its absorbing boundaries hold it in the "
+                         "static stage; a ramp would push it into its dashpots)")
     n = p.monoliths
     dams = [f"m{k}" for k in range(1, n + 1)]
     concrete = {"E": p.E, "nu": p.nu, "density": p.density}
     rock = {"E": p.rock_E, "nu": p.rock_nu}
-    if analysis in ("dynamic", "staged"):
+    if seismic:
         alpha, beta = rayleigh(p)
+        if radiating:  # absolute motion: a mass-proportional term would damp the rigid ground motion itself
+            alpha, beta = 0.0, rayleigh(p, ratio=1.0)[1] * 2
         concrete.update(rayleigh_alpha=alpha, rayleigh_beta=beta)
         rock.update(density=p.rock_density, rayleigh_alpha=alpha, rayleigh_beta=beta)
+    if analysis == "modal":
+        rock.update(density=p.rock_density)
     bodies = {d: {"mesh": "m", "regions": d, "material": dict(concrete)} for d in dams}
     bodies["foundation"] = {"mesh": "m", "regions": "foundation", "material": rock}
+    if p.foundation_model == "massless" and analysis != "static":  # the classical approach: inertia in the dam only
+        rock.update(density=0.0, rayleigh_alpha=0.0)
+        bodies["foundation"]["massless"] = True
     couples = [{"k": 1, "master": [f"m{k}_base" for k in range(1, n + 1)], "slave": ["foundation_contact", "heel_ring"],
                 "mu": p.mu_base}]
     if p.joints:  # joint k between monoliths k and k + 1: the odd (coarser) one is the master
@@ -315,6 +352,11 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         dirichlet += [{"surface": "foundation_xsides", "components": ["x"]}, {"surface": "foundation_ysides", "components": ["y"]}]
     elif p.sides == "all":
         dirichlet += [{"surface": "foundation_xsides"}, {"surface": "foundation_ysides"}]
+    absorbing = []
+    if radiating:  # Lysmer-Kuhlemeyer dashpots instead of the supports, the record coming in at the bottom
+        dirichlet = []
+        absorbing = [{"surface": "foundation_bottom", "input": "outcrop"},
+                     {"surface": "foundation_xsides"}, {"surface": "foundation_ysides"}]
     ramped = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else "constant"
     loads = [{"kind": "gravity", "vector": [0, 0, -G], "bodies": dams, "time": ramped},
              {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": ramped}]
@@ -330,13 +372,23 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
     out = {"title": f"gravity dam: {n} monoliths, H = {p.height:g} m, {analysis}",
            "meshes": {"m": "dam.msh"}, "bodies": bodies, "couples": couples, "dirichlet": dirichlet, "loads": loads,
            "output": {"fields": ["displacement", "stress"], "points": points}}
+    if absorbing:
+        out["absorbing"] = absorbing
+    if p.added_mass and analysis != "static":
+        out["added_mass"] = [{"surface": "upstream", "density": WATER / G, "level": p.water, "bottom": 0.0}]
+    if seismic:
+        out["output"]["fields"].append("envelope")
     if analysis == "dynamic":
-        loads.append({"kind": "gravity", "vector": [-1.0, 0, 0], "time": {"csv": record, "shift": eq_start}})
+        loads.append(ground_motion(p, record, eq_start))
         out["analysis"] = {"type": "dynamic", "dt": dt, "final_time": eq_start + eq_duration,
                            "newmark": {"beta": 0.3025, "gamma": 0.6}}
         out["output"]["every"] = every
+    elif analysis == "modal":
+        out["loads"] = []
+        out["analysis"] = {"type": "modal", "modes": 10}
+        out["output"]["fields"] = ["displacement", "stress"]
     elif staged:
-        quake = {"kind": "gravity", "vector": [-1.0, 0, 0], "time": {"csv": record, "shift": 1.0}}
+        quake = ground_motion(p, record, 1.0)
         out["stages"] = [{"name": "static", "analysis": {"type": "static"}},
                          {"name": "earthquake", "analysis": {"type": "dynamic", "dt": dt, "final_time": 1.0 + eq_duration,
                                                              "newmark": {"beta": 0.3025, "gamma": 0.6}},
@@ -345,6 +397,33 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
     else:
         out["analysis"] = {"type": "static"}
     return out
+
+
+def write_records(p, outdir, record, record_from):
+    """The records of the ground motion's components beside the scene: x the synthetic record
+    (meshes/dam/ground_motion.csv), y another one (seed 7), z two thirds of a third one (seed 8),
+    or the .AT2 files given; record_from > 0 copies a CSV record from that time on (its first
+    value set to 0: from rest)."""
+    import ground_motion  # noqa: E402 (beside this script)
+
+    for i, c in enumerate(p.components):
+        if i < len(p.at2):
+            if record_from > 0:
+                raise ValueError("record_from cuts the synthetic records, not an .AT2 (shift it instead)")
+            shutil.copy(p.at2[i], os.path.join(outdir, os.path.basename(p.at2[i])))
+            continue
+        name = record if c == "x" else record.replace(".csv", f"_{c}.csv")
+        if c == "x":
+            t, a = ground_motion.read(RECORD)
+        else:
+            t, a = ground_motion.record(seed=7 if c == "y" else 8, pga=0.3 if c == "y" else 0.2)
+        keep = t >= record_from - 1e-9
+        t, a = t[keep] - t[keep][0], a[keep].copy()
+        if record_from > 0:
+            a[0] = 0.0
+        with open(os.path.join(outdir, name), "w") as f:
+            f.write(f"# {c}: synthetic ground acceleration (meshes/dam/ground_motion.py) from t = {record_from:g} s\nt,a_g\n")
+            f.write("".join(f"{ti:.4f},{v:.7e}\n" for ti, v in zip(t, a)))
 
 
 def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, dt=0.01, ramp=1.0, eq_start=2.0,
@@ -357,7 +436,7 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     count, weight, thrust and times of the last call."""
     p = Dam(**params).check()
     if p.joints is None:  # a static analysis with contact between two bodies held only by contact does not converge yet
-        p = replace(p, joints=analysis == "dynamic")
+        p = replace(p, joints=analysis in ("dynamic", "modal"))
     if target_dofs:
         p = replace(p, h=size_for_dofs(p, target_dofs))
     os.makedirs(outdir, exist_ok=True)
@@ -368,20 +447,8 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     vertices = write_mesh(os.path.join(outdir, "dam.msh"), p, a, binary)
     t1 = time.perf_counter()
     record = "ground_motion.csv"
-    if analysis == "staged" and record_from <= 0:
-        shutil.copy(RECORD, os.path.join(outdir, record))
-    if analysis in ("dynamic", "staged") and record_from > 0:
-        with open(RECORD) as f:
-            rows = [line for line in f if line[:1] not in ("#", "t")]
-        data = np.array([r.split(",") for r in rows], dtype=float)
-        data = data[data[:, 0] >= record_from - 1e-9]
-        data[:, 0] -= data[0, 0]
-        data[0, 1] = 0.0
-        with open(os.path.join(outdir, record), "w") as f:
-            f.write(f"# meshes/dam/ground_motion.csv from t = {record_from:g} s, shifted to 0, starting from rest\nt,a_g\n")
-            f.write("".join(f"{t:.4f},{v:.7e}\n" for t, v in data))
-    elif analysis == "dynamic":
-        shutil.copy(RECORD, os.path.join(outdir, record))
+    if analysis in ("dynamic", "staged"):
+        write_records(p, outdir, record, record_from)
     h5 = prepare(outdir, "dam", scene(p, analysis, dt, ramp, eq_start, eq_duration, record, every))
     t2 = time.perf_counter()
     build.info = dict(params=asdict(p), analysis=analysis, dofs=dofs, vertices=vertices, h=p.h, nx=a["nx"], ny=a["ny"],
@@ -421,13 +488,21 @@ if __name__ == "__main__":
     ap.add_argument("--joints", action=argparse.BooleanOptionalAction, default=None,
                     help="contraction joints as contact couples (default: in dynamic analyses only)")
     ap.add_argument("--binary", action="store_true", default=None, help="binary Gmsh file (default above 200k DOFs)")
+    ap.add_argument("--modal", action="store_true", help="the first 10 natural frequencies and modes (couples tied)")
+    ap.add_argument("--added-mass", action="store_true", help="the reservoir's Westergaard added mass on the upstream faces")
+    ap.add_argument("--foundation", choices=("massed", "massless", "radiating"), default="massed",
+                    help="the rock's inertia and base: massed (fixed base), massless, or radiating (absorbing "
+                         "boundaries, the record entering at the bottom as the outcrop motion; --staged)")
+    ap.add_argument("--components", choices=("x", "xy", "xyz"), default="x", help="ground motion components")
+    ap.add_argument("--at2", nargs="+", default=(), help="PEER .AT2 records for x (and y, z) instead of the synthetic ones")
     a = ap.parse_args()
     params = dict(monoliths=a.monoliths, height=a.height, crest=a.crest, slope=a.slope, width=a.width, level=a.level,
-                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints)
+                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints,
+                  added_mass=a.added_mass, foundation_model=a.foundation, components=a.components, at2=tuple(a.at2))
     if a.h:
         params["h"] = a.h
     extra = dict(dt=0.02, eq_duration=0.0) if a.quasi_static else dict(eq_duration=a.eq_duration)
-    analysis = "staged" if a.staged else ("dynamic" if a.dynamic or a.quasi_static else "static")
+    analysis = "modal" if a.modal else ("staged" if a.staged else ("dynamic" if a.dynamic or a.quasi_static else "static"))
     h5 = build(a.outdir, analysis, target_dofs=a.dofs, binary=a.binary,
                quiet=False, **extra, **params)
     print(h5)

@@ -2,7 +2,7 @@
 """Sliding and opening of the joints and the base of the dam (meshes/dam/build.py), from the
 solver's contact results (h5py only: never import petsc4py beside it).
 
-  meshes/dam/report.py OUTDIR/dam_result [--json]
+  meshes/dam/report.py OUTDIR/dam_result [--json] [--spectrum POINT [--damping 0.05]] [--plots DIR]
 
 Per couple (the base, each joint), over the whole run and at the end: largest opening (gap) and
 sliding (accumulated tangential slip), the fractions of points open and slipping, the resultant
@@ -10,6 +10,13 @@ force on the master side; for the base the vertical and horizontal resultants ag
 weight W and the hydrostatic thrust T, and the sliding factor of safety mu W / T (design value)
 and mu N / |F_t| from the computed base resultant (its smallest value over a dynamic run). Per
 monolith (from the contact points of the last output) the base's opening and sliding.
+
+The seismic results engineers report: with `envelope` in the output fields, per body the largest
+principal stress over the run, where and when; the absolute acceleration of a point (relative
+plus the ground's, <prefix>_points.csv) and its 5 %-damped response spectrum (--spectrum POINT:
+<prefix>_spectrum_<POINT>.csv, and a plot with --plots); with --plots DIR PNG files of the base and
+joints' opening and sliding histories, the point's acceleration and its spectrum. A modal result
+(/modes) gives its table of frequencies and effective masses instead.
 
 Everything per step comes from <prefix>_contact.csv; only the per-monolith split reads the
 per-point file, through contact_points() alone (the collective <prefix>.h5 or the older
@@ -24,7 +31,10 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "python"))
-from mbcontact.results import read_csv  # noqa: E402
+from mbcontact.records import response_spectrum  # noqa: E402
+from mbcontact.results import point_history, read_csv, read_modes  # noqa: E402
+
+PERIODS = np.geomspace(0.02, 5.0, 120)  # s: the range of a dam's modes and of a record's content
 
 
 def contact_points(prefix, step=-1):
@@ -144,10 +154,140 @@ def text(r):
     return "\n".join(lines)
 
 
+def envelope(prefix):
+    """Per body the largest principal stress over the run (the last output's envelope), its time
+    and the centre of its cell; [] without the `envelope` field."""
+    import h5py
+
+    out = []
+    with h5py.File(prefix + ".h5", "r") as f:
+        n = int(f.attrs["num_outputs"])
+        for name in sorted(f.get("bodies", {}), key=lambda b: int(f["bodies"][b].attrs["index"])):
+            g = f["bodies"][name]
+            step = g.get(f"step_{n - 1}")
+            if step is None or "max_principal_stress" not in step:
+                continue
+            s1, t1 = step["max_principal_stress"][...], step["max_principal_stress_time"][...]
+            c = int(np.argmax(s1))
+            centre = g["vertices"][...][g["cells"][c]].mean(axis=0)
+            out.append({"body": name, "max_principal_stress": float(s1[c]), "time": float(t1[c]), "cell": c,
+                        "centre": [float(x) for x in centre]})
+    return out
+
+
+def spectrum(prefix, point, damping=0.05):
+    """The response spectrum (PSA, SA, SD per component x y z) of a point's absolute acceleration."""
+    h = point_history(prefix + "_points.csv", point)
+    if "abs_a" not in h:
+        raise KeyError(f"{prefix}_points.csv: no absolute acceleration of '{point}' (a dynamic analysis writes it)")
+    out = {"T": PERIODS, "damping": damping, "t": h["t"], "a": h["abs_a"]}
+    for i, c in enumerate("xyz"):
+        s = response_spectrum(h["t"], h["abs_a"][:, i], PERIODS, damping)
+        out[c] = s
+    return out
+
+
+def write_spectrum(prefix, point, sp):
+    path = f"{prefix}_spectrum_{point}.csv"
+    with open(path, "w") as f:
+        f.write("T," + ",".join(f"PSA_{c},SA_{c},SD_{c}" for c in "xyz") + "\n")
+        for i, T in enumerate(sp["T"]):
+            f.write(f"{T:.6g}," + ",".join(f"{sp[c]['PSA'][i]:.6e},{sp[c]['SA'][i]:.6e},{sp[c]['SD'][i]:.6e}" for c in "xyz") + "\n")
+    return path
+
+
+def plots(prefix, folder, point=None, sp=None):
+    """PNG files: the couples' largest opening and sliding over time, a point's absolute
+    acceleration and its spectrum. Returns their paths."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    os.makedirs(folder, exist_ok=True)
+    paths = []
+    if os.path.exists(prefix + "_contact.csv"):
+        info = scene_info(prefix)
+        fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+        for k, h in couple_histories(prefix).items():
+            name = info["couples"].get(k, f"couple {k}")
+            ax[0].plot(h["t"], h["max_opening"] * 1e3, label=name)
+            ax[1].plot(h["t"], np.nan_to_num(h["max_slip"]) * 1e3, label=name)
+        ax[0].set_ylabel("largest opening [mm]")
+        ax[1].set_ylabel("largest sliding [mm]")
+        ax[1].set_xlabel("t [s]")
+        ax[0].legend(fontsize=7)
+        paths.append(os.path.join(folder, "joints.png"))
+        fig.savefig(paths[-1], dpi=100)
+        plt.close(fig)
+    if sp is not None:
+        fig, ax = plt.subplots(2, 1, figsize=(8, 7))
+        for i, c in enumerate("xyz"):
+            if np.abs(sp["a"][:, i]).max() > 0:
+                ax[0].plot(sp["t"], sp["a"][:, i], label=c)
+                ax[1].loglog(sp["T"], sp[c]["PSA"], label=f"{c} (PSA)")
+        ax[0].set_xlabel("t [s]")
+        ax[0].set_ylabel(f"{point}: absolute acceleration")
+        ax[1].set_xlabel("period [s]")
+        ax[1].set_ylabel(f"PSA, {100 * sp['damping']:g} % damping")
+        ax[0].legend()
+        ax[1].legend()
+        paths.append(os.path.join(folder, f"spectrum_{point}.png"))
+        fig.savefig(paths[-1], dpi=100)
+        plt.close(fig)
+    return paths
+
+
+def modal_text(prefix):
+    m = read_modes(prefix + ".h5")
+    tot = m["total_mass"]
+    lines = [f"{'mode':>4} {'f [Hz]':>10} {'T [s]':>9} {'m_x %':>7} {'m_y %':>7} {'m_z %':>7}"]
+    for i, f in enumerate(m["frequency"]):
+        e = 100 * m["effective_mass"][i] / np.where(tot > 0, tot, 1)
+        lines.append(f"{i + 1:4d} {f:10.4f} {m['period'][i]:9.4f} {e[0]:7.2f} {e[1]:7.2f} {e[2]:7.2f}")
+    return "\n".join(lines)
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("prefix", help="result prefix, e.g. OUTDIR/dam_result")
     ap.add_argument("--json", action="store_true", help="print the report as JSON")
+    ap.add_argument("--spectrum", metavar="POINT", help="response spectrum of this output point's absolute acceleration")
+    ap.add_argument("--damping", type=float, default=0.05, help="the spectrum's damping ratio (default 0.05)")
+    ap.add_argument("--plots", metavar="DIR", help="write PNG plots into DIR")
     a = ap.parse_args()
+    import h5py
+    modal = False
+    if os.path.exists(a.prefix + ".h5"):
+        with h5py.File(a.prefix + ".h5", "r") as f:
+            modal = "modes" in f
+    if modal:
+        print(modal_text(a.prefix))
+        sys.exit(0)
     r = summarize(a.prefix)
-    print(json.dumps(r, indent=1) if a.json else text(r))
+    r["envelope"] = envelope(a.prefix) if os.path.exists(a.prefix + ".h5") else []
+    sp = None
+    if a.spectrum:
+        sp = spectrum(a.prefix, a.spectrum, a.damping)
+        r["spectrum"] = {"point": a.spectrum, "file": write_spectrum(a.prefix, a.spectrum, sp)}
+        for c in "xyz":
+            i = int(np.argmax(sp[c]["PSA"]))
+            r["spectrum"][c] = {"peak_PSA": float(sp[c]["PSA"][i]), "at_period": float(sp["T"][i]),
+                                "peak_abs_acceleration": float(np.abs(sp["a"][:, "xyz".index(c)]).max())}
+    if a.plots:
+        r["plots"] = plots(a.prefix, a.plots, a.spectrum, sp)
+    if a.json:
+        print(json.dumps(r, indent=1))
+    else:
+        print(text(r))
+        for e in r["envelope"]:
+            print(f"{e['body']}: largest principal stress {e['max_principal_stress']:.4e} at t = {e['time']:.3f} s, "
+                  f"cell {e['cell']} at ({e['centre'][0]:.1f}, {e['centre'][1]:.1f}, {e['centre'][2]:.1f})")
+        if sp is not None:
+            for c in "xyz":
+                s = r["spectrum"][c]
+                if s["peak_abs_acceleration"] > 0:
+                    print(f"{a.spectrum} {c}: peak absolute acceleration {s['peak_abs_acceleration']:.4g}, "
+                          f"{100 * a.damping:g} % spectrum peak PSA {s['peak_PSA']:.4g} at T = {s['at_period']:.3f} s")
+            print(f"spectrum: {r['spectrum']['file']}")
+        for p in r.get("plots", []):
+            print(f"plot: {p}")

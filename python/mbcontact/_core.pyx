@@ -3,7 +3,7 @@
 holding its handle; PETSc objects (Vec, DM, KSP) come back as petsc4py objects sharing the
 solver's memory."""
 from petsc4py import PETSc
-from petsc4py.PETSc cimport Comm, Vec, DM, KSP, Viewer, PetscObject, PetscVec, PetscDM, PetscKSP, PetscViewer
+from petsc4py.PETSc cimport Comm, Vec, DM, KSP, Mat, Viewer, PetscObject, PetscVec, PetscDM, PetscKSP, PetscMat, PetscViewer
 cimport numpy as cnp
 import numpy as np
 from mbcontact.cmbcontact cimport *
@@ -203,6 +203,24 @@ cdef class Body:
         ob.ksp = k
         CHKERR(PetscObjectReference(<PetscObject>k))
         return ob
+
+    def getOperators(self):
+        """(K, M, Cb): the stiffness, the mass with the reservoir's added mass (None in a static
+        analysis) and the absorbing boundaries' dashpots (None without), unconstrained, as
+        petsc4py Mats sharing the solver's (after setUp)."""
+        cdef PetscMat h[3]
+        h[0] = h[1] = h[2] = NULL
+        CHKERR(MBCBodyGetOperators(self.body, &h[0], &h[1], &h[2]))
+        out = []
+        for i in range(3):
+            if h[i] == NULL:
+                out.append(None)
+                continue
+            ob = Mat()
+            (<Mat>ob).mat = h[i]
+            CHKERR(PetscObjectReference(<PetscObject>h[i]))
+            out.append(ob)
+        return tuple(out)
 
     def getComm(self):
         return self.getDM().getComm()

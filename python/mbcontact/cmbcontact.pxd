@@ -1,6 +1,6 @@
 # Declarations of the C API (include/mbcontact.h) for the binding (_core.pyx), in the pattern
 # of slepc4py: PETSc's types come from petsc4py's PETSc.pxd.
-from petsc4py.PETSc cimport PetscObject, PetscVec, PetscDM, PetscKSP, PetscViewer, MPI_Comm
+from petsc4py.PETSc cimport PetscObject, PetscVec, PetscDM, PetscKSP, PetscMat, PetscViewer, MPI_Comm
 
 cdef extern from "mbcontact.h" nogil:
     ctypedef int PetscErrorCode
@@ -49,6 +49,7 @@ cdef extern from "mbcontact.h" nogil:
     PetscErrorCode MBCBodyGetVelocity(MBCBody, PetscVec *)
     PetscErrorCode MBCBodyCreateStress(MBCBody, PetscVec *)
     PetscErrorCode MBCBodyGetKSP(MBCBody, PetscKSP *)
+    PetscErrorCode MBCBodyGetOperators(MBCBody, PetscMat *, PetscMat *, PetscMat *)
     PetscErrorCode MBCBodyView(MBCBody, PetscViewer)
     PetscErrorCode MBCBodyDestroy(MBCBody *)
 

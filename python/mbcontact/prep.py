@@ -18,8 +18,8 @@ import tempfile
 import numpy as np
 
 from . import __version__
-from .bodies import build_bodies, couple_exclusions, face_labels, read_mesh
-from .scene import InputError, load_yaml, parse_scene, warn
+from .bodies import build_bodies, couple_exclusions, face_labels, read_mesh, surface_faces
+from .scene import InputError, Time, load_yaml, parse_scene, warn
 
 PROG = "mbcontact-prep"
 FORMAT_VERSION = 1
@@ -71,6 +71,7 @@ def _run(args):
     bodies = build_bodies(scene, meshes)
     labels, face_counts = face_labels(scene, bodies)
     exclude = couple_exclusions(scene, bodies, labels)
+    _reservoir_floors(scene, bodies)
 
     if not args.check:
         _write(output, scene, bodies, labels, face_counts, exclude)
@@ -92,6 +93,22 @@ def _print_summary(output, check_only, scene, bodies, face_counts, exclude):
     for c in scene.couples:
         out = f", {len(exclude[scene.couples.index(c)])} master nodes out of contact" if c.exclude else ""
         print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{out}")
+
+
+def _reservoir_floors(scene, bodies):
+    """An added mass without `bottom` takes the lowest point of its wetted surface as the
+    reservoir's floor; one with a `bottom` above that point is refused (Westergaard's pressure is
+    defined between the floor and the level)."""
+    for i, m in enumerate(scene.added_mass):
+        faces = surface_faces(m.surface, scene.surfaces[m.surface], bodies)
+        low = min(bodies[b].coords[bodies[b].boundary_faces[index]][..., m.axis].min() for b, index in faces.items())
+        if m.bottom is None:
+            m.bottom = float(low)
+        elif m.bottom > low + 1e-9 * max(1.0, abs(m.level - low)):
+            raise InputError(f"added_mass[{i}].bottom: the surface '{m.surface}' reaches down to {low:g}, "
+                             f"below the reservoir's floor {m.bottom:g}")
+        if not m.level > m.bottom:
+            raise InputError(f"added_mass[{i}].level: {m.level:g} is not above the reservoir's floor {m.bottom:g}")
 
 
 # ---------------------------------------------------------------- writing
@@ -163,13 +180,15 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
         _attrs(root, format_version=FORMAT_VERSION, title=scene.title)
         a = scene.analysis
         _attrs(root.create_group("analysis"), type=a.type, dt=a.dt, final_time=a.final_time,
-               newmark_beta=a.newmark_beta, newmark_gamma=a.newmark_gamma, mass=a.mass)
+               newmark_beta=a.newmark_beta, newmark_gamma=a.newmark_gamma, mass=a.mass,
+               **(dict(modes=a.modes, tie=int(a.tie)) if a.type == "modal" else {}))
         _list(root, "surfaces", face_counts.items(), lambda g, item: _attrs(
             g, name=item[0], id=surface_ids[item[0]], num_faces=item[1]))
         _list(root, "bodies", zip(scene.bodies, bodies), lambda g, item: _attrs(
             g, name=item[0].name, cell_type=item[1].cell_type, num_cells=len(item[1].cells),
             num_vertices=len(item[1].coords), **item[0].material,
-            **({"element": item[0].element} if item[0].element else {})))
+            **({"element": item[0].element} if item[0].element else {}),
+            **({"massless": 1} if item[0].massless else {})))
         def side_faces(c, column):  # faces of each body on one side of couple c: the edge weights of the decomposition
             if labels is None:
                 return np.zeros(len(bodies), dtype=np.int32)
@@ -196,7 +215,15 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
             surface_id=surface_ids.get(load.surface, -1), bodies=",".join(load.bodies),
             time=load.time.kind, time_function=time_function(load.time), stage=load.stage,
             **(dict(level=load.level, unit_weight=load.unit_weight, axis=load.axis)
-               if load.kind == "hydrostatic" else {})))
+               if load.kind == "hydrostatic" else {}),
+            **(dict(velocity_function=time_function(Time("table", load.velocity)),
+                    displacement_function=time_function(Time("table", load.displacement)))
+               if load.kind == "ground_acceleration" else {})))
+        _list(root, "added_mass", scene.added_mass, lambda g, m: _attrs(
+            g, model="westergaard", surface=m.surface, surface_id=surface_ids[m.surface], density=m.density,
+            level=m.level, bottom=m.bottom, axis=m.axis))
+        _list(root, "absorbing", scene.absorbing, lambda g, x: _attrs(
+            g, surface=x.surface, surface_id=surface_ids[x.surface], input=x.input))
         _list(root, "stages", scene.stages, lambda g, st: _attrs(
             g, name=st.name, type=st.analysis.type, start_time=st.start_time, dt=st.analysis.dt,
             final_time=st.analysis.final_time, newmark_beta=st.analysis.newmark_beta,

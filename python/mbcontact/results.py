@@ -102,6 +102,36 @@ def read_contact(path, step=-1):
     return out
 
 
+def read_modes(path):
+    """A modal analysis's /modes: frequency [Hz], period [s], participation (n, 3: Gamma_d =
+    phi^T M iota_d, phi mass-normalised), effective_mass (n, 3: Gamma_d^2) and total_mass (3: the
+    mass along x, y, z the modes can carry, the held DOFs' left out)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        if "modes" not in f:
+            raise KeyError(f"{path}: no /modes (not the result of a modal analysis)")
+        g = f["modes"]
+        out = {k: g[k][...] for k in ("frequency", "period", "participation", "effective_mass")}
+        out["total_mass"] = g.attrs["total_mass"][...]
+    return out
+
+
+def point_history(path, point):
+    """A point's history from <output>_points.csv: t, u (n, 3) and, in dynamic analyses, the
+    absolute displacement, velocity and acceleration (relative plus the ground's) as abs_u,
+    abs_v, abs_a (n, 3)."""
+    c = read_csv(path)
+    if f"{point}_ux" not in c:
+        names = sorted({k.rsplit("_", 1)[0] for k in c if k.endswith("_ux") and "_abs" not in k})
+        raise KeyError(f"{path}: no point '{point}' (points: {', '.join(names)})")
+    out = {"t": c["t"], "u": np.column_stack([c[f"{point}_u{x}"] for x in "xyz"])}
+    for q in "uva":
+        if f"{point}_abs_{q}x" in c:
+            out[f"abs_{q}"] = np.column_stack([c[f"{point}_abs_{q}{x}"] for x in "xyz"])
+    return out
+
+
 def log_view_times(text, events):
     """Seconds per phase from a -log_view report: events maps a phase name to a PETSc event
     name or a tuple of names (summed); absent events count 0. An event logged in several stages

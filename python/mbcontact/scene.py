@@ -259,8 +259,10 @@ def _csv_table(path, where):
 
 MATERIAL_DEFAULTS = dict(nu=0.0, density=0.0, damping=0.0, rayleigh_alpha=0.0, rayleigh_beta=0.0)
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
-LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic")
-FIELDS = ("displacement", "stress")
+LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration")
+FIELDS = ("displacement", "stress", "envelope")
+DEFAULT_FIELDS = ("displacement", "stress")
+ABSORBING_INPUTS = ("none", "outcrop", "incident")
 ELEMENTS = ("hex8", "hex8i", "hex8b")  # the element of a hex body (a tet4 body has tet4)
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
@@ -272,6 +274,7 @@ class Body:
     regions: list
     material: dict
     element: str = ""  # hex bodies: "hex8" | "hex8i" | "hex8b"; "" = the solver's default
+    massless: bool = False  # no inertia in a dynamic analysis (a massless foundation)
 
 
 @dataclass
@@ -304,6 +307,23 @@ class Load:
     axis: int = 2             # hydrostatic: 0, 1, 2 = x, y, z (up)
     stage: int = 0            # the stage from which the load acts (stages[i].loads)
     where: str = ""           # its key path in the YAML (stages[i].loads[j]; "" for loads[i])
+    velocity: np.ndarray = None      # ground_acceleration: the record's velocity and displacement
+    displacement: np.ndarray = None  # tables (n, 2), integrated exactly from the acceleration's
+
+
+@dataclass
+class AddedMass:
+    surface: str
+    density: float   # of the water, in the scene's units
+    level: float     # the reservoir's free surface along axis
+    bottom: float    # the reservoir's floor along axis (None: the surface's lowest point, set by the prep)
+    axis: int = 2
+
+
+@dataclass
+class Absorbing:
+    surface: str
+    input: str = "none"  # none | outcrop | incident: where the ground motion enters as 2 rho c v_incident
 
 
 @dataclass
@@ -314,6 +334,8 @@ class Analysis:
     newmark_beta: float = 0.25
     newmark_gamma: float = 0.5
     mass: str = "consistent"
+    modes: int = 6        # modal: how many of the lowest modes
+    tie: bool = True      # modal: the couples tied (bonded) or the bodies alone
 
 
 @dataclass
@@ -333,7 +355,7 @@ class Point:
 @dataclass
 class Output:
     every: int = 1
-    fields: list = field(default_factory=lambda: list(FIELDS))
+    fields: list = field(default_factory=lambda: list(DEFAULT_FIELDS))
     energy: bool = False
     points: list = field(default_factory=list)
 
@@ -350,9 +372,12 @@ class Scene:
     output: Output
     surfaces: dict    # surface name -> list of places it is referenced, in id order
     stages: list = field(default_factory=list)  # empty: one analysis (`analysis`)
+    added_mass: list = field(default_factory=list)
+    absorbing: list = field(default_factory=list)
 
 
-TOP_KEYS = ("title", "meshes", "bodies", "couples", "dirichlet", "loads", "analysis", "stages", "output")
+TOP_KEYS = ("title", "meshes", "bodies", "couples", "dirichlet", "loads", "added_mass", "absorbing",
+            "analysis", "stages", "output")
 
 
 def parse_scene(doc, base_dir):
@@ -365,7 +390,10 @@ def parse_scene(doc, base_dir):
     body_names = [b.name for b in bodies]
     couples = _couples(doc.get("couples"))
     dirichlet = [_dirichlet(e, f"dirichlet[{i}]", base_dir) for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
-    loads = [_load(e, f"loads[{i}]", body_names, base_dir) for i, e in enumerate(entries(doc.get("loads"), "loads"))]
+    loads = [load for i, e in enumerate(entries(doc.get("loads"), "loads"))
+             for load in _loads(e, f"loads[{i}]", body_names, base_dir)]
+    added_mass = [_added_mass(e, f"added_mass[{i}]") for i, e in enumerate(entries(doc.get("added_mass"), "added_mass"))]
+    absorbing = [_absorbing(e, f"absorbing[{i}]") for i, e in enumerate(entries(doc.get("absorbing"), "absorbing"))]
     if "stages" in doc and "analysis" in doc:
         raise InputError("analysis: a scene with stages gives each stage its analysis "
                          "(stages[i].analysis), not a top-level one")
@@ -373,14 +401,27 @@ def parse_scene(doc, base_dir):
     analysis = stages[0].analysis if stages else _analysis(doc.get("analysis"))
     output = _output(doc.get("output"), body_names)
     for where, a in ([(f"stages[{i}]", st.analysis) for i, st in enumerate(stages)] or [("analysis", analysis)]):
-        if a.type != "dynamic":
+        if a.type not in ("dynamic", "modal"):
             continue
         for b in bodies:
-            if b.material["density"] == 0:
-                raise InputError(f"bodies.{b.name}.material.density: a dynamic analysis ({where}) needs "
-                                 f"density > 0 for every body (body '{b.name}' has 0)")
-    surfaces = _surface_references(doc, couples, dirichlet, loads)
-    return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces, stages)
+            if b.material["density"] == 0 and not b.massless:
+                raise InputError(f"bodies.{b.name}.material.density: a {a.type} analysis ({where}) needs "
+                                 f"density > 0 for every body (body '{b.name}' has 0; `massless: true` "
+                                 "makes a body without inertia)")
+    dynamic = any(a.type == "dynamic" for a in ([st.analysis for st in stages] or [analysis]))
+    for load in loads:
+        if load.kind == "ground_acceleration" and not dynamic:
+            raise InputError(f"{load.where}: a ground acceleration needs a dynamic analysis (or a dynamic stage)")
+    if absorbing and not dynamic:
+        raise InputError("absorbing: dashpots act in a dynamic analysis (or a dynamic stage) only")
+    if added_mass and not dynamic and analysis.type != "modal":
+        raise InputError("added_mass[0]: an added mass acts in a dynamic or modal analysis only")
+    if any(x.input != "none" for x in absorbing) and not any(l.kind == "ground_acceleration" for l in loads):
+        raise InputError("absorbing: an input surface (input: outcrop or incident) needs a ground_acceleration "
+                         "load (the record that enters through it)")
+    surfaces = _surface_references(doc, couples, dirichlet, loads, added_mass, absorbing)
+    return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces, stages,
+                 added_mass, absorbing)
 
 
 def _meshes(value, base_dir):
@@ -403,13 +444,14 @@ def _body(name, spec, meshes):
     if not IDENTIFIER.match(name):
         raise InputError(f"{where}: body names must be identifiers ([A-Za-z_][A-Za-z0-9_]*), "
                          f"got {name!r}")
-    spec = mapping(spec, where, ("mesh", "regions", "material", "element"), required=("mesh", "regions", "material"))
+    spec = mapping(spec, where, ("mesh", "regions", "material", "element", "massless"), required=("mesh", "regions", "material"))
     mesh = string(spec["mesh"], f"{where}.mesh")
     if mesh not in meshes:
         raise InputError(f"{where}.mesh: unknown mesh {mesh!r} (meshes: {', '.join(meshes)})")
     regions = name_list(spec["regions"], f"{where}.regions")
     element = string(spec["element"], f"{where}.element", choices=ELEMENTS) if "element" in spec else ""
-    return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"), element)
+    massless = boolean(spec.get("massless", False), f"{where}.massless")
+    return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"), element, massless)
 
 
 MATERIAL_RANGE = (1e-100, 1e100)  # the solver's MBC_MATERIAL_MIN/MAX: squares stay normal doubles
@@ -481,6 +523,104 @@ _LOAD_KEYS = {  # kind -> (required keys, optional keys) besides kind and time
 }
 
 
+def _loads(spec, where, body_names, base_dir="."):
+    """The scene loads of one YAML entry: one, or one per component of a ground acceleration."""
+    if isinstance(spec, dict) and spec.get("kind") == "ground_acceleration":
+        return _ground_acceleration(spec, where, body_names, base_dir)
+    load = _load(spec, where, body_names, base_dir)
+    load.where = where
+    return [load]
+
+
+def _record_component(value, where, base_dir):
+    """One component of a ground acceleration: (t, a) in the scene's units, before the entry's
+    scale, shift and baseline."""
+    from .records import G_STANDARD, RecordError, read_at2, read_table
+
+    spec = mapping(value, where, ("at2", "csv", "table", "column", "dt", "scale", "g"))
+    sources = [k for k in ("at2", "csv", "table") if k in spec]
+    if len(sources) != 1:
+        raise InputError(f"{where}: give the record as one of at2: FILE (PEER NGA), csv: FILE (a table) "
+                         f"or table: [[t, a], ...], got {', '.join(sources) or 'none'}")
+    scale = real(spec.get("scale", 1.0), f"{where}.scale")
+    try:
+        if "at2" in spec:
+            for key in ("column", "dt"):
+                if key in spec:
+                    raise InputError(f"{where}.{key}: not for an .AT2 file (its header gives NPTS and DT)")
+            g = real(spec.get("g", G_STANDARD), f"{where}.g", gt=0)
+            dt, a = read_at2(os.path.join(base_dir, string(spec["at2"], f"{where}.at2", maxlen=None)))
+            return dt * np.arange(len(a)), a * g * scale
+        if "g" in spec:
+            raise InputError(f"{where}.g: only for an .AT2 record (in g); scale a table with scale")
+        if "csv" in spec:
+            column = integer(spec["column"], f"{where}.column", ge=1) if "column" in spec else None
+            dt = real(spec["dt"], f"{where}.dt", gt=0) if "dt" in spec else None
+            t, a = read_table(os.path.join(base_dir, string(spec["csv"], f"{where}.csv", maxlen=None)), column, dt)
+            return t, a * scale
+    except RecordError as err:
+        raise InputError(f"{where}: {err}") from None
+    for key in ("column", "dt"):
+        if key in spec:
+            raise InputError(f"{where}.{key}: only for a csv record")
+    table = time_spec({"table": spec["table"]}, where, ()).table
+    if len(table) < 2:
+        raise InputError(f"{where}.table: a record needs at least 2 rows")
+    return table[:, 0], table[:, 1] * scale
+
+
+def _ground_acceleration(spec, where, body_names, base_dir):
+    """kind ground_acceleration: x, y, z records (at least one) of the base's acceleration; each
+    becomes a scene load along its axis with its acceleration, velocity and displacement tables."""
+    from .records import BASELINES, baseline_correct, integrate, padded
+
+    mapping(spec, where, ("kind", "x", "y", "z", "scale", "shift", "baseline", "bodies"))
+    comps = [c for c in ("x", "y", "z") if c in spec]
+    if not comps:
+        raise InputError(f"{where}: a ground acceleration needs at least one of x, y, z (a record each)")
+    scale = real(spec.get("scale", 1.0), f"{where}.scale")
+    shift = real(spec.get("shift", 0.0), f"{where}.shift")
+    baseline = string(spec.get("baseline", "none"), f"{where}.baseline", choices=tuple(BASELINES))
+    bodies = name_list(spec["bodies"], f"{where}.bodies") if "bodies" in spec else []
+    for b in bodies:
+        if b not in body_names:
+            raise InputError(f"{where}.bodies: unknown body {b!r} (bodies: {', '.join(body_names)})")
+    loads = []
+    for c in comps:
+        t, a = _record_component(spec[c], f"{where}.{c}", base_dir)
+        a = baseline_correct(t, a * scale, BASELINES[baseline])
+        t, a = padded(t + shift, a)
+        v, d = integrate(t, a)
+        vector = np.zeros(3)
+        vector[COMPONENTS[c]] = 1.0
+        load = Load("ground_acceleration", vector, 0.0, "", bodies, Time("table", np.column_stack([t, a])))
+        load.velocity, load.displacement = np.column_stack([t, v]), np.column_stack([t, d])
+        load.where = f"{where}.{c}"
+        loads.append(load)
+    return loads
+
+
+def _added_mass(spec, where):
+    spec = mapping(spec, where, ("surface", "density", "level", "bottom", "axis", "model"),
+                   required=("surface", "density", "level"))
+    string(spec.get("model", "westergaard"), f"{where}.model", choices=("westergaard",))
+    axis = spec.get("axis", "z")
+    if not isinstance(axis, str) or axis not in COMPONENTS:
+        raise InputError(f"{where}.axis: expected x, y or z (the upward axis), got {axis!r}")
+    m = AddedMass(string(spec["surface"], f"{where}.surface"), real(spec["density"], f"{where}.density", gt=0),
+                  real(spec["level"], f"{where}.level"),
+                  real(spec["bottom"], f"{where}.bottom") if "bottom" in spec else None, COMPONENTS[axis])
+    if m.bottom is not None and not m.bottom < m.level:
+        raise InputError(f"{where}.bottom: the reservoir's floor {m.bottom:g} must lie below its level {m.level:g}")
+    return m
+
+
+def _absorbing(spec, where):
+    spec = mapping(spec, where, ("surface", "input"), required=("surface",))
+    return Absorbing(string(spec["surface"], f"{where}.surface"),
+                     string(spec.get("input", "none"), f"{where}.input", choices=ABSORBING_INPUTS))
+
+
 def _load(spec, where, body_names, base_dir="."):
     if not isinstance(spec, dict) or "kind" not in spec:
         raise InputError(f"{where}: expected a mapping with a 'kind' ({', '.join(LOAD_KINDS)})")
@@ -510,11 +650,22 @@ def _load(spec, where, body_names, base_dir="."):
 def _analysis(value, where="analysis", start=0.0):
     """The analysis settings; a stage's (`where` = stages[i].analysis) runs from `start`, the end
     of the stage before, to its final_time (time runs on across stages)."""
-    spec = mapping(value, where, ("type", "dt", "final_time", "newmark", "mass"),
+    spec = mapping(value, where, ("type", "dt", "final_time", "newmark", "mass", "modes", "tie"),
                    required=("type",) if where != "analysis" else ())
     a = Analysis()
-    a.type = string(spec.get("type", a.type), f"{where}.type", choices=("static", "dynamic"))
+    a.type = string(spec.get("type", a.type), f"{where}.type",
+                    choices=("static", "dynamic", "modal") if where == "analysis" else ("static", "dynamic"))
     a.mass = string(spec.get("mass", a.mass), f"{where}.mass", choices=("consistent", "lumped"))
+    if a.type == "modal":
+        for key in ("dt", "final_time", "newmark"):
+            if key in spec:
+                raise InputError(f"{where}.{key}: a modal analysis has no time steps")
+        a.modes = integer(spec.get("modes", a.modes), f"{where}.modes", ge=1, le=10000)
+        a.tie = boolean(spec.get("tie", a.tie), f"{where}.tie")
+        return a
+    for key in ("modes", "tie"):
+        if key in spec:
+            raise InputError(f"{where}.{key}: only for a modal analysis (type: modal)")
     if a.type == "dynamic":
         for key in ("dt", "final_time"):
             if key not in spec:
@@ -566,9 +717,9 @@ def _stages(value, loads, body_names, base_dir):
             raise InputError(f"{where}.analysis.mass: every stage uses one mass matrix "
                              f"({stages[0].analysis.mass} in stages[0]), got {a.mass}")
         for j, e in enumerate(entries(spec.get("loads"), f"{where}.loads")):
-            load = _load(e, f"{where}.loads[{j}]", body_names, base_dir)
-            load.stage, load.where = i, f"{where}.loads[{j}]"
-            loads.append(load)
+            for load in _loads(e, f"{where}.loads[{j}]", body_names, base_dir):
+                load.stage = i
+                loads.append(load)
         steps += (a.final_time - start) / a.dt
         if steps > MAX_STEPS:
             raise InputError(f"{where}.analysis.dt: the stages up to this one make {steps:.3g} steps, "
@@ -606,7 +757,7 @@ def _point(name, value, where, body_names):
     return Point(name, vector3(spec["x"], f"{where}.x"), body)
 
 
-def _surface_references(doc, couples, dirichlet, loads):
+def _surface_references(doc, couples, dirichlet, loads, added_mass=(), absorbing=()):
     """Referenced surface names in order of first appearance in the file.
 
     Sections are visited in the order they appear in the YAML; within a couple
@@ -627,7 +778,13 @@ def _surface_references(doc, couples, dirichlet, loads):
             for i, d in enumerate(dirichlet):
                 add(d.surface, f"dirichlet[{i}].surface")
         elif section in ("loads", "stages"):
-            for i, load in enumerate(loads):
-                if load.surface and bool(load.where) == (section == "stages"):
-                    add(load.surface, f"{load.where or f'loads[{i}]'}.surface")
+            for load in loads:
+                if load.surface and load.where.startswith("stages") == (section == "stages"):
+                    add(load.surface, f"{load.where}.surface")
+        elif section == "added_mass":
+            for i, m in enumerate(added_mass):
+                add(m.surface, f"added_mass[{i}].surface")
+        elif section == "absorbing":
+            for i, x in enumerate(absorbing):
+                add(x.surface, f"absorbing[{i}].surface")
     return refs

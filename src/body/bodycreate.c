@@ -239,10 +239,18 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   }
   for (PetscInt i = 0; i < b->nloads; i++) PetscCall(VecDestroy(&b->load[i]));
   PetscCall(PetscFree2(b->load, b->load_index));
+  if (b->bc_rows_held) { /* bc_rows points at one of the two sets */
+    PetscCall(PetscFree2(b->bc_rows_held, b->bc_entry_held));
+    b->bc_rows = b->bc_rows_free, b->bc_entry = b->bc_entry_free;
+  }
   PetscCall(PetscFree2(b->bc_rows, b->bc_entry));
+  PetscCall(VecDestroy(&b->fhold));
   PetscCall(MBCBodyRigidModesDestroy(b));
   PetscCall(MatDestroy(&b->K));
   PetscCall(MatDestroy(&b->M));
+  PetscCall(MatDestroy(&b->Cb));
+  PetscCall(MatDestroy(&b->Cin));
+  PetscCall(VecDestroy(&b->envelope));
   PetscCall(MatDestroy(&b->A));
   PetscCall(KSPDestroy(&b->ksp));
   for (PetscInt l = 0; l < MBC_MAX_CUTS; l++) {
@@ -319,6 +327,15 @@ PetscErrorCode MBCBodyGetKSP(MBCBody body, KSP *ksp)
 {
   PetscFunctionBegin;
   *ksp = body ? body->ksp : NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetOperators(MBCBody body, Mat *K, Mat *M, Mat *Cb)
+{
+  PetscFunctionBegin;
+  if (K) *K = body ? body->K : NULL;
+  if (M) *M = body ? body->M : NULL;
+  if (Cb) *Cb = body ? body->Cb : NULL;
   PetscFunctionReturn(0);
 }
 

@@ -18,6 +18,8 @@ static PetscErrorCode BodyAssembleOperators(MBCBody body, PetscBool mass, MBCMas
     PetscCall(MatDiagonalSet(body->M, diag, INSERT_VALUES));
     PetscCall(VecDestroy(&diag));
   }
+  if (mass && body->desc.massless) PetscCall(MatZeroEntries(body->M)); /* no inertia: the pattern kept for A */
+  if (mass) PetscCall(MBCBodyAddedMass(body));
   if (mass) PetscCall(MatSetOption(body->M, MAT_SYMMETRIC, PETSC_TRUE));
   PetscFunctionReturn(0);
 }
@@ -49,6 +51,11 @@ static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
   PetscScalar   c[MBC_NUM_CONSTANTS] = {0};
 
   PetscFunctionBegin;
+  if (load->kind == MBC_LOAD_GROUND_ACCELERATION) { /* MBCBodyAssembleLoads assembles it */
+    PetscBool applies;
+    PetscCall(MBCBodyGroundLoad(body, load, F, &applies));
+    PetscFunctionReturn(0);
+  }
   if (load->kind == MBC_LOAD_HYDROSTATIC) { /* a linear field cut at the level: integrated by hand */
     PetscCall(MBCBodyAssembleHydrostatic(body, load, F));
     PetscFunctionReturn(0);
@@ -103,6 +110,7 @@ PetscErrorCode MBCBodyAssembleLoads(MBCBody body)
       PetscCall(BodySurfaceSize(body, load->surface_id, &n));
       applies = (PetscBool)(n > 0);
     }
+    if (applies && load->kind == MBC_LOAD_GROUND_ACCELERATION) applies = (PetscBool)(!body->scene->absolute || body->Cin); /* absolute motion: through the input surfaces only */
     if (!applies) continue;
     PetscCall(DMCreateGlobalVector(body->dm, &body->load[body->nloads]));
     PetscCall(BodyAssembleLoad(body, load, body->load[body->nloads]));
@@ -231,8 +239,9 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
   PetscCall(BodyAssembleOperators(body, dynamic, mass));
   body->cM = body->desc.damping + body->desc.rayleigh_alpha;
   body->cK = body->desc.rayleigh_beta;
-  PetscCall(MBCBodyAssembleLoads(body));
   PetscCall(BodySetUpConstraints(body));
+  if (dynamic) PetscCall(MBCBodyAbsorbingSetUp(body)); /* before the loads: the input surfaces' loads use Cin */
+  PetscCall(MBCBodyAssembleLoads(body));
   PetscCall(DMCreateGlobalVector(body->dm, &body->u));
   PetscCall(PetscObjectSetName((PetscObject)body->u, "displacement"));
   PetscCall(VecDuplicate(body->u, &body->du));

@@ -99,6 +99,7 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
     PetscCall(MatDuplicate(body->M, MAT_COPY_VALUES, &A));
     if (aM != 1) PetscCall(MatScale(A, aM));
   }
+  if (aK != 0 && aM != 0 && body->aC != 0 && body->Cb) PetscCall(MatAXPY(A, body->aC, body->Cb, SUBSET_NONZERO_PATTERN)); /* Newmark's a1 Cb: the dashpots */
   if (aK != 0 && body->stab > 0) { /* static stabilisation: a spring stab K_ii on every DOF */
     Vec d;
     PetscCall(MatCreateVecs(A, &d, NULL));
@@ -223,9 +224,13 @@ PetscErrorCode MBCBodyExternalForce(MBCBody body, PetscReal t, PetscBool constan
 
     if (constantOnly && load->time != MBC_TIME_CONSTANT) continue;
     if (load->stage > body->stage) continue;
-    PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
+    if (load->kind == MBC_LOAD_GROUND_ACCELERATION && body->scene->absolute) { /* through the input surfaces, with the record's velocity */
+      PetscReal d, a;
+      PetscCall(MBCSceneRecord(body->scene, load, t, &d, &factor, &a));
+    } else PetscCall(MBCTimeFactor(body->scene, load->time, load->time_function, t, &factor));
     if (factor != 0) PetscCall(VecAXPY(F, factor, body->load[i]));
   }
+  if (body->fhold && !body->held) PetscCall(VecAXPY(F, 1.0, body->fhold)); /* what the released absorbing surfaces carried */
   PetscFunctionReturn(0);
 }
 
@@ -240,11 +245,11 @@ PetscErrorCode MBCBodyPrescribed(MBCBody body, PetscReal t, Vec g)
   PetscCall(VecGetOwnershipRange(g, &rstart, NULL));
   PetscCall(VecGetArray(g, &gv));
   for (PetscInt i = 0; i < body->nbc; i++) {
-    MBCDirichletDesc *d = &body->scene->dirichlet[body->bc_entry[i]];
-    PetscReal         factor;
+    MBCDirichletDesc *d = body->bc_entry[i] >= 0 ? &body->scene->dirichlet[body->bc_entry[i]] : NULL; /* < 0: a held absorbing surface */
+    PetscReal         factor = 0;
 
-    PetscCall(MBCTimeFactor(body->scene, d->time, d->time_function, t, &factor));
-    gv[body->bc_rows[i] - rstart] = d->value * factor;
+    if (d) PetscCall(MBCTimeFactor(body->scene, d->time, d->time_function, t, &factor));
+    gv[body->bc_rows[i] - rstart] = d ? d->value * factor : 0.0;
   }
   PetscCall(VecRestoreArray(g, &gv));
   PetscFunctionReturn(0);

@@ -4,10 +4,11 @@
 #include <mbc/private/h5util.h>
 #include <hdf5.h>
 
-const char *const MBCAnalysisTypes[] = {"static", "dynamic", "MBCAnalysisType", "MBC_ANALYSIS_", NULL};
+const char *const MBCAnalysisTypes[] = {"static", "dynamic", "modal", "MBCAnalysisType", "MBC_ANALYSIS_", NULL};
 const char *const MBCMassTypes[]     = {"consistent", "lumped", "MBCMassType", "MBC_MASS_", NULL};
 const char *const MBCTimeKinds[]     = {"constant", "sudden", "table", "MBCTimeKind", "MBC_TIME_", NULL};
-const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "MBCLoadKind", "MBC_LOAD_", NULL};
+const char *const MBCAbsorbingInputs[] = {"none", "outcrop", "incident", "MBCAbsorbingInput", "MBC_INPUT_", NULL};
+const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration", "MBCLoadKind", "MBC_LOAD_", NULL};
 
 typedef struct {
   const char *file;
@@ -293,6 +294,11 @@ static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
   PetscCall(H5ReadReal(e, "damping", &b->damping, PETSC_TRUE));
   PetscCall(H5ReadReal(e, "rayleigh_alpha", &b->rayleigh_alpha, PETSC_TRUE));
   PetscCall(H5ReadReal(e, "rayleigh_beta", &b->rayleigh_beta, PETSC_TRUE));
+  {
+    PetscInt massless = 0;
+    PetscCall(H5ReadInt(e, "massless", &massless, PETSC_TRUE));
+    b->massless = massless ? PETSC_TRUE : PETSC_FALSE;
+  }
   /* The prep checks these too; a hand-edited file must not reach the assembly. */
   PetscCheck(b->E > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': Young's modulus E = %g must be positive", e->file, b->name, (double)b->E);
   PetscCheck(b->nu > -1.0 && b->nu < 0.5, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s': Poisson's ratio nu = %g must lie in (-1, 0.5)", e->file, b->name, (double)b->nu);
@@ -327,6 +333,15 @@ static PetscErrorCode ReadAnalysis(H5Node *root, MBCScene s)
   PetscCall(H5ReadReal(&e, "final_time", &s->final_time, PETSC_TRUE));
   PetscCall(H5ReadReal(&e, "newmark_beta", &s->newmark_beta, PETSC_TRUE));
   PetscCall(H5ReadReal(&e, "newmark_gamma", &s->newmark_gamma, PETSC_TRUE));
+  s->modal_modes = 6;
+  s->modal_tie   = PETSC_TRUE;
+  if (s->analysis == MBC_ANALYSIS_MODAL) {
+    PetscInt tie = 1;
+    PetscCall(H5ReadInt(&e, "modes", &s->modal_modes, PETSC_TRUE));
+    PetscCall(H5ReadInt(&e, "tie", &tie, PETSC_TRUE));
+    s->modal_tie = tie ? PETSC_TRUE : PETSC_FALSE;
+    PetscCheck(s->modal_modes >= 1 && s->modal_modes <= 10000, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: analysis/modes = %" PetscInt_FMT " must lie in [1, 10000]", s->filename, s->modal_modes);
+  }
   PetscCall(H5NodeClose(&e));
   PetscFunctionReturn(0);
 }
@@ -395,6 +410,7 @@ static PetscErrorCode ReadOutput(H5Node *root, MBCScene s)
     PetscCall(H5ReadString(&e, "fields", NULL, 0, &fields, PETSC_FALSE));
     s->output_displacement = (PetscBool)(strstr(fields, "displacement") != NULL);
     s->output_stress       = (PetscBool)(strstr(fields, "stress") != NULL);
+    s->output_envelope     = (PetscBool)(strstr(fields, "envelope") != NULL);
     PetscCall(PetscFree(fields));
   }
   PetscCall(H5ReadInt(&e, "energy", &energy, PETSC_TRUE));
@@ -526,7 +542,7 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
         PetscCheck(!applies || !PetscIsInfOrNanReal(s->bodies[b].density * g), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s': density %g times the gravity of loads/%" PetscInt_FMT " (%g) overflows", s->filename, s->bodies[b].name, (double)s->bodies[b].density, i, (double)g);
       }
     }
-    if (l->kind == MBC_LOAD_GRAVITY || l->kind == MBC_LOAD_BODY_FORCE) continue;
+    if (l->kind == MBC_LOAD_GRAVITY || l->kind == MBC_LOAD_BODY_FORCE || l->kind == MBC_LOAD_GROUND_ACCELERATION) continue;
     PetscBool same;
     PetscCheck(l->surface_id >= 1 && l->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: loads/%" PetscInt_FMT " has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, i, l->surface_id, s->nsurfaces);
     PetscCall(PetscStrcmp(l->surface, s->surfaces[l->surface_id - 1].name, &same));
@@ -556,7 +572,8 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   PetscCall(H5ReadString(&root, "title", s->title, sizeof(s->title), NULL, PETSC_TRUE));
   PetscCall(ReadAnalysis(&root, s));
   PetscCall(ReadStages(&root, s));
-  s->has_dynamic = (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
+  PetscCheck(s->analysis != MBC_ANALYSIS_MODAL || !s->nstages, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: a modal analysis has no stages", s->filename);
+  s->has_dynamic = (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC || s->analysis == MBC_ANALYSIS_MODAL); /* the bodies need M */
   for (PetscInt i = 0; i < s->nstages; i++)
     if (s->stages[i].analysis == MBC_ANALYSIS_DYNAMIC) s->has_dynamic = PETSC_TRUE;
 
@@ -566,7 +583,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   for (PetscInt i = 0; i < s->nbodies; i++) {
     PetscCall(H5EntryOpen(&list, i, &e));
     PetscCall(ReadBody(&e, &s->bodies[i]));
-    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->filename, s->bodies[i].name);
+    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0 || s->bodies[i].massless, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a %s analysis (or massless)", s->filename, s->bodies[i].name, MBCAnalysisTypes[s->analysis]);
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -650,9 +667,55 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
       PetscCheck(l->axis >= 0 && l->axis < 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: hydrostatic load %s has axis %" PetscInt_FMT ", not 0, 1 or 2", s->filename, e.path, l->axis);
       PetscCheck(l->unit_weight >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: hydrostatic load %s has unit weight %g < 0", s->filename, e.path, (double)l->unit_weight);
     }
+    l->velocity_function = l->displacement_function = -1;
+    if (l->kind == MBC_LOAD_GROUND_ACCELERATION) {
+      PetscCall(H5ReadInt(&e, "velocity_function", &l->velocity_function, PETSC_FALSE));
+      PetscCall(H5ReadInt(&e, "displacement_function", &l->displacement_function, PETSC_FALSE));
+      PetscCheck(l->time == MBC_TIME_TABLE && l->velocity_function >= 0 && l->velocity_function < s->ntables && l->displacement_function >= 0 && l->displacement_function < s->ntables, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: ground acceleration %s needs a table and its velocity and displacement tables (time functions %" PetscInt_FMT ", %" PetscInt_FMT " of %" PetscInt_FMT ")", s->filename, e.path, l->velocity_function, l->displacement_function, s->ntables);
+      PetscCheck(s->has_dynamic, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: ground acceleration %s needs a dynamic analysis", s->filename, e.path);
+      { /* the integrals' tables at the acceleration's rows (MBCSceneRecord interpolates within them) */
+        const MBCTimeTable *A = &s->tables[l->time_function], *V = &s->tables[l->velocity_function], *D = &s->tables[l->displacement_function];
+        PetscBool same = (PetscBool)(V->n == A->n && D->n == A->n && A->n >= 2);
+        for (PetscInt r = 0; same && r < A->n; r++) same = (PetscBool)(V->t[r] == A->t[r] && D->t[r] == A->t[r]);
+        PetscCheck(same, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: ground acceleration %s: its velocity and displacement tables must have the acceleration's rows (at least 2)", s->filename, e.path);
+      }
+    }
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "added_mass", &list, &s->naddedmass));
+  PetscCall(PetscCalloc1(s->naddedmass, &s->addedmass));
+  for (PetscInt i = 0; i < s->naddedmass; i++) {
+    MBCAddedMassDesc *m = &s->addedmass[i];
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadString(&e, "surface", m->surface, MBC_NAME_LEN, NULL, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "surface_id", &m->surface_id, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "density", &m->density, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "level", &m->level, PETSC_FALSE));
+    PetscCall(H5ReadReal(&e, "bottom", &m->bottom, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "axis", &m->axis, PETSC_FALSE));
+    PetscCheck(m->axis >= 0 && m->axis < 3 && m->density > 0 && m->level > m->bottom, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: added mass %s: axis %" PetscInt_FMT " (0, 1, 2), density %g (> 0), level %g above bottom %g needed", s->filename, e.path, m->axis, (double)m->density, (double)m->level, (double)m->bottom);
+    PetscCheck(m->surface_id >= 1 && m->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: added mass %s has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, e.path, m->surface_id, s->nsurfaces);
+    PetscCheck(s->has_dynamic, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: added mass %s needs a dynamic or modal analysis", s->filename, e.path);
+    PetscCall(H5NodeClose(&e));
+  }
+  if (list.obj >= 0) PetscCall(H5NodeClose(&list));
+  PetscCall(ReadList(&root, "absorbing", &list, &s->nabsorbing));
+  PetscCall(PetscCalloc1(s->nabsorbing, &s->absorbing));
+  for (PetscInt i = 0; i < s->nabsorbing; i++) {
+    MBCAbsorbingDesc *a = &s->absorbing[i];
+    PetscInt          v = MBC_INPUT_NONE;
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadString(&e, "surface", a->surface, MBC_NAME_LEN, NULL, PETSC_FALSE));
+    PetscCall(H5ReadInt(&e, "surface_id", &a->surface_id, PETSC_FALSE));
+    PetscCall(H5ReadEnum(&e, "input", MBCAbsorbingInputs, &v, PETSC_TRUE));
+    a->input = (MBCAbsorbingInput)v;
+    if (a->input != MBC_INPUT_NONE) s->absolute = PETSC_TRUE;
+    PetscCheck(a->surface_id >= 1 && a->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: absorbing boundary %s has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, e.path, a->surface_id, s->nsurfaces);
+    PetscCall(H5NodeClose(&e));
+  }
+  if (list.obj >= 0) PetscCall(H5NodeClose(&list));
 
   PetscCall(ReadOutput(&root, s));
   PetscCall(H5NodeClose(&root));
@@ -709,6 +772,8 @@ PetscErrorCode MBCSceneCreateEmpty(MPI_Comm comm, MBCScene *scene)
   (*scene)->newmark_beta  = 0.25;
   (*scene)->newmark_gamma = 0.5;
   (*scene)->output_every  = 1;
+  (*scene)->modal_modes   = 6;
+  (*scene)->modal_tie     = PETSC_TRUE;
   PetscCall(PetscStrncpy((*scene)->filename, "scene.h5", sizeof((*scene)->filename)));
   PetscFunctionReturn(0);
 }
@@ -738,6 +803,8 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   PetscCall(PetscFree(s->loads));
   PetscCall(PetscFree(s->points));
   PetscCall(PetscFree(s->stages));
+  PetscCall(PetscFree(s->addedmass));
+  PetscCall(PetscFree(s->absorbing));
   PetscCall(PetscHeaderDestroy(scene));
   PetscFunctionReturn(0);
 }
@@ -815,9 +882,75 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
     MBCLoadDesc *l = &s->loads[i];
     if (l->kind == MBC_LOAD_HYDROSTATIC) PetscCall(PetscViewerASCIIPrintf(viewer, "load hydrostatic on %s: unit weight %g, level %c = %g (%s)\n", l->surface, (double)l->unit_weight, "xyz"[l->axis], (double)l->level, MBCTimeKinds[l->time]));
     else PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
+    if (l->kind == MBC_LOAD_GROUND_ACCELERATION) PetscCall(PetscViewerASCIIPrintf(viewer, "  ground acceleration along (%g, %g, %g): %" PetscInt_FMT " rows from t = %g to %g\n", (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], s->tables[l->time_function].n, (double)s->tables[l->time_function].t[0], (double)s->tables[l->time_function].t[s->tables[l->time_function].n - 1]));
     if (l->stage) PetscCall(PetscViewerASCIIPrintf(viewer, "  from stage %" PetscInt_FMT " (%s)\n", l->stage, s->stages[l->stage].name));
   }
+  for (PetscInt i = 0; i < s->naddedmass; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "added mass (Westergaard) on %s: water density %g, level %c = %g, floor %g\n", s->addedmass[i].surface, (double)s->addedmass[i].density, "xyz"[s->addedmass[i].axis], (double)s->addedmass[i].level, (double)s->addedmass[i].bottom));
+  for (PetscInt i = 0; i < s->nabsorbing; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "absorbing boundary (Lysmer-Kuhlemeyer dashpots) on %s, input %s\n", s->absorbing[i].surface, MBCAbsorbingInputs[s->absorbing[i].input]));
   PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+/* A ground acceleration's record at time t: the acceleration linear between its rows, the
+   velocity and displacement its exact integrals (quadratic and cubic between the rows, from the
+   prep's tables of their values at the rows); before the first row at rest, after the last one
+   the acceleration held (0: the prep pads a record with zeros) and integrated on. */
+PetscErrorCode MBCSceneRecord(MBCScene s, MBCLoadDesc *l, PetscReal t, PetscReal *d, PetscReal *v, PetscReal *a)
+{
+  const MBCTimeTable *A = &s->tables[l->time_function], *V = &s->tables[l->velocity_function], *D = &s->tables[l->displacement_function];
+  PetscInt            i;
+  PetscReal           tau, h, slope;
+
+  PetscFunctionBegin;
+  PetscCheck(V->n == A->n && D->n == A->n, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: a ground acceleration's velocity and displacement tables must have its %" PetscInt_FMT " rows", s->filename, A->n);
+  if (t <= A->t[0]) {
+    *d = D->f[0], *v = V->f[0], *a = t < A->t[0] ? 0.0 : A->f[0];
+    PetscFunctionReturn(0);
+  }
+  if (t >= A->t[A->n - 1]) {
+    tau = t - A->t[A->n - 1];
+    *a  = A->f[A->n - 1];
+    *v  = V->f[A->n - 1] + *a * tau;
+    *d  = D->f[A->n - 1] + V->f[A->n - 1] * tau + 0.5 * *a * tau * tau;
+    PetscFunctionReturn(0);
+  }
+  { /* the row before t, by bisection (records have thousands of rows) */
+    PetscInt lo = 0, hi = A->n - 1;
+    while (hi - lo > 1) {
+      const PetscInt mid = (lo + hi) / 2;
+      if (A->t[mid] <= t) lo = mid;
+      else hi = mid;
+    }
+    i = lo;
+  }
+  tau   = t - A->t[i];
+  h     = A->t[i + 1] - A->t[i];
+  slope = (A->f[i + 1] - A->f[i]) / h;
+  *a    = A->f[i] + slope * tau;
+  *v    = V->f[i] + A->f[i] * tau + 0.5 * slope * tau * tau;
+  *d    = D->f[i] + V->f[i] * tau + 0.5 * A->f[i] * tau * tau + slope * tau * tau * tau / 6;
+  PetscFunctionReturn(0);
+}
+
+/* The base's displacement, velocity and acceleration at time t in stage `stage`: the sum of the
+   ground accelerations acting by then, each along its vector (0 in a scene in absolute motion,
+   whose bodies' own motion is absolute). */
+PetscErrorCode MBCSceneGroundMotion(MBCScene s, PetscInt stage, PetscReal t, PetscReal d[3], PetscReal v[3], PetscReal a[3])
+{
+  PetscFunctionBegin;
+  for (PetscInt c = 0; c < 3; c++) d[c] = v[c] = a[c] = 0;
+  if (s->absolute) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < s->nloads; i++) {
+    MBCLoadDesc *l = &s->loads[i];
+    PetscReal    f[3];
+    if (l->kind != MBC_LOAD_GROUND_ACCELERATION || l->stage > stage) continue;
+    PetscCall(MBCSceneRecord(s, l, t, &f[0], &f[1], &f[2]));
+    for (PetscInt c = 0; c < 3; c++) {
+      d[c] += l->vector[c] * f[0];
+      v[c] += l->vector[c] * f[1];
+      a[c] += l->vector[c] * f[2];
+    }
+  }
   PetscFunctionReturn(0);
 }
 

@@ -114,7 +114,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   s->mass     = (MBCMassType)mass;
   /* the solver's own settings, handed to its bodies: the scene stays as its file says, so other
      solvers on it see the same */
-  s->has_dynamic = s->scene->nstages ? s->scene->has_dynamic : (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC);
+  s->has_dynamic = s->scene->nstages ? s->scene->has_dynamic : (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC || s->analysis == MBC_ANALYSIS_MODAL); /* modal: M too */
+  PetscCall(MBCSolverModalSetFromOptions(s));
   PetscCheck(s->dt > 0 && PetscIsNormalReal(s->dt), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Time step -mbc_dt %g must be positive and finite", (double)s->dt);
   PetscCheck(s->final_time >= s->dt * (1 - 1e-12) && PetscIsNormalReal(s->final_time), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Final time -mbc_final_time %g must be finite and at least one step (%g)", (double)s->final_time, (double)s->dt);
   /* checked before the cast to an integer below (undefined beyond its range); the output
@@ -123,7 +124,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
   if (s->analysis == MBC_ANALYSIS_DYNAMIC && !s->scene->nstages) { /* the stages are checked as read */
     PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);
-    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0 || s->scene->bodies[b].massless, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
   PetscCall(MBCSolverStagesSetUp(s, (PetscBool)(set[0] || set[1] || set[2] || set[3] || set[4])));
   if (s->dt_min < 0) s->dt_min = s->dt / 1024;
@@ -448,6 +449,7 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
+    PetscCall(MBCBodyAbsorbingHold(body)); /* a truncated foundation's support in a static state */
     PetscCall(MBCBodyRigidModes(body)); /* the free rigid modes, exact (FETI), unless a spring is asked for */
     body->stab = (s->static_stabilize > 0 && body->nrigid) ? s->static_stabilize : 0.0;
     if (body->stab > 0) {
@@ -621,8 +623,6 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode BodyAddDamping(MBCBody, PetscReal, Vec, Vec);
-
 /* The acceleration the forces at time t give the body in its state: M a = F(t) - K u - C v +
    fc on the free DOFs (fc: the contact force H lambda, or NULL); body->fold = F(t). */
 static PetscErrorCode BodyAcceleration(MBCBody body, PetscReal t, Vec fc)
@@ -636,10 +636,11 @@ static PetscErrorCode BodyAcceleration(MBCBody body, PetscReal t, Vec fc)
   PetscCall(VecCopy(body->fold, body->rhs));
   PetscCall(MatMult(body->K, body->u, body->work));
   PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-  if (body->cM != 0 || body->cK != 0) PetscCall(BodyAddDamping(body, -1.0, body->v, body->rhs));
+  if (MBCBodyDamped(body)) PetscCall(MBCBodyAddDamping(body, -1.0, body->v, body->rhs));
   if (fc) PetscCall(VecAXPY(body->rhs, 1.0, fc));
   PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rhs));
   PetscCall(VecZeroEntries(body->a));
+  if (body->desc.massless) PetscFunctionReturn(0); /* no inertia: its Newmark acceleration starts at 0 */
   PetscCall(VecNorm(body->rhs, NORM_INFINITY, &rnorm));
   if (rnorm > 0) {
     PetscCall(MBCBodyFactor(body, 0.0, 1.0, &ksp, &A, "mass"));
@@ -662,6 +663,7 @@ static PetscErrorCode BodyDynamicInitialState(MBCBody body)
   PetscCall(VecZeroEntries(body->u));
   PetscCall(VecZeroEntries(body->v));
   PetscCall(VecZeroEntries(body->a));
+  PetscCall(MBCBodyAbsorbingHold(body));
   PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_TRUE, body->rhs));
   PetscCall(MBCBodyPrescribed(body, 0.0, body->g));
   PetscCall(VecNorm(body->rhs, NORM_INFINITY, &fnorm));
@@ -672,24 +674,10 @@ static PetscErrorCode BodyDynamicInitialState(MBCBody body)
     PetscCall(KSPDestroy(&ksp));
     PetscCall(MatDestroy(&A));
   }
+  PetscCall(MBCBodyAbsorbingRelease(body, 0.0)); /* the motion from here on through the dashpots */
   PetscCall(BodyAcceleration(body, 0.0, NULL));
   PetscCall(VecDot(body->fold, body->u, &body->wext)); /* so that total = T + U - F.u for constant F */
   body->wdamp = 0;
-  PetscFunctionReturn(0);
-}
-
-/* x += cM M y + cK K y (the damping matrix is never formed). */
-static PetscErrorCode BodyAddDamping(MBCBody body, PetscReal scale, Vec y, Vec x)
-{
-  PetscFunctionBegin;
-  if (body->cM != 0) {
-    PetscCall(MatMult(body->M, y, body->work));
-    PetscCall(VecAXPY(x, scale * body->cM, body->work));
-  }
-  if (body->cK != 0) {
-    PetscCall(MatMult(body->K, y, body->work));
-    PetscCall(VecAXPY(x, scale * body->cK, body->work));
-  }
   PetscFunctionReturn(0);
 }
 
@@ -712,7 +700,9 @@ static PetscErrorCode BodyUseLevel(MBCBody body, PetscInt level, NewmarkCoeffici
   PetscFunctionBegin;
   body->aK = 1 + c.a1 * body->cK;
   body->aM = c.a0 + c.a1 * body->cM;
+  body->aC = c.a1; /* the dashpots, if any */
   if (!body->kspcut[level]) PetscCall(MBCBodyFactor(body, body->aK, body->aM, &body->kspcut[level], &body->Acut[level], level ? "Newmark effective stiffness (cut step)" : "Newmark effective stiffness"));
+  body->aC = 0;
   PetscCall(PetscObjectReference((PetscObject)body->kspcut[level]));
   PetscCall(PetscObjectReference((PetscObject)body->Acut[level]));
   PetscCall(KSPDestroy(&body->ksp));
@@ -786,6 +776,7 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
     PetscCall(KSPDestroy(&body->ksp));
     PetscCall(MatDestroy(&body->A));
     if (after_static) PetscCall(VecZeroEntries(body->v));
+    PetscCall(MBCBodyAbsorbingRelease(body, s->time));
     PetscCall(BodyUseLevel(body, 0, Newmark(dt, beta, gamma)));
   }
   s->level = s->start_level = s->good_steps = 0;
@@ -873,10 +864,10 @@ static PetscErrorCode SolverDynamicIncrement(MBCSolver s, NewmarkCoefficients c)
     PetscCall(VecAXPY(body->work2, a3, body->a));
     PetscCall(MatMult(body->M, body->work2, body->work));
     PetscCall(VecAXPY(body->rhs, 1.0, body->work));
-    if (body->cM != 0 || body->cK != 0) {
+    if (MBCBodyDamped(body)) {
       PetscCall(VecAXPBY(body->work2, a4, 0.0, body->v));
       PetscCall(VecAXPY(body->work2, a5, body->a));
-      PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
+      PetscCall(MBCBodyAddDamping(body, 1.0, body->work2, body->rhs));
     }
     PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
     PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
@@ -905,10 +896,10 @@ static PetscErrorCode SolverDynamicIncrement(MBCSolver s, NewmarkCoefficients c)
     PetscCall(VecCopy(body->work2, body->a));
     PetscCall(VecAXPY(body->u, 1.0, body->du));
     /* damping dissipation with the mid-step velocity (v_n + v_n+1)/2 = du/dt for gamma = 1/2 */
-    if (body->cM != 0 || body->cK != 0) {
+    if (MBCBodyDamped(body)) {
       PetscCall(VecAXPBY(body->work2, 1.0 / h, 0.0, body->du));
       PetscCall(VecZeroEntries(body->rhs));
-      PetscCall(BodyAddDamping(body, 1.0, body->work2, body->rhs));
+      PetscCall(MBCBodyAddDamping(body, 1.0, body->work2, body->rhs));
       PetscCall(VecDot(body->work2, body->rhs, &dv));
       body->wdamp += h * PetscRealPart(dv);
     }
@@ -987,6 +978,13 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       if (s->contact->view) PetscCall(MBCContactView(s->contact, PETSC_VIEWER_STDOUT_(s->comm)));
     }
     if (s->search_only) {
+      s->stage = 2;
+      PetscFunctionReturn(0);
+    }
+    if (s->analysis == MBC_ANALYSIS_MODAL) { /* every mode in one call, its own output: solvermodal.c */
+      PetscCall(MBCSolverStageLog(s, 0));
+      PetscCall(MBCSolverModalSolve(s));
+      PetscCall(MBCSolverStageLog(s, -1));
       s->stage = 2;
       PetscFunctionReturn(0);
     }

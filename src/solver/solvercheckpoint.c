@@ -245,6 +245,7 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
   PetscBool   has;
 
   PetscFunctionBegin;
+  PetscCheck(!s->scene->nabsorbing, s->comm, PETSC_ERR_SUP, "Restart file -mbc_restart %s: a scene with absorbing boundaries (%s) cannot be restarted yet (the released supports' reactions are not in the checkpoint); run it from the start", file, s->scene->filename);
   PetscCall(PetscTestFile(file, 'r', &has));
   PetscCheck(has, s->comm, PETSC_ERR_FILE_OPEN, "Restart file -mbc_restart %s does not exist or cannot be read", file);
   PetscCall(PetscViewerHDF5Open(s->comm, file, FILE_MODE_READ, &v));

@@ -104,6 +104,14 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
+/* A dynamic run's points also report their absolute displacement, velocity and acceleration:
+   the bodies' own (relative to the base in the relative-motion form) plus the ground's (0 in a
+   scene in absolute motion). */
+static PetscBool SolverPointsAbsolute(MBCSolver s)
+{
+  return (PetscBool)(s->has_dynamic && s->analysis != MBC_ANALYSIS_MODAL);
+}
+
 /* The CSV histories are flushed after every step, so that a killed or failed run leaves whole
    lines; a write error (full disk, file-size limit) is found on rank 0 and raised on every rank
    (collective), so that the run stops cleanly. */
@@ -186,7 +194,7 @@ static PetscErrorCode SolverOutputCommit(MBCSolver s)
 PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
 {
   MBCScene    scene  = s->scene;
-  PetscBool   fields = (PetscBool)(scene->output_displacement || scene->output_stress);
+  PetscBool   fields = (PetscBool)(scene->output_displacement || scene->output_stress || scene->output_envelope);
   PetscMPIInt rank;
   char        file[PETSC_MAX_PATH_LEN];
 
@@ -219,6 +227,10 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
       PetscCall(MBCFileOpenWrite(file, &s->points_csv));
       fprintf(s->points_csv, "t");
       for (PetscInt p = 0; p < scene->npoints; p++) fprintf(s->points_csv, ",%s_ux,%s_uy,%s_uz", scene->points[p].name, scene->points[p].name, scene->points[p].name);
+      if (SolverPointsAbsolute(s)) /* the motion engineers report: relative plus the ground's */
+        for (PetscInt p = 0; p < scene->npoints; p++)
+          for (PetscInt q = 0; q < 3; q++)
+            for (PetscInt c = 0; c < 3; c++) fprintf(s->points_csv, ",%s_abs_%c%c", scene->points[p].name, "uva"[q], "xyz"[c]);
       fprintf(s->points_csv, "\n");
     }
   }
@@ -235,26 +247,40 @@ PetscErrorCode MBCSolverOutputOpen(MBCSolver s)
 
 static PetscErrorCode SolverOutputPoints(MBCSolver s)
 {
-  MBCScene   scene = s->scene;
-  PetscReal *val;
+  MBCScene        scene = s->scene;
+  const PetscBool absolute = SolverPointsAbsolute(s);
+  const PetscInt  nv = absolute ? 12 : 3; /* u; absolute u, v, a */
+  PetscReal      *val, g[9];
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1(3 * scene->npoints, &val));
+  PetscCall(PetscCalloc1(nv * scene->npoints, &val));
+  if (absolute) PetscCall(MBCSceneGroundMotion(scene, s->istage, s->time, &g[0], &g[3], &g[6]));
   for (PetscInt p = 0; p < scene->npoints; p++) {
-    const PetscScalar *u;
-    PetscInt           rstart;
-    MBCBody            body;
+    Vec      vecs[3];
+    PetscInt rstart;
+    MBCBody  body;
     if (s->points[p].row < 0) continue;
     body = s->bodies[s->points[p].body];
+    vecs[0] = body->u, vecs[1] = body->v, vecs[2] = body->a;
     PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
-    PetscCall(VecGetArrayRead(body->u, &u));
-    for (PetscInt c = 0; c < 3; c++) val[3 * p + c] = PetscRealPart(u[s->points[p].row - rstart + c]);
-    PetscCall(VecRestoreArrayRead(body->u, &u));
+    for (PetscInt q = 0; q < (absolute ? 3 : 1); q++) {
+      const PetscScalar *x;
+      PetscCall(VecGetArrayRead(vecs[q], &x));
+      for (PetscInt c = 0; c < 3; c++) {
+        const PetscReal xc = PetscRealPart(x[s->points[p].row - rstart + c]);
+        if (!q) val[nv * p + c] = xc;
+        if (absolute) val[nv * p + 3 + 3 * q + c] = xc + g[3 * q + c];
+      }
+      PetscCall(VecRestoreArrayRead(vecs[q], &x));
+    }
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, val, 3 * (PetscMPIInt)scene->npoints, MPIU_REAL, MPI_SUM, s->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, val, nv * (PetscMPIInt)scene->npoints, MPIU_REAL, MPI_SUM, s->comm));
   if (s->points_csv) {
     fprintf(s->points_csv, "%.17g", (double)s->time);
-    for (PetscInt i = 0; i < 3 * scene->npoints; i++) fprintf(s->points_csv, ",%.17g", (double)val[i]);
+    for (PetscInt p = 0; p < scene->npoints; p++)
+      for (PetscInt i = 0; i < 3; i++) fprintf(s->points_csv, ",%.17g", (double)val[nv * p + i]);
+    for (PetscInt p = 0; absolute && p < scene->npoints; p++)
+      for (PetscInt i = 3; i < 12; i++) fprintf(s->points_csv, ",%.17g", (double)val[nv * p + i]);
     fprintf(s->points_csv, "\n");
   }
   PetscCall(PetscFree(val));
@@ -264,7 +290,7 @@ static PetscErrorCode SolverOutputPoints(MBCSolver s)
 PetscErrorCode MBCSolverOutputStep(MBCSolver s)
 {
   MBCScene  scene = s->scene;
-  PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress);
+  PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress || scene->output_envelope);
   const MBCSolverStage *st = &s->stages[s->istage];
   PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == st->step0 + st->nsteps)); /* and each stage's end */
   int       sig;
@@ -274,6 +300,9 @@ PetscErrorCode MBCSolverOutputStep(MBCSolver s)
   if (sig && (fields || s->contact)) fieldstep = PETSC_TRUE;
   PetscCall(PetscLogEventBegin(MBC_Output, 0, 0, 0, 0));
   if (scene->npoints) PetscCall(SolverOutputPoints(s));
+  if (scene->output_envelope && s->analysis != MBC_ANALYSIS_MODAL)
+    for (PetscInt b = 0; b < s->nbodies; b++)
+      if (s->bodies[b]) PetscCall(MBCBodyEnvelopeUpdate(s->bodies[b], s->time));
   if (scene->output_energy && s->analysis == MBC_ANALYSIS_DYNAMIC) {
     PetscReal e[MBC_NENERGY];
     PetscCall(MBCSolverEnergy(s, e));

@@ -255,16 +255,46 @@ static PetscErrorCode BodyFields(MBCScene scene, MBCBody body, MBCBodyOutput *o)
   PetscFunctionReturn(0);
 }
 
+/* The envelope of the bodies this rank is in (MBCBodyEnvelopeUpdate), in its cell rows: the
+   largest principal stress in env[b][0 .. ncrows), its time in env[b][ncrows .. 2 ncrows). */
+static PetscErrorCode BodyEnvelope(MBCBody body, MBCBodyOutput *o, PetscReal **env)
+{
+  const PetscScalar *ea;
+  PetscReal         *rows;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(2 * o->ncrows, env));
+  PetscCall(PetscMalloc1(6 * o->ncrows, &rows));
+  if (!body->envelope) PetscCall(MBCBodyEnvelopeUpdate(body, 0.0)); /* not stepped yet */
+  PetscCall(VecGetArrayRead(body->envelope, &ea));
+  for (PetscInt i = 0; i < o->ncown; i++)
+    for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(ea[o->crow[i] + c]);
+  PetscCall(VecRestoreArrayRead(body->envelope, &ea));
+  PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, rows, MPI_REPLACE));
+  PetscCall(PetscSFReduceEnd(o->csf, MPIU_REAL, o->leaf, rows, MPI_REPLACE));
+  for (PetscInt i = 0; i < o->ncrows; i++) {
+    (*env)[i]             = rows[6 * i];
+    (*env)[o->ncrows + i] = rows[6 * i + 1];
+  }
+  PetscCall(PetscFree(rows));
+  PetscFunctionReturn(0);
+}
+
 /* /bodies/<name>/step_<k>/displacement and stress of output k = s->noutputs: every rank computes
    its bodies' rows, then all write body after body. Collective. */
 PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver s)
 {
-  MBCScene scene = s->scene;
-  int      step  = (int)s->step;
+  MBCScene   scene = s->scene;
+  int        step  = (int)s->step;
+  PetscReal **env  = NULL;
 
   PetscFunctionBegin;
+  if (scene->output_envelope) PetscCall(PetscCalloc1(s->nbodies, &env));
   for (PetscInt b = 0; b < s->nbodies; b++)
-    if (s->bodies[b]) PetscCall(BodyFields(scene, s->bodies[b], &s->bout[b]));
+    if (s->bodies[b]) {
+      PetscCall(BodyFields(scene, s->bodies[b], &s->bout[b]));
+      if (env) PetscCall(BodyEnvelope(s->bodies[b], &s->bout[b], &env[b]));
+    }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBodyOutput *o = &s->bout[b];
     char           path[MBC_NAME_LEN + 64];
@@ -276,8 +306,14 @@ PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver s)
     PetscCall(MBCH5WriteAttribute(g, "step", H5T_NATIVE_INT, 1, &step));
     if (scene->output_displacement) PetscCall(MBCH5WriteRows(g, "displacement", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, o->root));
     if (scene->output_stress) PetscCall(MBCH5WriteRows(g, "stress", H5T_NATIVE_DOUBLE, o->nc, 6, o->cstart, o->ncrows, o->root ? o->root + 3 * o->nvrows : NULL));
+    if (env) {
+      PetscCall(MBCH5WriteRows(g, "max_principal_stress", H5T_NATIVE_DOUBLE, o->nc, 1, o->cstart, o->ncrows, env[b]));
+      PetscCall(MBCH5WriteRows(g, "max_principal_stress_time", H5T_NATIVE_DOUBLE, o->nc, 1, o->cstart, o->ncrows, env[b] ? env[b] + o->ncrows : NULL));
+      PetscCall(PetscFree(env[b]));
+    }
     PetscCall(MBCH5GroupClose(&g));
   }
+  PetscCall(PetscFree(env));
   PetscFunctionReturn(0);
 }
 
@@ -311,6 +347,8 @@ PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver s, FILE *fp, PetscInt k)
     fprintf(fp, "          <DataItem Dimensions=\"%" PetscInt_FMT " %" PetscInt_FMT "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">%s:/bodies/%s/cells</DataItem>\n        </Topology>\n", o->nc, o->nvpc, h5, name);
     fprintf(fp, "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/vertices</DataItem>\n        </Geometry>\n", o->nv, h5, name);
     if (scene->output_displacement) fprintf(fp, "        <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/step_%" PetscInt_FMT "/displacement</DataItem>\n        </Attribute>\n", o->nv, h5, name, k);
+    if (scene->output_envelope)
+      for (PetscInt i = 0; i < 2; i++) fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Cell\">\n          <DataItem Dimensions=\"%" PetscInt_FMT "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/step_%" PetscInt_FMT "/%s</DataItem>\n        </Attribute>\n", i ? "max_principal_stress_time" : "max_principal_stress", o->nc, h5, name, k, i ? "max_principal_stress_time" : "max_principal_stress");
     if (scene->output_stress) fprintf(fp, "        <Attribute Name=\"stress\" AttributeType=\"Tensor6\" Center=\"Cell\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 6\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/step_%" PetscInt_FMT "/stress</DataItem>\n        </Attribute>\n", o->nc, h5, name, k);
     fprintf(fp, "      </Grid>\n");
   }

@@ -34,7 +34,7 @@ PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver s)
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-  if (!s->scene->ndirichlet || rank) PetscFunctionReturn(0);
+  if (!s->scene->ndirichlet || rank || s->analysis == MBC_ANALYSIS_MODAL) PetscFunctionReturn(0); /* a mode shape has no reactions */
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_reactions.csv", s->output));
   PetscCall(MBCFileOpenWrite(file, &s->reactions_csv));
   fprintf(s->reactions_csv, "t,surface,fx,fy,fz\n");
@@ -120,7 +120,7 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
   PetscReal *sum, *lam = NULL;
 
   PetscFunctionBegin;
-  if (!scene->ndirichlet) PetscFunctionReturn(0);
+  if (!scene->ndirichlet || s->analysis == MBC_ANALYSIS_MODAL) PetscFunctionReturn(0);
   PetscCall(PetscMalloc1(scene->ndirichlet, &first));
   PetscCall(PetscCalloc1(3 * scene->ndirichlet, &sum));
   PetscCall(ReactionSurfaces(scene, first, &nsurf));
@@ -143,6 +143,7 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
     PetscCall(VecGetArrayRead(r, &rv));
     for (PetscInt i = 0; i < body->nbc; i++) {
       const PetscInt d = body->bc_entry[i];
+      if (d < 0) continue; /* an absorbing surface held in a static state (bodyabsorbing.c) */
       sum[3 * first[d] + scene->dirichlet[d].component] += PetscRealPart(rv[body->bc_rows[i] - rstart]);
     }
     PetscCall(VecRestoreArrayRead(r, &rv));

@@ -22,7 +22,7 @@ PetscErrorCode MBCSolverStagesSetUp(MBCSolver s, PetscBool overridden)
     s->stages[0].dt       = s->dt;
     s->stages[0].beta     = s->beta;
     s->stages[0].gamma    = s->gamma;
-    s->stages[0].nsteps   = (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9);
+    s->stages[0].nsteps   = s->analysis == MBC_ANALYSIS_MODAL ? s->modal_nev : (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9); /* modal: an output per mode */
   } else {
     PetscCheck(!overridden, s->comm, PETSC_ERR_ARG_INCOMP, "Scene file %s has %" PetscInt_FMT " analysis stages, each with its analysis settings: -mbc_analysis, -mbc_dt and -mbc_newmark_* do not apply (change the stages in the scene; -mbc_final_time ends the run early)", scene->filename, scene->nstages);
     PetscCall(PetscCalloc1(scene->nstages, &s->stages));

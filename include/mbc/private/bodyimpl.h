@@ -39,7 +39,15 @@ struct _n_MBCBody {
   PetscFE fe;
   PetscReal lambda, mu;   /* Lamé constants */
 
-  Mat K, M;               /* unconstrained stiffness and mass (lumped: diagonal) */
+  Mat K, M;               /* unconstrained stiffness and mass (lumped: diagonal), M with the reservoir's added mass */
+  Mat Cb;                 /* Lysmer-Kuhlemeyer dashpots on the absorbing surfaces (nodal 3 x 3 blocks; NULL: none), part of C */
+  Mat Cin;                /* their input weights: 2 (incident) or 1 (outcrop) times the dashpots of the input surfaces (NULL: none) */
+  PetscReal aC;           /* coefficient of Cb in A: Newmark's a1 while the Newmark operator is factored (BodyUseLevel), else 0 */
+  PetscBool held;         /* the absorbing surfaces are held (static states): bc_rows is the held set */
+  PetscInt  nbc_free, *bc_rows_free, *bc_entry_free; /* the Dirichlet set alone (dynamic) */
+  PetscInt  nbc_held, *bc_rows_held, *bc_entry_held; /* and with the absorbing surfaces' rows (entry -1: value 0) */
+  Vec       fhold;        /* the reactions the absorbing surfaces carried when released: a constant load */
+  Vec envelope;           /* per cell (stress layout): the largest principal stress so far [0] and its time [1] (output field envelope) */
   PetscReal cM, cK;       /* damping C = cM M + cK K (never formed) */
   Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
   KSP ksp;
@@ -95,3 +103,14 @@ PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], Petsc
 PETSC_INTERN PetscErrorCode MBCBodyRigidModes(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyRigidModesDestroy(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyZeroHeldRows(MBCBody, Vec, Mat);
+/* seismic loads and boundaries (bodysurface.c, bodyaddedmass.c, bodyabsorbing.c) */
+typedef PetscErrorCode (*MBCFaceWeights)(PetscInt, const PetscReal[4][3], void *, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCBodySurfaceBlocks(MBCBody, PetscInt, MBCFaceWeights, void *, PetscReal, PetscReal, Mat);
+PETSC_INTERN PetscErrorCode MBCBodyAddedMass(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAbsorbingSetUp(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAbsorbingHold(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAbsorbingRelease(MBCBody, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyGroundLoad(MBCBody, MBCLoadDesc *, Vec, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyAddDamping(MBCBody, PetscReal, Vec, Vec);
+PETSC_INTERN PetscBool      MBCBodyDamped(MBCBody);

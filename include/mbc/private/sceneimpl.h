@@ -29,7 +29,10 @@ typedef enum {
   MBC_LOAD_BODY_FORCE,
   MBC_LOAD_PRESSURE,
   MBC_LOAD_TRACTION,
-  MBC_LOAD_HYDROSTATIC /* p = unit_weight (level - x_axis) below the level, against the outward normal */
+  MBC_LOAD_HYDROSTATIC, /* p = unit_weight (level - x_axis) below the level, against the outward normal */
+  MBC_LOAD_GROUND_ACCELERATION /* the base's acceleration a_g(t) = vector f(t): -(M + M_added) a_g on a body
+                                  in relative motion; 2 rho c v_incident(t) on the absorbing input surfaces
+                                  of a scene in absolute motion (bodyabsorbing.c) */
 } MBCLoadKind;
 PETSC_INTERN const char *const MBCLoadKinds[];
 
@@ -43,6 +46,7 @@ typedef struct {
   char      element[16]; /* hex bodies: "hex8" | "hex8i" | "hex8b" | "" (the solver's default) */
   PetscInt  num_cells, num_vertices;
   PetscReal E, nu, density, damping, rayleigh_alpha, rayleigh_beta;
+  PetscBool massless; /* no inertia in a dynamic analysis (a massless foundation) */
 } MBCBodyDesc;
 
 typedef struct {
@@ -75,7 +79,29 @@ typedef struct {
   char       *bodies; /* body names joined by ",", "" for all */
   MBCTimeKind time;
   PetscInt    stage;  /* acts from this analysis stage on (0: from the start) */
+  PetscInt    velocity_function, displacement_function; /* ground acceleration: the record's v and d tables */
 } MBCLoadDesc;
+
+/* Westergaard's added mass of a reservoir on a wetted surface (bodyaddedmass.c). */
+typedef struct {
+  char      surface[MBC_NAME_LEN];
+  PetscInt  surface_id, axis;      /* axis: 0, 1, 2 = x, y, z, up */
+  PetscReal density, level, bottom; /* the water's density, the free surface and the floor along axis */
+} MBCAddedMassDesc;
+
+typedef enum {
+  MBC_INPUT_NONE,     /* dashpots only */
+  MBC_INPUT_OUTCROP,  /* the record is the outcrop motion: the incident wave is half of it */
+  MBC_INPUT_INCIDENT  /* the record is the upgoing incident wave at this boundary */
+} MBCAbsorbingInput;
+PETSC_INTERN const char *const MBCAbsorbingInputs[];
+
+/* Lysmer-Kuhlemeyer dashpots on a truncated boundary (bodyabsorbing.c). */
+typedef struct {
+  char              surface[MBC_NAME_LEN];
+  PetscInt          surface_id;
+  MBCAbsorbingInput input;
+} MBCAbsorbingDesc;
 
 /* One analysis stage (docs/scene.md, stages): from start_time, where the stage before ends, to
    final_time; it starts from the state the stage before left. */
@@ -114,12 +140,21 @@ struct _n_MBCScene {
   MBCDirichletDesc *dirichlet;
   MBCLoadDesc      *loads;
   MBCPointDesc     *points;
+  PetscInt          naddedmass, nabsorbing;
+  MBCAddedMassDesc *addedmass;
+  MBCAbsorbingDesc *absorbing;
+  PetscBool         absolute;  /* some absorbing surface takes the ground motion in: every body moves in absolute motion */
+  PetscInt          modal_modes; /* modal analysis: how many modes */
+  PetscBool         modal_tie;   /* and whether the couples are tied */
 
   PetscInt  output_every;
   PetscBool output_displacement, output_stress, output_energy;
+  PetscBool output_envelope; /* per cell the largest principal stress over time and its time */
 };
 
 PETSC_EXTERN PetscErrorCode MBCTimeFactor(MBCScene, MBCTimeKind, PetscInt, PetscReal, PetscReal *);
 PETSC_INTERN PetscErrorCode MBCSceneCheckMeshes(MBCScene, hid_t);
 PETSC_INTERN PetscErrorCode MBCSceneCheckStages(MBCScene);
 PETSC_INTERN PetscErrorCode MBCLoadAppliesToBody(MBCLoadDesc *, const char[], PetscBool *);
+PETSC_INTERN PetscErrorCode MBCSceneRecord(MBCScene, MBCLoadDesc *, PetscReal, PetscReal *, PetscReal *, PetscReal *);
+PETSC_INTERN PetscErrorCode MBCSceneGroundMotion(MBCScene, PetscInt, PetscReal, PetscReal[3], PetscReal[3], PetscReal[3]);

@@ -136,6 +136,11 @@ struct _n_MBCSolver {
   PetscBool      restarting;  /* set-up for a restart: the state comes from the file */
   MBCBodyOutput *ckpt;        /* per body: its vertex map (scene order rows) */
   Vec           *ubuild, *ugsbuild; /* per body: u when H was built, and at the global search it used (the search replayed at a restart) */
+
+  /* modal analysis (solvermodal.c) */
+  PetscInt   modal_nev;   /* -mbc_modal_nev: modes (default the scene's) */
+  PetscBool  modal_tie;   /* -mbc_modal_tie: the couples tied (default the scene's) */
+  PetscReal *modal_freq;  /* the frequencies found, Hz */
 };
 
 PETSC_INTERN PetscErrorCode MBCSolverDecompose(MBCSolver);
@@ -166,3 +171,5 @@ PETSC_INTERN PetscErrorCode MBCSolverCheckpointFree(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverStageResume(MBCSolver, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverStageLog(MBCSolver, PetscInt);
 PETSC_INTERN PetscReal      MBCSolverStageTime(MBCSolver, PetscInt);
+PETSC_INTERN PetscErrorCode MBCSolverModalSetFromOptions(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverModalSolve(MBCSolver);
