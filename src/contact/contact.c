@@ -16,7 +16,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->scene       = scene;
   c->cell_factor = 1.0;
   c->extension   = 0.1;
-  c->stable_normal = 0; /* off: 1e-12 kept faces only between coplanar faces, where the kept gap of an open point then depended on the ranks (Hertz at 4 ranks: 1.7e-4), and saved no build on the dams */
+  c->hysteresis  = 0.05;
   c->integrate   = PETSC_TRUE;
   c->nquad       = 4;
   c->ncouples    = scene->ncouples;
@@ -41,7 +41,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsReal("-mbc_contact_cell_factor", "Search cell edge / mean face edge", "MBCContactSetFromOptions", c->cell_factor, &c->cell_factor, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));
-  PetscCall(PetscOptionsReal("-mbc_contact_stable_normal", "A master node keeps the slave face of the pairs D was built for while the two faces' unit normals differ by at most this and the projection lies inside that face or within this fraction of an edge beyond it (0: the best face always)", "MBCContactSetFromOptions", c->stable_normal, &c->stable_normal, NULL));
+  PetscCall(PetscOptionsReal("-mbc_contact_hysteresis", "A master node keeps the slave face of the pairs H was built for while its projection lies on that face or within this fraction of an edge beyond it, the two faces on one smooth surface (0: the best face at every search)", "MBCContactSetFromOptions", c->hysteresis, &c->hysteresis, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_check_search", "After every search, pair every master node with every slave face by brute force and stop at a pair the search missed (debug)", "MBCContactSetFromOptions", c->check, &c->check, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
@@ -69,6 +69,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCheck(c->margin >= 0 && !PetscIsInfOrNanReal(c->margin), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_margin %g must be finite and not negative", (double)c->margin);
   PetscCheck(c->adjust >= 0 && !PetscIsInfOrNanReal(c->adjust), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_adjust %g must be finite and not negative (a distance; 0: off)", (double)c->adjust);
   PetscCheck(!PetscIsInfOrNanReal(c->interference_tol), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_interference_tol %g must be finite", (double)c->interference_tol);
+  PetscCheck(c->hysteresis >= 0 && c->hysteresis <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_hysteresis %g must lie in [0, 0.5] (a fraction of an edge's length)", (double)c->hysteresis);
   PetscCheck(c->extension >= 0 && c->extension <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_extension %g must lie in [0, 0.5]", (double)c->extension);
   PetscFunctionReturn(0);
 }
@@ -506,7 +507,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
     PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
     cp->extension = c->extension;
-    cp->stable    = c->stable_normal;
+    cp->hysteresis = c->hysteresis;
     if (global) PetscCall(MBCCoupleGlobalSearch(cp, c->cell_factor, c->margin));
     PetscCall(MBCCoupleLocalSearch(cp));
     PetscCall(MBCCoupleIntegrate(cp, c->integrate, c->nquad));
@@ -549,12 +550,12 @@ PetscErrorCode MBCContactView(MBCContact c, PetscViewer viewer)
   PetscFunctionReturn(0);
 }
 
-/* The slave faces the local search prefers (-mbc_contact_stable_normal): per couple and master node
+/* The slave faces the local search prefers (-mbc_contact_hysteresis): per couple and master node
    the face of pairs (n points of `size` entries: couple, master node, slave face, ...; the pairs
    H and D were built for), -1 for the others. A master node whose projection sits on an edge
-   between two faces keeps its face while that face still takes the projection and its normal
-   agrees with the winner's (MBCCoupleKeepsFace), so a pairing does not flip with motions far
-   below the mesh size. The preference is a function of the pairs built alone: a
+   between two faces keeps its face while that face still takes the projection within the
+   hysteresis (MBCCoupleKeepsFace), so a pairing does not flip with motions far below the mesh
+   size. The preference is a function of the pairs built alone: a
    restart that builds the same pairs searches with the same preference. */
 PetscErrorCode MBCContactSetPreferredFaces(MBCContact c, PetscInt n, const PetscInt pairs[], PetscInt size)
 {

@@ -333,30 +333,30 @@ PetscBool MBCBilinearInverse(const PetscReal Y[][2], const PetscReal y[], PetscR
   return PETSC_FALSE;
 }
 
-/* Does master node v (at xm, normal nm), whose best face is `face`, keep its preferred face
-   c->prefer[v] instead (MBCContactSetPreferredFaces)? Yes when that face is another one, the two
-   faces' unit normals differ by at most c->stable, and the preferred face still takes the
-   projection: by the inside test (its tolerance, 2e-6 of an edge) or within c->stable of an edge's
-   length beyond its boundary (the node sits on or near their common edge; on a warped quad the
-   projections onto the two faces' planes miss the common edge by the warp). Then the two pairings
-   put the point on the same plane to within that angle, with the same gap to within that angle
-   times the distance to the edge, and the integrated constraint's weights do not depend on the
-   face (they are integrated over the master node's share): H changes by the normal alone (and, at
-   a point kept at the node's collocation, by its clamped weights). cp: the kept point. */
+/* Pairing with hysteresis (-mbc_contact_hysteresis): does master node v (at xm, normal nm), whose
+   best face is `face`, keep the face of the pairs H was built for, c->prefer[v]
+   (MBCContactSetPreferredFaces)? Yes while that face still takes the projection: by the inside
+   test, or clamped onto it with the projection at most c->hysteresis of an edge's length beyond
+   its boundary, and the two faces lie on one smooth surface (normals within the feature angle,
+   MBC_FEATURE_COS). A node on the common edge of two faces (the dams' base nodes over the
+   foundation's edges, Hertz's faceted cylinders) otherwise changes its face with motions of 1e-7
+   of an edge, and H and D were rebuilt at nearly every step of an earthquake for that alone. The
+   kept pairing puts the point on the kept face's edge: its normal is interpolated from the corner
+   normals there, which both faces share on a smooth surface, and an integrated constraint's
+   weights do not depend on the face (they are integrated over the master node's share), so H
+   and the gap differ from the best face's by the motion beyond the edge times the surface's
+   curvature. cp: the kept point. */
 PetscBool MBCCoupleKeepsFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt v, PetscInt face, MBCContactPoint *cp)
 {
-  PetscInt         f;
-  const PetscReal *a, *b;
-  PetscReal        d[3], q;
+  PetscInt  f;
+  PetscReal q;
 
-  if (!(c->stable > 0) || !c->prefer || v >= c->nprefer) return PETSC_FALSE;
+  if (!(c->hysteresis > 0) || !c->prefer || v >= c->nprefer) return PETSC_FALSE;
   f = c->prefer[v];
   if (f < 0 || f == face || f >= c->slave.nfaces) return PETSC_FALSE;
-  a = &c->slave.fnormal[3 * f], b = &c->slave.fnormal[3 * face];
-  MBCSub(a, b, d);
-  if (!(PetscSqrtReal(MBCDot(d, d)) <= c->stable)) return PETSC_FALSE;
+  if (!(MBCDot(&c->slave.fnormal[3 * f], &c->slave.fnormal[3 * face]) > MBC_FEATURE_COS)) return PETSC_FALSE;
   if (MBCCoupleProjectOnFace(c, xm, nm, f, PETSC_FALSE, cp, &q)) return PETSC_TRUE;
-  return (PetscBool)(MBCCoupleProjectOnFace(c, xm, nm, f, PETSC_TRUE, cp, &q) && q >= -c->stable);
+  return (PetscBool)(MBCCoupleProjectOnFace(c, xm, nm, f, PETSC_TRUE, cp, &q) && q >= -c->hysteresis);
 }
 
 /* Tangents: t1 = e x n with e the axis least aligned with n, t2 = n x t1. */
@@ -483,7 +483,7 @@ PetscErrorCode MBCCoupleCheckSearch(MBCCouple *c, PetscInt *missed, PetscInt *fa
       }
     if (!found || MBCCoupleExcludes(c, v)) continue;
     if (pointOf[v] >= 0) (void)MBCCoupleProjectOnFace(c, &m->x[3 * v], &m->nnormal[3 * v], c->points[pointOf[v]].face, PETSC_FALSE, &cp, &qs);
-    if (pointOf[v] >= 0 && c->points[pointOf[v]].face != best.face && MBCCoupleKeepsFace(c, &m->x[3 * v], &m->nnormal[3 * v], v, best.face, &cp) && cp.face == c->points[pointOf[v]].face) continue; /* its stable face */
+    if (pointOf[v] >= 0 && c->points[pointOf[v]].face != best.face && MBCCoupleKeepsFace(c, &m->x[3 * v], &m->nnormal[3 * v], v, best.face, &cp) && cp.face == c->points[pointOf[v]].face) continue; /* its kept face */
     if (pointOf[v] < 0 || (c->points[pointOf[v]].face != best.face && qs < bestq - 1e-9)) {
       *missed = v;
       *face   = best.face;

@@ -152,14 +152,46 @@ PetscErrorCode MBCInterfaceBodyForce(MBCInterface ifc, PetscInt b, Vec f)
   PetscFunctionReturn(0);
 }
 
+/* Does point j of cp keep the slave nodes of the constraint built as bn[0..nb) (weights bw)? The
+   mortar weights of nodes along a shared edge of nearly matching meshes, or at a face's corner
+   the master node's share just reaches, come and go as the bodies move (Hertz, dynamic; the joints
+   of an earthquake at every other step); with hysteresis a node counts as come only from 2e-2 of
+   the largest weight if it had less than 5e-3 at the build, and as gone below 5e-3 if it had 2e-2,
+   so weights that hover near a threshold rebuild nothing. Without hysteresis: the sets of nodes
+   from 1e-2 of the largest weight. */
+static PetscBool SlaveNodesKept(const MBCCouple *cp, PetscInt j, PetscInt nb, const PetscInt bn[], const PetscReal bw[], PetscBool hysteresis)
+{
+  const PetscReal lo = hysteresis ? 5e-3 : 1e-2, hi = hysteresis ? 2e-2 : 1e-2;
+  PetscReal       wmax = 0, bmax = 0;
+
+  for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) wmax = PetscMax(wmax, PetscAbsReal(cp->sw[l]));
+  for (PetscInt l = 0; l < nb; l++) bmax = PetscMax(bmax, PetscAbsReal(bw[l]));
+  for (PetscInt pass = 0; pass < 2; pass++) { /* came: now >= hi, built < lo; gone: built >= hi, now < lo */
+    const PetscInt   n1 = pass ? nb : cp->soff[j + 1] - cp->soff[j], n2 = pass ? cp->soff[j + 1] - cp->soff[j] : nb;
+    const PetscInt  *a1 = pass ? bn : cp->snode + cp->soff[j], *a2 = pass ? cp->snode + cp->soff[j] : bn;
+    const PetscReal *w1 = pass ? bw : cp->sw + cp->soff[j], *w2 = pass ? cp->sw + cp->soff[j] : bw;
+    const PetscReal  m1 = pass ? bmax : wmax, m2 = pass ? wmax : bmax;
+    for (PetscInt l = 0; l < n1; l++) {
+      PetscReal w = 0;
+      if (!(PetscAbsReal(w1[l]) >= hi * m1)) continue;
+      for (PetscInt i = 0; i < n2; i++)
+        if (a2[i] == a1[l]) w = PetscAbsReal(w2[i]);
+      if (!(w >= lo * m2)) return PETSC_FALSE;
+    }
+  }
+  return PETSC_TRUE;
+}
+
 /* The contact pairs of the current search: per point (couple, master node, slave face, hash of
    the slave nodes of its integrated constraint); *changed when they differ from those H and D
-   were built for. The caller owns pairs (MBCInterfaceSetUp takes them). */
+   were built for (SlaveNodesKept: a point whose slave nodes it keeps takes the built hash). The
+   caller owns pairs (MBCInterfaceSetUp takes them). */
 PetscErrorCode MBCInterfaceGetPairs(MBCInterface ifc, PetscInt *npairs, PetscInt **pairs_out, PetscBool *changed)
 {
-  MBCContact c = ifc->contact;
-  PetscInt   n = 0, k = 0, *pairs;
-  PetscBool  same;
+  MBCContact      c = ifc->contact;
+  const PetscBool hysteresis = (PetscBool)(c->hysteresis > 0);
+  PetscInt        n = 0, k = 0, *pairs;
+  PetscBool       same;
 
   PetscFunctionBegin;
   for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].npoints;
@@ -167,18 +199,17 @@ PetscErrorCode MBCInterfaceGetPairs(MBCInterface ifc, PetscInt *npairs, PetscInt
   for (PetscInt i = 0; i < c->ncouples; i++)
     for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
       const MBCCouple *cp = &c->couples[i];
+      const PetscInt  *b  = ifc->pairs_built && n == ifc->npairs_built ? ifc->pairs_built + MBC_PAIR_SIZE * k : NULL;
       uint32_t         h  = 2166136261u; /* FNV-1a of the slave nodes the point's constraint involves */
       PetscReal        wmax = 0;
       for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) wmax = PetscMax(wmax, PetscAbsReal(cp->sw[l]));
-      /* nodes below 1e-2 of the largest weight do not count: the mortar slivers along a shared edge
-         of nearly matching meshes come and go as the bodies vibrate (Hertz, dynamic), and a rebuild
-         every step is what they would cost; their weights stay those of the last rebuild */
       for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++)
         if (PetscAbsReal(cp->sw[l]) >= 1e-2 * wmax) h = (h ^ (uint32_t)cp->snode[l]) * 16777619u;
       pairs[MBC_PAIR_SIZE * k]     = i;
       pairs[MBC_PAIR_SIZE * k + 1] = cp->points[j].master;
       pairs[MBC_PAIR_SIZE * k + 2] = cp->points[j].face;
       pairs[MBC_PAIR_SIZE * k + 3] = (PetscInt)(h & 0x7fffffff);
+      if (b && b[0] == i && b[1] == cp->points[j].master && b[2] == cp->points[j].face && b[3] != pairs[MBC_PAIR_SIZE * k + 3] && SlaveNodesKept(cp, j, ifc->bsoff[k + 1] - ifc->bsoff[k], ifc->bsnode + ifc->bsoff[k], ifc->bsw + ifc->bsoff[k], hysteresis)) pairs[MBC_PAIR_SIZE * k + 3] = b[3];
     }
   same = (PetscBool)(ifc->pairs_built && n == ifc->npairs_built);
   if (same) PetscCall(PetscArraycmp(pairs, ifc->pairs_built, MBC_PAIR_SIZE * n, &same));
@@ -1225,6 +1256,21 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
   PetscCall(InterfaceReset(ifc));
   ifc->pairs_built  = pairs;
   ifc->npairs_built = n;
+  { /* the slave nodes and weights of each point's constraint, for SlaveNodesKept */
+    PetscInt ns = 0;
+    for (PetscInt i = 0; i < c->ncouples; i++) ns += c->couples[i].npoints ? c->couples[i].soff[c->couples[i].npoints] : 0;
+    PetscCall(PetscFree3(ifc->bsoff, ifc->bsnode, ifc->bsw));
+    PetscCall(PetscMalloc3(n + 1, &ifc->bsoff, ns + 1, &ifc->bsnode, ns + 1, &ifc->bsw));
+    ifc->bsoff[0] = 0;
+    for (PetscInt i = 0, k = 0; i < c->ncouples; i++)
+      for (PetscInt j = 0; j < c->couples[i].npoints; j++, k++) {
+        const MBCCouple *cp = &c->couples[i];
+        const PetscInt   o = ifc->bsoff[k], len = cp->soff[j + 1] - cp->soff[j];
+        PetscCall(PetscArraycpy(ifc->bsnode + o, cp->snode + cp->soff[j], len));
+        PetscCall(PetscArraycpy(ifc->bsw + o, cp->sw + cp->soff[j], len));
+        ifc->bsoff[k + 1] = o + len;
+      }
+  }
   PetscCall(MBCContactSetPreferredFaces(c, n, pairs, MBC_PAIR_SIZE)); /* the next searches keep these faces where they tie */
   ifc->ncontact     = nc;
   PetscCall(PetscMalloc1(nc + 1, &dims));
@@ -1334,6 +1380,7 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(PetscFree(ifc->stepslip));
   PetscCall(PetscFree(ifc->cutslip));
   PetscCall(PetscFree(ifc->pairs_built));
+  PetscCall(PetscFree3(ifc->bsoff, ifc->bsnode, ifc->bsw));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     PetscCall(MatDestroy(&ifc->sinv[b]));
     PetscCall(ISDestroy(&ifc->sinv_is[b]));

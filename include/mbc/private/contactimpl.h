@@ -46,8 +46,8 @@ typedef struct {
   MBCSurface master, slave;
   PetscReal  h, margin, lo[3];
   PetscReal  extension;     /* slave faces reach this fraction of their edge beyond the slave surface's free boundary */
-  PetscReal  stable;        /* -mbc_contact_stable_normal: a master node keeps its face prefer[] while that face still takes its
-                               projection and its normal is within this of the winning face's (0: never) */
+  PetscReal  hysteresis;    /* -mbc_contact_hysteresis: a master node keeps its face prefer[] while its projection lies on that
+                               face or within this fraction of an edge beyond it (0: the best face always) */
   PetscInt   nprefer, *prefer; /* per master node: the slave face of the pairs D was built for, or -1 */
   PetscInt   npairs, ntests;
   MBCTestPair *pairs;
@@ -86,7 +86,7 @@ struct _n_MBCContact {
   MBCCouple *couples;
   PetscReal  cell_factor, margin;   /* margin <= 0: one cell edge */
   PetscReal  extension;     /* -mbc_contact_extension */
-  PetscReal  stable_normal; /* -mbc_contact_stable_normal */
+  PetscReal  hysteresis;    /* -mbc_contact_hysteresis */
   PetscBool  check;         /* -mbc_contact_check_search: brute-force cross-check of every search */
   PetscBool  integrate;     /* constraints averaged over each master node's share of the surface (else at the node) */
   PetscInt   nquad;         /* Gauss points per direction on a master face */

@@ -70,6 +70,8 @@ struct _n_MBCInterface {
   Vec        lamsave;     /* the warm start, restored when a solve that may fail does */
   PetscReal  theta, carry; /* complementarity on z = theta lambda_n+1 + (1 - theta) lambda_n; carry = (1 - theta) / theta */
   PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
+  PetscInt  *bsoff, *bsnode; /* per point (couple order) at the build: the slave nodes of its constraint, bsnode[bsoff[k]..bsoff[k + 1]) */
+  PetscReal *bsw;            /* and their weights */
   PetscReal *frames;      /* (n, t1, t2) of each point when D was built (turned where a tangent is held, interfaceheld.c) */
   PetscInt  *held;        /* per point: bit a set where its direction a (n, t1, t2) is held on both sides: no multiplier, no H column */
   PetscBool  held_warned; /* the master nodes prescribed on one side only were named (first build) */
