@@ -216,6 +216,11 @@ def monolith(p, a, k):
         if k % 2:
             keep &= (ref[f][:, :, 0].min(axis=1) > 0) & (ref[f][:, :, 0].max(axis=1) < m["nx"]) & (ref[f][:, :, 2].max(axis=1) < len(m["z"]) - 1)
         joint[side] = f[keep]
+        used = p.joints and k % 2 and (k < p.monoliths if side == "ymax" else k > 1)
+        if used and not len(joint[side]):
+            raise ValueError(f"h = {p.h:g} m is too coarse for joints: monolith m{k} has {m['nx']} x {len(m['z']) - 1} elements on its "
+                             f"joint and keeps no face inside its upstream, downstream and crest edges for the joint's master side; "
+                             "take a smaller h (more DOFs)")
     surfaces = {f"m{k}_base": sides["zmin"], f"m{k}_ymin": joint["ymin"], f"m{k}_ymax": joint["ymax"],
                 "upstream": sides["xmin"]}
     return points, cells, surfaces
@@ -503,6 +508,8 @@ if __name__ == "__main__":
         params["h"] = a.h
     extra = dict(dt=0.02, eq_duration=0.0) if a.quasi_static else dict(eq_duration=a.eq_duration)
     analysis = "modal" if a.modal else ("staged" if a.staged else ("dynamic" if a.dynamic or a.quasi_static else "static"))
-    h5 = build(a.outdir, analysis, target_dofs=a.dofs, binary=a.binary,
-               quiet=False, **extra, **params)
+    try:
+        h5 = build(a.outdir, analysis, target_dofs=a.dofs, binary=a.binary, quiet=False, **extra, **params)
+    except ValueError as e:  # the dam's parameters: a message, not a traceback
+        ap.error(str(e))
     print(h5)

@@ -32,6 +32,7 @@ SMOKE = {
     "fclib.py": (["--smoke"], r"^\| local_problem_test\.hdf5 \| local \| 48 \|.*\| mbcontact \|", False),
     "hertz_convergence.py": (["--smoke"], r"^\s+0\.400\s+\d+", True),
     "newton_lu.py": (["--n", "300", "--bodies", "2", "5"], r"^\s+dam\s+5\s+300\s", True),
+    "quake.py": (["--dofs", "5e3", "--steps", "3"], r"^\s+4752\s+124\s+3\s", True),
     "search.py": (["--sizes", "1000"], r"^\s+1060\s", True),
 }
 HELPERS = {"plot.py", "monitor.py", "extremes_poisson.py", "extremes_dynamic.py"}  # imported by the benches (extremes.py --smoke runs extremes_*.py's smallest cases)

@@ -188,3 +188,12 @@ def test_static_builder_defaults_with_joints(tmp_path, nproc):
     base = s["couples"][1]
     assert abs(base["vertical_over_weight"] - 1) < 1e-6 and abs(base["horizontal_over_thrust"] - 1) < 1e-6
     assert abs(base["force"][1]) < 1e-6 * s["weight"]
+
+
+def test_joints_on_a_mesh_too_coarse_for_them_are_refused(tmp_path):
+    """At 2e3 DOFs the odd monoliths have 2 x 3 elements on a joint, all on its upstream, downstream
+    or crest edge, so the joint's master surface was empty and the prep stopped on a missing
+    region m1_ymax; the builder now says why, and 3e3 DOFs builds."""
+    with pytest.raises(ValueError, match=r"too coarse for joints: monolith m1 .* take a smaller h"):
+        dam.build(tmp_path / "a", target_dofs=2e3, joints=True)
+    assert str(dam.build(tmp_path / "b", target_dofs=3e3, joints=True)).endswith(".h5")

@@ -115,7 +115,8 @@ def test_cylinders_dynamic_route_matches_static(tmp_path, levels):
     """The paper's route: Newmark (trapezoidal), density 7.85e-9 t/mm3, damping 200, dt 0.01 s
     to 3 s, the approach ramped over 1 s. The cylinders' lowest period (~1e-5 s) is 1000 times
     below the step, so every step is quasi-static: at 3 s P, b and p_max equal the static
-    results within 1e-4 (hc 0.04 mm; measured p_max 8e-5), with D rebuilt 7 times in 300 steps.
+    results within 1e-4 (hc 0.04 mm; measured P 1e-7), with D built once in 300 steps (7 times
+    without the pairing's hysteresis, p_max 8e-5 off).
     Each rebuild used to correct the acceleration to the re-paired contact force, a velocity kick
     per rebuild: with the faces flipping every step from t = 0.94 s P drifted from 1305 to 679 N
     (286 rebuilds), and a face hysteresis that held it off left p_max 9.4e-4 off."""
@@ -125,4 +126,4 @@ def test_cylinders_dynamic_route_matches_static(tmp_path, levels):
     static = levels[0.04][0]
     for key in ("P", "b", "p_max"):
         assert res[key] == pytest.approx(static[key], rel=1e-4), key
-    assert r.stdout.count("flexibility matrix rebuilt") < 20, r.stdout.count("flexibility matrix rebuilt")
+    assert r.stdout.count("flexibility matrix rebuilt") == 1, r.stdout.count("flexibility matrix rebuilt")
