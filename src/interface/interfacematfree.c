@@ -34,8 +34,7 @@ static PetscErrorCode DShellMult(Mat W, Vec x, Vec y)
     MBCBody body = ifc->bodies[b];
     if (!ctx->lam[b]) continue;
     PetscCall(MatMult(ifc->H[b], ctx->lam[b], ctx->Hl[b]));
-    PetscCall(MBCBodyZeroHeldRows(body, ctx->Hl[b], NULL));
-    PetscCall(KSPSolve(body->ksp, ctx->Hl[b], ctx->Xl[b]));
+    PetscCall(MBCBodyApplyInverse(body, ctx->Hl[b], ctx->Xl[b]));
     PetscCall(MatMultTranspose(ifc->H[b], ctx->Xl[b], ctx->Hu[b]));
   }
   PetscCall(MBCInterfaceGatherFromBodies(ifc, ctx->Hu, y));

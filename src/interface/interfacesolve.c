@@ -325,8 +325,7 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
     MBCBody body = ifc->bodies[b];
     if (!body || !ifc->H[b]) continue;
     PetscCall(MatMult(ifc->H[b], ifc->lam[b], ifc->Hl[b]));
-    PetscCall(MBCBodyZeroHeldRows(body, ifc->Hl[b], NULL));
-    PetscCall(KSPSolve(body->ksp, ifc->Hl[b], ifc->Xl[b]));
+    PetscCall(MBCBodyApplyInverse(body, ifc->Hl[b], ifc->Xl[b]));
     PetscCall(VecAXPY(body->du, 1.0, ifc->Xl[b]));
   }
   if (ifc->fp.G) PetscCall(MBCInterfaceRigidMotion(ifc));

@@ -98,6 +98,7 @@ PETSC_INTERN PetscErrorCode MBCBodyPrescribed(MBCBody, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyPrescribedIncrement(MBCBody, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode MBCBodySetConstrainedRows(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyConstrainedSolve(MBCBody, KSP, PetscReal, PetscReal, Vec, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyApplyInverse(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyComputeStress(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyRigidModes(MBCBody);
