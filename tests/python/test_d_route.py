@@ -28,10 +28,13 @@ def test_schur_route_gives_the_same_answer(tmp_path, nproc):
     """On 4 ranks the foundation spans 3 of them: its S^-1 by parallel MUMPS (the inverse's entries
     gathered on its first rank), which before stop 27 fell back to the solves; the monoliths share
     the fourth. (Bodies on one rank each over 2 ranks: the two blocks in test_matfree.py and the
-    restarts below.)"""
+    restarts below.) Without the pairing's hysteresis the static dam builds D twice (its pairs
+    change once), which is the path where S^-1 is reused; with it (default) D is built once and
+    test_pair_hysteresis.py checks that answer."""
     h5 = dam.build(tmp_path, **STATIC)
-    solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_d_route", "multirhs", nproc=nproc)
-    r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_d_route", "schur", "-info", nproc=nproc)
+    rebuild = ("-mbc_contact_hysteresis", "0")
+    solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_d_route", "multirhs", *rebuild, nproc=nproc)
+    r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_d_route", "schur", "-info", *rebuild, nproc=nproc)
     assert r.stdout.count("D through the Schur complement onto") == 4, r.stdout[-2000:]  # 4 bodies, S^-1 once
     assert r.stdout.count("S^-1 reused") == 4  # the second build
     if nproc == 4:
@@ -43,12 +46,14 @@ def test_schur_route_gives_the_same_answer(tmp_path, nproc):
 
 
 def test_schur_inverse_serves_every_rebuild(tmp_path):
-    """The small dynamic dam (75 steps, joints): D is rebuilt 12 times for new pairs; S^-1 on each
-    body's contact-surface DOFs is computed once (the operator does not change) and every rebuild
-    is two dense products: the answer is the multi-right-hand-side route's to 1e-9."""
+    """The small dynamic dam (75 steps, joints) paired without hysteresis: D is rebuilt 12 times for
+    new pairs; S^-1 on each body's contact-surface DOFs is computed once (the operator does not
+    change) and every rebuild is two dense products: the answer is the multi-right-hand-side
+    route's to 1e-9. (With the default hysteresis the pairs hold and D is built once.)"""
     h5 = dam.build(tmp_path, "dynamic", dt=0.02, ramp=0.5, eq_start=1.0, eq_duration=0.5, record_from=3.0, h=15.0, monoliths=3)
-    ref = solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_monitor", "-mbc_d_route", "multirhs")
-    r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_monitor", "-mbc_d_route", "schur", "-info")
+    rebuild = ("-mbc_contact_hysteresis", "0")
+    ref = solve(h5, "-mbc_output", str(tmp_path / "rhs"), "-mbc_monitor", "-mbc_d_route", "multirhs", *rebuild)
+    r = solve(h5, "-mbc_output", str(tmp_path / "schur"), "-mbc_monitor", "-mbc_d_route", "schur", "-info", *rebuild)
     n = ref.stdout.count("flexibility matrix rebuilt")
     assert n == r.stdout.count("flexibility matrix rebuilt") and n > 2
     assert r.stdout.count("D through the Schur complement onto") == 4
@@ -66,9 +71,11 @@ def test_schur_restart_equals_uninterrupted(tmp_path, save, load):
     run's to 1e-12 on the same ranks. From 2 ranks to 1 the Newton step's dense LU is ScaLAPACK's
     before the restart and LAPACK's after (docs/performance.md 3d): their rounding differs, and
     the last step's forces differ by 1.8e-12 of the largest (measured); 1e-10 still sees any lost
-    state (a replayed search that finds other faces moves forces by 1e-4 and more)."""
+    state (a replayed search that finds other faces moves forces by 1e-4 and more). Paired without
+    hysteresis, so that D is rebuilt after the restart from the restarted S^-1; the default
+    pairing's restart: test_pair_hysteresis.py."""
     h5 = dam.build(tmp_path, "dynamic", dt=0.02, ramp=0.5, eq_start=1.0, eq_duration=0.5, record_from=3.0, h=15.0, monoliths=3)
-    opt = ("-mbc_d_route", "schur", "-info")
+    opt = ("-mbc_d_route", "schur", "-info", "-mbc_contact_hysteresis", "0")
     full = solve(h5, *opt, "-mbc_output", str(tmp_path / "full"), nproc=save)
     assert "S^-1 reused" in full.stdout
     part = str(tmp_path / "part")
