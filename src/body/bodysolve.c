@@ -291,6 +291,10 @@ PetscErrorCode MBCBodyComputeStress(MBCBody body, Vec u, Vec stress)
   const PetscReal    lambda = body->lambda, mu = body->mu, kappa = lambda + 2.0 * mu / 3.0;
 
   PetscFunctionBegin;
+  if (body->surface) { /* a rigid surface: no volume, no stress */
+    PetscCall(VecZeroEntries(stress));
+    PetscFunctionReturn(0);
+  }
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(DMGetLocalVector(body->dm, &ul));
   PetscCall(DMGlobalToLocal(body->dm, u, INSERT_VALUES, ul));
@@ -299,8 +303,8 @@ PetscErrorCode MBCBodyComputeStress(MBCBody body, Vec u, Vec stress)
   PetscCall(VecGetArray(stress, &sv));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
   for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscInt     idx[24], nv;
-    PetscReal    X[24], U[24], g[9], tr;
+    PetscInt     idx[3 * MBC_MAX_CELL_NODES], nv;
+    PetscReal    X[3 * MBC_MAX_CELL_NODES], U[3 * MBC_MAX_CELL_NODES], g[9], tr;
     PetscScalar *s;
 
     PetscCall(DMPlexPointGlobalRef(body->dmStress, c, sv, &s));
