@@ -14,7 +14,8 @@ typedef struct {
 /* One body in the result file (solveroutputbody.c): the rows of its scene-ordered datasets this
    rank writes, and the star forests that bring them there from the distributed mesh. */
 typedef struct {
-  PetscInt   nv, nc, nvpc;   /* the scene's vertices, cells, vertices per cell */
+  PetscInt   nv, nc, nvpc;   /* the scene's nodes (vertices and tet10's midside nodes), cells, nodes per cell (the most: -1 pads) */
+  PetscInt   ntopo, topostart, ntoporows; /* a body of several cell types: XDMF's Mixed topology, its length and this rank's part */
   PetscInt   vstart, nvrows; /* this rank writes vertex rows [vstart, vstart + nvrows) */
   PetscInt   cstart, ncrows; /* and cell rows [cstart, cstart + ncrows) (0 rows off the body) */
   PetscSF    vsf, csf;       /* values of owned vertices (3 each) and cells (6 each) -> their rows; NULL off the body */
