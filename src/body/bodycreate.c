@@ -227,6 +227,8 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   }
   PetscCall(VecDestroy(&b->ustart));
   PetscCall(VecDestroy(&b->u));
+  PetscCall(VecDestroy(&b->u0));
+  PetscCall(VecDestroy(&b->v0));
   PetscCall(VecDestroy(&b->v));
   PetscCall(VecDestroy(&b->a));
   PetscCall(VecDestroy(&b->du));

@@ -373,6 +373,7 @@ PetscErrorCode MBCBodyCreateOperator(MBCBody body, Mat *K)
   PetscCall(MatSetLocalToGlobalMapping(pre, rl2g, cl2g));
   PetscCall(MatSetUp(pre));
   PetscCall(MBCBodyAssembleElasticity(body, pre, NULL)); /* the pattern only */
+  PetscCall(MBCBodySpringPattern(body, pre));
   PetscCall(MatPreallocatorPreallocate(pre, PETSC_TRUE, *K));
   PetscCall(MatDestroy(&pre));
   PetscFunctionReturn(0);

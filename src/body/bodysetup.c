@@ -262,6 +262,7 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
   body->cK = body->desc.rayleigh_beta;
   PetscCall(BodySetUpConstraints(body));
   if (dynamic) PetscCall(MBCBodyAbsorbingSetUp(body)); /* before the loads: the input surfaces' loads use Cin */
+  PetscCall(MBCBodySpringsSetUp(body, dynamic));
   PetscCall(MBCBodyAssembleLoads(body));
   PetscCall(DMCreateGlobalVector(body->dm, &body->u));
   PetscCall(PetscObjectSetName((PetscObject)body->u, "displacement"));
@@ -280,7 +281,9 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
   if (!dynamic && !scene->ncouples) {
     /* K alone: without inertia or contact, every component needs a prescribed DOF somewhere
        (with contact, the static solver stabilises such bodies: -mbc_static_stabilize). */
-    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface, hold it by contact, or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
+    PetscBool held[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+    MBCBodySpringHeld(body, held);
+    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c] || held[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface, hold it by contact, or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
   }
   PetscFunctionReturn(0);
 }

@@ -96,6 +96,7 @@ struct _n_MBCBody {
   PetscReal  fres[6];     /* the resultant of the load F and its moment about the origin (static, this step) */
 
   Vec u, v, a;            /* displacement, velocity, acceleration */
+  Vec u0, v0;             /* the initial state set from the API (MBCBodySetInitialState; NULL: the scene's) */
   Vec du, rhs, f, fold, g, work, work2;
   Vec ustart;             /* static: u where a load step that may be cut began */
 };
@@ -144,4 +145,11 @@ PETSC_INTERN PetscErrorCode MBCBodyAbsorbingRelease(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyGroundLoad(MBCBody, MBCLoadDesc *, Vec, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyAddDamping(MBCBody, PetscReal, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyNodalBlockMatrix(MBCBody, Mat *);
+PETSC_INTERN PetscErrorCode MBCBodyInitialState(MBCBody, PetscBool *, PetscBool *);
+/* bodyspring.c: discrete springs and dashpots */
+PETSC_INTERN PetscBool      MBCBodyHasSprings(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodySpringPattern(MBCBody, Mat);
+PETSC_INTERN PetscErrorCode MBCBodySpringsSetUp(MBCBody, PetscBool);
+PETSC_INTERN void           MBCBodySpringHeld(MBCBody, PetscBool[3]);
 PETSC_INTERN PetscBool      MBCBodyDamped(MBCBody);
