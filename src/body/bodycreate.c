@@ -242,6 +242,7 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(DMDestroy(&b->dm));
   PetscCall(PetscFree2(b->vnum, b->cnum));
   PetscCall(MBCBodyLayoutDestroy(b));
+  PetscCall(MBCBodyRigidDestroy(b));
   PetscCall(MBCSceneDestroy(&b->scene));
   comm = b->comm; /* split by the solver for this body: freed after the header lets go of it */
   PetscCall(PetscHeaderDestroy(body));

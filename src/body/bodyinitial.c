@@ -67,5 +67,24 @@ PetscErrorCode MBCBodyInitialState(MBCBody body, PetscBool *hasu, PetscBool *has
     PetscCall(MBCBodySetConstrainedRows(body, body->g, body->u));
   }
   if (*hasv) PetscCall(MBCBodySetConstrainedRows(body, NULL, body->v));
+  if (body->desc.rigid && (*hasu || *hasv)) { /* a rigid body's state: the rigid motion that fits the nodes' best, its prescribed components as prescribed */
+    PetscReal q[6];
+    if (*hasu) {
+      PetscCall(MBCBodyRigidMotion(body, body->u, q));
+      PetscCall(VecZeroEntries(body->u));
+      for (PetscInt j = 0; j < 6; j++) PetscCall(VecAXPY(body->u, q[j], body->Trig[j]));
+      PetscCall(MBCBodyRigidPrescribed(body, 0.0, body->u, body->g)); /* the prescribed components' increment to t = 0 */
+      PetscCall(VecAXPY(body->u, 1.0, body->g));
+    }
+    if (*hasv) {
+      PetscCall(MBCBodyRigidMotion(body, body->v, q));
+      PetscCall(VecZeroEntries(body->v));
+      for (PetscInt j = 0; j < 6; j++) PetscCall(VecAXPY(body->v, q[j], body->Trig[j]));
+      PetscCall(MBCBodyRigidPrescribed(body, 0.0, body->v, body->g)); /* prescribed components at rest */
+      PetscCall(VecAXPY(body->v, 1.0, body->g));
+      PetscCall(MBCBodyRigidPrescribed(body, 0.0, NULL, body->work));
+      PetscCall(VecAXPY(body->v, -1.0, body->work));
+    }
+  }
   PetscFunctionReturn(0);
 }

@@ -201,6 +201,10 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
 
   PetscFunctionBegin;
   PetscCall(MBCBodyRigidModesDestroy(body));
+  if (body->desc.rigid) { /* a rigid body: its free components, nothing to hold in K^+ = 0 */
+    PetscCall(MBCBodyRigidFreeModes(body));
+    PetscFunctionReturn(0);
+  }
   PetscCall(BodyRigidBasis(body, modes));
   PetscCall(VecGetOwnershipRange(body->u, &rstart, &rend));
   for (PetscInt a = 0; a < nm; a++) PetscCall(VecGetArrayRead(modes[a], &mv[a]));

@@ -81,6 +81,11 @@ static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
     PetscCall(BodyAssembleNodalLoad(body, load, F));
     PetscFunctionReturn(0);
   }
+  if (load->kind == MBC_LOAD_GRAVITY && body->desc.rigid) { /* through its mass about the reference point */
+    PetscCall(MBCBodyRigidGravity(body, load->vector, F));
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(!(load->kind == MBC_LOAD_BODY_FORCE && body->surface), body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: a body force acts on the rigid surface '%s', which has no volume", body->scene->filename, body->name);
   if (load->kind == MBC_LOAD_GRAVITY || load->kind == MBC_LOAD_BODY_FORCE) { /* by hand, as K */
     PetscReal f[3];
     for (PetscInt d = 0; d < 3; d++) f[d] = PetscRealPart(load->vector[d]) * (load->kind == MBC_LOAD_GRAVITY ? body->desc.density : 1.0);
@@ -257,7 +262,8 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_BodyAssemble, 0, 0, 0, 0));
-  PetscCall(BodyAssembleOperators(body, dynamic, mass));
+  if (body->desc.rigid) PetscCall(MBCBodyRigidSetUp(body, dynamic)); /* K = 0, M of its six DOFs */
+  else PetscCall(BodyAssembleOperators(body, dynamic, mass));
   body->cM = body->desc.damping + body->desc.rayleigh_alpha;
   body->cK = body->desc.rayleigh_beta;
   PetscCall(BodySetUpConstraints(body));
@@ -278,7 +284,7 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
     PetscCall(VecDuplicate(body->u, &body->work2));
   }
   PetscCall(PetscLogEventEnd(MBC_BodyAssemble, 0, 0, 0, 0));
-  if (!dynamic && !scene->ncouples) {
+  if (!dynamic && !scene->ncouples && !body->desc.rigid) {
     /* K alone: without inertia or contact, every component needs a prescribed DOF somewhere
        (with contact, the static solver stabilises such bodies: -mbc_static_stabilize). */
     PetscBool held[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};

@@ -55,6 +55,8 @@ struct _n_MBCBody {
   PetscReal *ecoord;      /* and its position, 3 each */
   PetscBool surface;      /* a rigid surface: a 2D mesh, its cells are its faces */
   void     *nodemap;      /* scene node -> local point (MBCBodyNodePoint), built on first use */
+  Vec       Trig[6];      /* a rigid body (bodyrigidbody.c): u = T q, T's six columns */
+  PetscReal TtTinv[36], Mr[36]; /* (T^T T)^-1 and its mass about the reference point */
   PetscReal lambda, mu;   /* Lamé constants */
 
   Mat K, M;               /* unconstrained stiffness and mass (lumped: diagonal), M with the reservoir's added mass */
@@ -147,6 +149,15 @@ PETSC_INTERN PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyAddDamping(MBCBody, PetscReal, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyNodalBlockMatrix(MBCBody, Mat *);
 PETSC_INTERN PetscErrorCode MBCBodyInitialState(MBCBody, PetscBool *, PetscBool *);
+/* bodyrigidbody.c: a rigid body's six DOFs */
+PETSC_INTERN PetscErrorCode MBCBodyRigidSetUp(MBCBody, PetscBool);
+PETSC_INTERN PetscErrorCode MBCBodyRigidFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *);
+PETSC_INTERN PetscErrorCode MBCBodyRigidMotion(MBCBody, Vec, PetscReal[6]);
+PETSC_INTERN PetscErrorCode MBCBodyRigidPrescribed(MBCBody, PetscReal, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyRigidSolve(MBCBody, KSP, PetscReal, Vec, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyRigidFreeModes(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyRigidGravity(MBCBody, const PetscReal[3], Vec);
+PETSC_INTERN PetscErrorCode MBCBodyRigidDestroy(MBCBody);
 /* bodyspring.c: discrete springs and dashpots */
 PETSC_INTERN PetscBool      MBCBodyHasSprings(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodySpringPattern(MBCBody, Mat);
