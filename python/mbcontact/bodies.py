@@ -54,7 +54,9 @@ class MeshFile:
         return ", ".join(names) if names else "none"
 
 
-def read_mesh(name, path):
+def read_mesh(name, path, extrude=None):
+    """A mesh file and its named regions; extrude (length, layers): a 2D mesh in the xy plane made
+    3D along z (extrude_mesh)."""
     import meshio  # slow import; only needed here
 
     if not os.path.isfile(path):
@@ -81,7 +83,47 @@ def read_mesh(name, path):
                          "(Gmsh physical names, MED groups or meshio cell sets)")
     fields = {k: np.asarray(v, dtype=float).reshape(len(points), -1) for k, v in mesh.point_data.items()
               if not k.endswith("point_tags") and np.asarray(v).dtype.kind in "fi" and len(v) == len(points)}
-    return MeshFile(name, path, points, regions, node_groups, fields)
+    out = MeshFile(name, path, points, regions, node_groups, fields)
+    return extrude_mesh(out, *extrude) if extrude else out
+
+
+_EXTRUDED = {"vertex": "line", "line": "quad", "triangle": "wedge", "quad": "hexahedron"}
+
+
+def extrude_mesh(mesh, length, layers):
+    """A 2D mesh in the xy plane (z = 0) extruded along z over `length` in `layers` layers: triangles
+    and quads become prisms and hexahedra, lines quads, points lines, node groups their nodes on
+    every layer, point fields copied to every layer; every region keeps its name, one dimension up
+    (a plane-strain model of another code as a slab: hold z on its nodes)."""
+    where = f"meshes.{mesh.name}.extrude"
+    if np.any(np.abs(mesh.points[:, 2]) > 1e-12 * max(1.0, np.abs(mesh.points).max())):
+        raise InputError(f"{where}: {mesh.path} is not a 2D mesh in the xy plane (z != 0)")
+    n = len(mesh.points)
+    z = np.linspace(0.0, length, layers + 1)
+    points = np.concatenate([mesh.points + [0, 0, zk] for zk in z])
+    regions = {}
+    for name, region in mesh.regions.items():
+        if region.dim == 3:
+            raise InputError(f"{where}: {mesh.path} has the volume region '{name}': only a 2D mesh is extruded")
+        blocks = {}
+        for t, cells in region.blocks.items():
+            if t not in _EXTRUDED:
+                raise InputError(f"{where}: region '{name}' has cells of type '{t}'; extruded are points, lines, "
+                                 "triangles and quads (not quadratic cells)")
+            out = []
+            for k in range(layers):
+                lo, hi = cells + k * n, cells + (k + 1) * n
+                if t == "vertex":
+                    out.append(np.column_stack([lo[:, 0], hi[:, 0]]))
+                elif t == "line":
+                    out.append(np.column_stack([lo[:, 0], lo[:, 1], hi[:, 1], hi[:, 0]]))
+                else:
+                    out.append(np.hstack([lo, hi]))
+            blocks[_EXTRUDED[t]] = np.concatenate(out)
+        regions[name] = Region(region.dim + 1, blocks)
+    groups = {name: np.concatenate([pts + k * n for k in range(layers + 1)]) for name, pts in mesh.node_groups.items()}
+    fields = {k: np.concatenate([v] * (layers + 1)) for k, v in mesh.point_data.items()}
+    return MeshFile(mesh.name, mesh.path, points, regions, groups, fields)
 
 
 def _regions(mesh):
@@ -499,7 +541,7 @@ def _union_faces(names, faces):
 
 # ---------------------------------------------------------------- node sets
 
-def region_nodes(name, bodies, where, node_sets=None, allow_volume=True):
+def region_nodes(name, bodies, where, node_sets=None, allow_volume=True, allow_empty=False):
     """The body nodes named by `name`, per body: {body index: sorted node indices}: a scene node
     set, a mesh node group (MED's GROUP_NO), or the nodes of a region of any dimension (a volume
     only when allow_volume). A name the bodies' meshes do not have is refused, listing theirs."""
@@ -530,16 +572,16 @@ def region_nodes(name, bodies, where, node_sets=None, allow_volume=True):
         lists = "; ".join(f"{m.describe()}: {', '.join(list(m.regions) + list(m.node_groups))}" for m in meshes.values())
         extra = f"; node sets: {', '.join(node_sets)}" if node_sets else ""
         raise InputError(f"{where}: '{name}' is no node set, node group or region of the meshes of the bodies ({lists}{extra})")
-    if not found:
+    if not found and not allow_empty:
         raise InputError(f"{where}: '{name}' has no node in any body")
     return found
 
 
-def nodes_of(names, bodies, where, node_sets=None, allow_volume=True):
+def nodes_of(names, bodies, where, node_sets=None, allow_volume=True, allow_empty=False):
     """Union over names of region_nodes: {body index: nodes}."""
     out = {}
     for name in names:
-        for i, nodes in region_nodes(name, bodies, where, node_sets, allow_volume).items():
+        for i, nodes in region_nodes(name, bodies, where, node_sets, allow_volume, allow_empty).items():
             out[i] = np.union1d(out.get(i, np.zeros(0, dtype=np.int64)), nodes).astype(np.int64)
     return out
 
@@ -559,7 +601,7 @@ def build_node_sets(scene, bodies):
         chosen = set(range(len(bodies))) if not spec.bodies else {
             i for i, b in enumerate(bodies) if b.name in spec.bodies}
         if spec.kind in ("union", "difference", "intersection"):
-            parts = [nodes_of([n], bodies, f"{where}.{spec.kind}", sets) for n in spec.names]
+            parts = [nodes_of([n], bodies, f"{where}.{spec.kind}", sets, allow_empty=True) for n in spec.names]
             out = {}
             for i in chosen:
                 arrays = [p.get(i, np.zeros(0, dtype=np.int64)) for p in parts]

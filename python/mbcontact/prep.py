@@ -69,7 +69,7 @@ def _run(args):
     for name in scene.meshes:
         if name not in used:
             warn(f"meshes.{name} is not used by any body")
-    meshes = {name: read_mesh(name, path) for name, path in scene.meshes.items() if name in used}
+    meshes = {name: read_mesh(name, path, scene.extrude.get(name)) for name, path in scene.meshes.items() if name in used}
     bodies = build_bodies(scene, meshes)
     labels, face_counts = face_labels(scene, bodies)
     sets = build_node_sets(scene, bodies)

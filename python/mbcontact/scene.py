@@ -424,6 +424,7 @@ class Scene:
     node_sets: dict = field(default_factory=dict)  # name -> NodeSet, in file order
     initial: list = field(default_factory=list)
     springs: list = field(default_factory=list)
+    extrude: dict = field(default_factory=dict)  # mesh name -> (length, layers): a 2D mesh extruded along z
 
 
 TOP_KEYS = ("title", "meshes", "bodies", "node_sets", "couples", "dirichlet", "loads", "initial", "springs",
@@ -436,7 +437,8 @@ def parse_scene(doc, base_dir):
     mapping(doc, "", TOP_KEYS, required=("meshes", "bodies"))
     title = doc.get("title")
     title = "" if title in (None, "") else string(str(title), "title")
-    meshes = _meshes(doc["meshes"], base_dir)
+    extrude = {}
+    meshes = _meshes(doc["meshes"], base_dir, extrude)
     bodies = _bodies(doc["bodies"], meshes)
     body_names = [b.name for b in bodies]
     couples = _couples(doc.get("couples"))
@@ -480,15 +482,29 @@ def parse_scene(doc, base_dir):
         raise InputError("initial: initial conditions need the first stage to be dynamic (a static stage starts "
                          "from rest and from its own equilibrium)")
     return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces, stages,
-                 added_mass, absorbing, node_sets, initial, springs)
+                 added_mass, absorbing, node_sets, initial, springs, extrude)
 
 
-def _meshes(value, base_dir):
+def _meshes(value, base_dir, extrude=None):
+    """name -> file, or name -> {file: FILE, extrude: {length: L, layers: n}} (a 2D mesh made 3D by
+    extruding it along z, as a plane-strain model of another code); extrude collects the latter."""
     meshes = named(value, "meshes")
     if not meshes:
         raise InputError("meshes: at least one mesh is needed (name: file)")
-    return {name: os.path.join(base_dir, string(path, f"meshes.{name}", maxlen=None))
-            for name, path in meshes.items()}
+    out = {}
+    for name, spec in meshes.items():
+        where = f"meshes.{name}"
+        if isinstance(spec, dict):
+            spec = mapping(spec, where, ("file", "extrude"), required=("file",))
+            if "extrude" in spec:
+                ex = mapping(spec["extrude"], f"{where}.extrude", ("length", "layers"), required=("length",))
+                length = real(ex["length"], f"{where}.extrude.length", gt=0)
+                layers = integer(ex.get("layers", 1), f"{where}.extrude.layers", ge=1, le=10000)
+                if extrude is not None:
+                    extrude[name] = (length, layers)
+            spec = spec["file"]
+        out[name] = os.path.join(base_dir, string(spec, where, maxlen=None))
+    return out
 
 
 def _bodies(value, meshes):

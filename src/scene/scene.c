@@ -692,7 +692,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   for (PetscInt i = 0; i < s->nbodies; i++) {
     PetscCall(H5EntryOpen(&list, i, &e));
     PetscCall(ReadBody(&e, &s->bodies[i]));
-    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0 || s->bodies[i].massless, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a %s analysis (or massless)", s->filename, s->bodies[i].name, MBCAnalysisTypes[s->analysis]);
+    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0 || s->bodies[i].massless || s->bodies[i].rigid, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a %s analysis (or massless)", s->filename, s->bodies[i].name, MBCAnalysisTypes[s->analysis]);
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));

@@ -129,7 +129,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
   if (s->analysis == MBC_ANALYSIS_DYNAMIC && !s->scene->nstages) { /* the stages are checked as read */
     PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);
-    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0 || s->scene->bodies[b].massless, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0 || s->scene->bodies[b].massless || s->scene->bodies[b].rigid, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
   PetscCall(MBCSolverStagesSetUp(s, (PetscBool)(set[0] || set[1] || set[2] || set[3] || set[4] || set[5])));
   if (s->dt_min < 0) s->dt_min = s->dt / 1024;
