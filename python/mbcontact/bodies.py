@@ -480,6 +480,11 @@ def face_labels(scene, bodies):
         for column, side in ((1, "master"), (2, "slave")):
             sides[side] = _union_faces(getattr(c, side), faces)
             for i, index in sides[side].items():
+                if np.any(bodies[i].boundary_nv[index] == 6):
+                    raise InputError(f"couple k={c.k}: the {side} surface ({', '.join(getattr(c, side))}) has 6-node "
+                                     f"faces of tet10 body '{bodies[i].name}': contact on quadratic faces is not "
+                                     "available (only their corners would touch: a wrong answer); mesh a body in "
+                                     "contact with linear cells (tet4, hex8, wedge6, pyr5)")
                 taken = labels[i][index, column]
                 if np.any(taken):
                     raise InputError(f"couples: faces of body '{bodies[i].name}' are {side} faces of "
@@ -596,8 +601,12 @@ def build_node_sets(scene, bodies):
     """The scene's `node_sets`, in file order (a set may use the ones before it): per set
     {body index: nodes}."""
     sets = {}
+    if scene.node_sets:
+        corners = np.vstack([np.vstack([b.coords.min(axis=0), b.coords.max(axis=0)]) for b in bodies])
+        extent = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
     for name, spec in scene.node_sets.items():
         where = f"node_sets.{name}"
+        tolerance = 1e-6 * extent if spec.tolerance is None else spec.tolerance
         chosen = set(range(len(bodies))) if not spec.bodies else {
             i for i, b in enumerate(bodies) if b.name in spec.bodies}
         if spec.kind in ("union", "difference", "intersection"):
@@ -623,11 +632,11 @@ def build_node_sets(scene, bodies):
                 x = bodies[i].coords
                 if spec.kind == "plane":
                     d = np.abs((x - spec.point) @ spec.normal)
-                    inside = d <= spec.tolerance
+                    inside = d <= tolerance
                 elif spec.kind == "sphere":
-                    inside = np.linalg.norm(x - spec.point, axis=1) <= spec.radius + spec.tolerance
+                    inside = np.linalg.norm(x - spec.point, axis=1) <= spec.radius + tolerance
                 else:  # box
-                    inside = np.all((x >= spec.lo - spec.tolerance) & (x <= spec.hi + spec.tolerance), axis=1)
+                    inside = np.all((x >= spec.lo - tolerance) & (x <= spec.hi + tolerance), axis=1)
                 v = np.nonzero(inside)[0]
                 if len(v):
                     out[i] = v.astype(np.int64)

@@ -946,6 +946,23 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
   PetscFunctionReturn(0);
 }
 
+
+/* A static start would ignore an initial state (the scene's `initial`, MBCBodySetInitialState):
+   refused rather than dropped (-mbc_analysis static on a dynamic scene with one, say). */
+static PetscErrorCode SolverCheckNoInitialState(MBCSolver s)
+{
+  PetscInt given = 0;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    const MBCBody body = s->bodies[b];
+    if (body && (body->u0 || body->v0 || body->desc.initial_u || body->desc.initial_v)) given = PetscMax(given, b + 1);
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &given, 1, MPIU_INT, MPI_MAX, s->comm));
+  PetscCheck(!given, s->comm, PETSC_ERR_ARG_INCOMP, "Body '%s' has an initial displacement or velocity (scene file %s's `initial`, or MBCBodySetInitialState) but the analysis starts static: initial conditions start a dynamic analysis", s->scene->bodies[given - 1].name, s->scene->filename);
+  PetscFunctionReturn(0);
+}
+
 /* Time step s->step, as 2^start_level steps of dt / 2^start_level: after a cut the run stays at
    the step that worked (switching back and forth would refactor nothing, the factors are kept,
    but rebuild D each time) and the step grows back by one halving after MBC_GOOD_STEPS steps
@@ -1009,6 +1026,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       }
     } else {
       PetscCall(MBCSolverStageLog(s, 0));
+      if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverCheckNoInitialState(s));
       if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
       else PetscCall(SolverDynamicBegin(s));
     }
