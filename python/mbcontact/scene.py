@@ -557,6 +557,9 @@ def _rigid(value, where):
         if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0) or np.any(np.linalg.eigvalsh(inertia) <= 0):
             raise InputError(f"{where}.inertia: must be symmetric and positive definite, got {inertia.tolist()}")
         out["inertia"] = inertia
+        if "mass" not in spec:
+            raise InputError(f"{where}.inertia: give the mass with it (an inertia about the reference point, taken as "
+                             "the mass centre); without both, the mass and inertia come from the cells and the density")
     return out
 
 

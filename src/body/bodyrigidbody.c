@@ -203,13 +203,13 @@ PetscErrorCode MBCBodyRigidSetUp(MBCBody body, PetscBool dynamic)
     PetscBool inertia = PETSC_FALSE;
     for (PetscInt i = 0; i < 9; i++) inertia = (PetscBool)(inertia || d->rigid_inertia[i] != 0);
     for (PetscInt i = 0; i < 36; i++) body->Mr[i] = 0;
-    for (PetscInt i = 0; i < 3; i++) body->Mr[7 * i] = d->rigid_mass;
-    if (inertia)
+    if (!inertia && Munit[0] > 0) /* the cells' distribution scaled to the mass: the coupling of translation and rotation about a reference off the mass centre kept */
+      for (PetscInt i = 0; i < 36; i++) body->Mr[i] = d->rigid_mass / Munit[0] * Munit[i];
+    else { /* given inertia: about the reference, taken as the mass centre */
+      for (PetscInt i = 0; i < 3; i++) body->Mr[7 * i] = d->rigid_mass;
       for (PetscInt i = 0; i < 3; i++)
         for (PetscInt j = 0; j < 3; j++) body->Mr[6 * (3 + i) + 3 + j] = d->rigid_inertia[3 * i + j];
-    else if (Munit[0] > 0)
-      for (PetscInt i = 0; i < 3; i++)
-        for (PetscInt j = 0; j < 3; j++) body->Mr[6 * (3 + i) + 3 + j] = d->rigid_mass / Munit[0] * Munit[6 * (3 + i) + 3 + j];
+    }
   } else
     for (PetscInt i = 0; i < 36; i++) body->Mr[i] = d->density * Munit[i];
   RigidPrescribedEntries(body, entry);

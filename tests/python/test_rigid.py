@@ -45,8 +45,10 @@ def test_rigid_base_is_a_stiff_base(tmp_path, nproc):
     assert abs(c["normal_force"][-1] / 1e3 - 1) < 1e-8 and abs(d["normal_force"][-1] / 1e3 - 1) < 1e-6
 
 
-def test_rigid_mass_on_a_bar(tmp_path):
-    """A rigid cube of mass m = 0.01 kg (density 10, free along x only: the other five components
+@pytest.mark.parametrize("mass", ["density", "given"])
+def test_rigid_mass_on_a_bar(tmp_path, mass):
+    """A rigid cube of mass m = 0.01 kg (density 10, or `mass: 0.01` with the reference point off
+    the cube's centre; free along x only: the other five components
     prescribed at 0) starts at v0 = 1 m/s (`initial`) against a free elastic bar (E = rho = 1,
     A = 0.01 m2, 1 m, c = 1 m/s, impedance Z = rho c A = 0.01 kg/s). Until the wave reflected at
     the bar's far end returns (t = 2 L / c = 2 s) the bar is semi-infinite for the mass: v(t) =
@@ -57,7 +59,8 @@ def test_rigid_mass_on_a_bar(tmp_path):
                                             dict(lo=(0, 0, 0), hi=(1, 0.1, 0.1), n=(20, 1, 1), name="bar")])
     h5 = prep(tmp_path, {
         "meshes": {"m": "m.msh"},
-        "bodies": {"mass": {"mesh": "m", "regions": "mass", "rigid": True, "material": {"density": 10.0}},
+        "bodies": {"mass": {"mesh": "m", "regions": "mass", **({"rigid": True, "material": {"density": 10.0}} if mass == "density"
+                            else {"rigid": {"mass": 0.01, "reference": [-0.1, 0, 0]}})},
                    "bar": {"mesh": "m", "regions": "bar", "material": {"E": 1.0, "nu": 0.0, "density": 1.0}}},
         "couples": [{"master": "mass_xmax", "slave": "bar_xmin"}],
         "dirichlet": [{"body": "mass", "components": ["y", "z", "rx", "ry", "rz"]}, {"body": "bar", "components": ["y", "z"]}],
@@ -73,7 +76,7 @@ def test_rigid_mass_on_a_bar(tmp_path):
 
 
 def test_rigid_inputs_refused(tmp_path):
-    """A rigid body's inertia that is not symmetric positive definite, a material with more than a
+    """A rigid body's inertia that is not symmetric positive definite or comes without its mass, a material with more than a
     density, rotation components on a deformable body, and a spring on a rigid body: each refused,
     naming the key."""
     import subprocess
@@ -89,6 +92,7 @@ def test_rigid_inputs_refused(tmp_path):
             "analysis": {"type": "static"}}
     cases = [
         (("bodies", "base", "rigid"), {"inertia": [[1, 0, 0], [0, -1, 0], [0, 0, 1]]}, "bodies.base.rigid.inertia"),
+        (("bodies", "base", "rigid"), {"inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}, "bodies.base.rigid.inertia: give the mass"),
         (("bodies", "base", "material"), {"density": 1.0, "E": 3.0}, "bodies.base.material.E"),
         (("dirichlet",), [{"body": "block", "components": ["rx"]}], "dirichlet[0].components"),
         (("springs",), [{"nodes": "base_zmin", "stiffness": [1, 1, 1]}], "springs[0].nodes"),
