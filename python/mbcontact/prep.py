@@ -367,8 +367,9 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
         for i, d in enumerate(scene.dirichlet):
             index = time_function(d.time)
             rows = nodal["dirichlet"][i] if nodal else None
+            label = d.surface or (f"body:{d.body}" if d.body else "nodes:" + "+".join(d.nodes).replace(",", " "))[:200]
             where = dict(surface=d.surface, surface_id=surface_ids[d.surface]) if d.surface else \
-                dict(surface="", surface_id=-1, **({"body": names.index(d.body)} if d.body and rows is None else {}))
+                dict(surface=label, surface_id=-1, **({"body": names.index(d.body)} if d.body and rows is None else {}))
             dirichlet += [(dict(**where, component=comp, value=d.value, time=d.time.kind, time_function=index), rows)
                           for comp in d.components]
 

@@ -30,11 +30,8 @@ MBCTimeCoefficients MBCTimeScheme(PetscReal h, PetscReal beta, PetscReal gamma, 
    lambda_n on which the contacts' complementarity is imposed (docs/design.md): the share of the new
    force in the step's impulse, M dv = h M ((1 - gamma) a_n + gamma a_n+1) with (1 - am) M a_n+1 =
    (1 - af) H lambda_n+1 + ...: theta = gamma (1 - af) / (1 - am). Newmark's gamma; 1/2 for the
-   trapezoidal rule (rho_inf 1), where z is the force the balance of energy sees. Measured on a
-   bar bouncing off a wall (one contact node, its gap >= 0 at every step's end): the energy never
-   rose above its start (by 6e-4 of it at most, rho_inf 0.9 to 0.3, HHT alpha 0 to -0.3, 1/4 to 5
-   times the bar's element transit time), where theta = 1 - af gained up to 5.6x and gamma up to
-   1.9x. */
+   trapezoidal rule (rho_inf 1), where z is the force the balance of energy sees (docs/design.md,
+   "The mean force under generalized-alpha", with the energy measured on two bars parting). */
 PetscReal MBCTimeContactWeight(PetscReal gamma, PetscReal am, PetscReal af)
 {
   return gamma * (1 - af) / (1 - am);
