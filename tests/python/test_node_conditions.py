@@ -59,7 +59,8 @@ def test_nodal_force_on_node_sets(tmp_path, nproc):
     """Supports on node sets only (the bottom plane in z, the origin node in x, y, the node at
     (1, 0, 0) in y: no rigid motion left, nothing else held) and 1/4 N down at each of the four top
     nodes (a node set, one through a set difference plus the node it takes out): the consistent
-    nodal forces of 1 Pa on the 1 m2 top, so sigma_zz = -1 Pa exactly."""
+    nodal forces of 1 Pa on the 1 m2 top, so sigma_zz = -1 Pa exactly; the reactions CSV names each
+    condition by its nodes, the bottom carrying the 1 N."""
     mesh = column(tmp_path)
     h5 = prep(tmp_path, {
         "meshes": {"m": mesh},
@@ -72,6 +73,10 @@ def test_nodal_force_on_node_sets(tmp_path, nproc):
     })
     solve(h5, nproc=nproc)
     assert_uniaxial(h5, -1.0)
+    rows = [l.split(",") for l in open(result(h5, "_reactions.csv")).read().splitlines()[1:]]
+    named = {r[1]: np.array([float(v) for v in r[2:]]) for r in rows}
+    assert set(named) == {"nodes:bottom", "nodes:origin", "nodes:x_axis"}  # each condition by its nodes
+    assert abs(named["nodes:bottom"][2] - 1.0) < 1e-10 and np.abs(named["nodes:origin"]).max() < 1e-10
 
 
 def test_line_force_on_line_region(tmp_path):
