@@ -229,3 +229,43 @@ def test_mirrored_gmsh_cells_oriented(tmp_path):
     assert r.returncode == 0 and "48 of the 48 tet4 cells" in r.stderr and "mirrored" in r.stderr, r.stderr
     solve(tmp_path / "s.h5")
     assert_uniform(tmp_path / "s.h5", 4)
+
+
+def test_extruded_2d_mesh(tmp_path):
+    """A 2D mesh in the xy plane (a perturbed quad and triangle square, its sides as lines)
+    extruded along z over 0.5 in 2 layers (`extrude`): quads become hexahedra, triangles prisms,
+    lines the side surfaces (named as in the 2D file); held in z on both faces of the slab (plane
+    strain) and pressed by P on x = 1: the plane-strain patch test holds to rounding,
+    sigma_xx = -P, sigma_zz = -nu P."""
+    points = np.array([[0, 0, 0], [0.5, 0, 0], [1, 0, 0], [0, 0.5, 0], [0.45, 0.55, 0], [1, 0.5, 0],
+                       [0, 1, 0], [0.5, 1, 0], [1, 1, 0]], dtype=float)
+    quads = np.array([[0, 1, 4, 3], [1, 2, 5, 4]])
+    tris = np.array([[3, 4, 7], [3, 7, 6], [4, 5, 8], [4, 8, 7]])
+    lines = {"xmin": [[0, 3], [3, 6]], "xmax": [[2, 5], [5, 8]], "ymin": [[0, 1], [1, 2]], "ymax": [[6, 7], [7, 8]]}
+    regions = [("body", 2, "quad", quads), ("body_tri", 2, "triangle", tris)]
+    regions += [(name, 1, "line", np.array(c)) for name, c in lines.items()]
+    cells, physical, field_data = [], [], {}
+    for tag, (name, dim, kind, data) in enumerate(regions, start=1):
+        base = name.replace("_tri", "")
+        tag = int(field_data.get(base, [tag])[0])
+        cells.append((kind, data))
+        physical.append(np.full(len(data), tag))
+        field_data[base] = np.array([tag, dim])
+    meshio.write(str(tmp_path / "flat.msh"), meshio.Mesh(points, cells, field_data=field_data,
+                 cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical}), file_format="gmsh22", binary=False)
+    h5 = prep(tmp_path, {
+        "meshes": {"m": {"file": "flat.msh", "extrude": {"length": 0.5, "layers": 2}}},
+        "bodies": {"b": {"mesh": "m", "regions": "body", "material": {"E": E, "nu": NU}}},
+        "node_sets": {"front": {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}},
+         "back": {"plane": {"point": [0, 0, 0.5], "normal": [0, 0, 1]}},
+         "faces": {"union": ["front", "back"]}},
+        "dirichlet": [{"nodes": "faces", "components": ["z"]}, {"surface": "xmin", "components": ["x"]},
+                      {"surface": "ymin", "components": ["y"]}],
+        "loads": [{"kind": "pressure", "surface": "xmax", "value": P}],
+        "analysis": {"type": "static"}})
+    solve(h5)
+    r = read_body(result(h5, ".h5"), "b")
+    assert r["cell_type"] == "mixed" and len(r["cells"]) == 2 * (2 + 4)
+    s = r["stress"]
+    assert np.abs(s[:, 0] + P).max() < 1e-10 * P and np.abs(s[:, 5] + NU * P).max() < 1e-10 * P
+    assert np.abs(s[:, [1, 2, 3, 4]]).max() < 1e-10 * P
