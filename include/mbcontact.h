@@ -87,5 +87,8 @@ PETSC_EXTERN PetscErrorCode MBCBodyGetKSP(MBCBody, KSP *);
 PETSC_EXTERN PetscErrorCode MBCBodyGetOperators(MBCBody, Mat *, Mat *, Mat *);
 PETSC_EXTERN PetscErrorCode MBCBodyView(MBCBody, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCBodyGetVelocity(MBCBody, Vec *);
+/* The initial displacement and velocity of a dynamic analysis (copies; NULL: the scene's), in the
+   layout of MBCBodyGetDisplacement's Vec: after MBCSolverSetUp, before the first MBCSolverStep. */
+PETSC_EXTERN PetscErrorCode MBCBodySetInitialState(MBCBody, Vec, Vec);
 PETSC_EXTERN PetscErrorCode MBCBodyGetStressDM(MBCBody, DM *);
 PETSC_EXTERN PetscErrorCode MBCBodyCreateStress(MBCBody, Vec *);

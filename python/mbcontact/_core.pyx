@@ -175,6 +175,14 @@ cdef class Body:
         CHKERR(MBCBodyGetVelocity(self.body, &v))
         return _vec(v)
 
+    def setInitialState(self, Vec displacement=None, Vec velocity=None):
+        """The initial displacement and velocity of a dynamic analysis (copied; None: the scene's
+        `initial`, else the static equilibrium and rest), in getDisplacement()'s layout. Call it
+        after solver.setUp() and before solve() or the first step: the dynamic start takes them
+        (prescribed DOFs as prescribed at t = 0) and finds the initial acceleration from them."""
+        CHKERR(MBCBodySetInitialState(self.body, displacement.vec if displacement is not None else NULL,
+                                      velocity.vec if velocity is not None else NULL))
+
     def getStress(self):
         """The cellwise stress (xx yy zz xy yz xz) of the current displacement, a new Vec on getStressDM()."""
         cdef PetscVec v = NULL

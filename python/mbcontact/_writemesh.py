@@ -9,9 +9,13 @@ never be loaded into one process, so this module imports no h5py (and prep.py no
 petsc4py). It creates OUT.h5 (mode "w"); prep.py adds the metadata afterwards.
 
 BODIES.npz holds `names` (body names, in order) and for body i:
-  cells<i>   int32 (ncells, 4|8)  0-based vertex indices, PETSc vertex order
+  cells<i>   int32 (ncells, 8)    0-based vertex indices, PETSc vertex order, -1 padded
+  types<i>   str (ncells,)        mbcontact cell type of each cell (tet4, hex8, wedge6, pyr5, tet10, tri3, quad4)
+  dim<i>     int                  3, or 2 for a rigid surface
   coords<i>  float64 (nvertices, 3)
-  faces<i>   int32 (nfaces, 3|4)  labelled boundary faces, vertices in cyclic order
+  faces<i>   int32 (nfaces, 4)    labelled boundary faces, corners in cyclic order, -1 padded
+  facenv<i>  int32 (nfaces,)      their corners
+  faceidx<i> int64 (nfaces,)      their index among the body's boundary faces (a surface's: its cells)
   labels<i>  int32 (nfaces, 3)    values for LABELS, 0 = not in that label
 """
 import sys
@@ -35,21 +39,34 @@ def main(argv):
     # cannot overwrite (H5Dset_extent fails).
     viewer.pushFormat(PETSc.Viewer.Format.HDF5_PETSC)
     for i, name in enumerate(data["names"]):
-        dm = body_dm(PETSc, str(name), data[f"cells{i}"], data[f"coords{i}"],
-                     data[f"faces{i}"], data[f"labels{i}"])
+        dm = body_dm(PETSc, str(name), data[f"cells{i}"], data[f"types{i}"], int(data[f"dim{i}"]), data[f"coords{i}"],
+                     data[f"faces{i}"], data[f"facenv{i}"], data[f"faceidx{i}"], data[f"labels{i}"])
         dm.view(viewer)
         dm.destroy()
     viewer.destroy()
     return 0
 
 
-def body_dm(PETSc, name, cells, coords, faces, values):
+POLYTOPE = {"tet4": "TETRAHEDRON", "tet10": "TETRAHEDRON", "hex8": "HEXAHEDRON", "wedge6": "TRI_PRISM",
+            "pyr5": "PYRAMID", "tri3": "TRIANGLE", "quad4": "QUADRILATERAL"}
+CORNERS = {"tet4": 4, "tet10": 4, "hex8": 8, "wedge6": 6, "pyr5": 5, "tri3": 3, "quad4": 4}
+
+
+def body_dm(PETSc, name, cells, types, dim, coords, faces, facenv, faceidx, values):
     """Interpolated DMPlex of one body with its three face labels."""
-    dm = PETSc.DMPlex().createFromCellList(3, cells.astype(PETSc.IntType), coords,
-                                           interpolate=True, comm=PETSc.COMM_SELF)
+    kinds = set(str(t) for t in types)
+    if dim == 3 and len(kinds) == 1 and kinds <= {"tet4", "tet10", "hex8"}:
+        ncorner = CORNERS[kinds.pop()]
+        dm = PETSc.DMPlex().createFromCellList(3, cells[:, :ncorner].astype(PETSc.IntType), coords,
+                                               interpolate=True, comm=PETSc.COMM_SELF)
+    else:
+        dm = mixed_dm(PETSc, cells, types, dim, coords)
     dm.setName(name)
-    check_geometry(PETSc, dm, name)
-    points = face_points(dm, faces).astype(PETSc.IntType)
+    if dim == 3:
+        check_geometry(PETSc, dm, name)
+        points = face_points(dm, faces, facenv).astype(PETSc.IntType)
+    else:
+        points = faceidx.astype(PETSc.IntType)  # the cells themselves, points 0 .. ncells - 1
     for column, label_name in enumerate(LABELS):
         dm.createLabel(label_name)  # all three, though DMView skips empty labels
         label = dm.getLabel(label_name)
@@ -60,8 +77,47 @@ def body_dm(PETSc, name, cells, coords, faces, values):
     return dm
 
 
-def face_points(dm, faces):
-    """DMPlex point of each face given by its vertices (cyclic order).
+def mixed_dm(PETSc, cells, types, dim, coords):
+    """A DMPlex of cells of several types (or a surface in 3D) built point by point, as PETSc's own
+    readers of such meshes do: cells 0 .. nc-1, vertices nc .. nc+nv-1 (the numbering
+    createFromCellList gives), each cell's polytope set before the interpolation (the cone size
+    alone makes 6 vertices a tensor prism, a cohesive cell)."""
+    nc, nv = len(cells), len(coords)
+    corners = [CORNERS[str(t)] for t in types]
+    dm = PETSc.DMPlex().create(comm=PETSc.COMM_SELF)
+    dm.setChart(0, nc + nv)
+    for c in range(nc):
+        dm.setConeSize(c, corners[c])
+    dm.setDimension(dim)
+    dm.setUp()
+    for c in range(nc):
+        dm.setCone(c, [int(v) + nc for v in cells[c, :corners[c]]])
+    dm.symmetrize()
+    dm.stratify()
+    label = dm.getCellTypeLabel()
+    for c in range(nc):
+        label.clearValue(c, dm.getCellType(c))
+        dm.setCellType(c, getattr(PETSc.DM.PolytopeType, POLYTOPE[str(types[c])]))
+    dm.interpolate()
+    dm.setCoordinateDim(3)
+    section = PETSc.Section().create(comm=PETSc.COMM_SELF)
+    section.setNumFields(1)
+    section.setFieldComponents(0, 3)
+    vstart, vend = dm.getDepthStratum(0)
+    section.setChart(vstart, vend)
+    for v in range(vstart, vend):
+        section.setDof(v, 3)
+        section.setFieldDof(v, 0, 3)
+    section.setUp()
+    dm.getCoordinateDM().setSection(section)
+    x = PETSc.Vec().createSeq(3 * nv, comm=PETSc.COMM_SELF)
+    x.setArray(np.ascontiguousarray(coords, dtype=float).ravel())
+    dm.setCoordinatesLocal(x)
+    return dm
+
+
+def face_points(dm, faces, facenv=None):
+    """DMPlex point of each face given by its corners (cyclic order).
 
     Two consecutive edges determine the face: face = join(join(a, b), join(b, c)).
     """

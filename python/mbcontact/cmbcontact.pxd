@@ -47,6 +47,7 @@ cdef extern from "mbcontact.h" nogil:
     PetscErrorCode MBCBodyGetStressDM(MBCBody, PetscDM *)
     PetscErrorCode MBCBodyGetDisplacement(MBCBody, PetscVec *)
     PetscErrorCode MBCBodyGetVelocity(MBCBody, PetscVec *)
+    PetscErrorCode MBCBodySetInitialState(MBCBody, PetscVec, PetscVec)
     PetscErrorCode MBCBodyCreateStress(MBCBody, PetscVec *)
     PetscErrorCode MBCBodyGetKSP(MBCBody, PetscKSP *)
     PetscErrorCode MBCBodyGetOperators(MBCBody, PetscMat *, PetscMat *, PetscMat *)

@@ -506,3 +506,91 @@ def perturbed_blocks(path, z0=1.0, gap=0.0, footprints=(((0, 0), (1, 1)), ((0.1,
     write_parts(path, parts)
     return {"lower_top": f"{names[0]}_zmax", "upper_bottom": f"{names[1]}_zmin", "z0": z0, "gap": gap,
             "footprints": footprints, "parts": parts}
+
+
+# ---------------------------------------------------------------------------
+# Meshes of the other element types: a box of hexes, pyramids and prisms (a mixed mesh, as
+# Salome and Gmsh make between hex and tet regions) and a box of tet10 (quadratic tets).
+
+def mixed_box(path, lo=(0, 0, 0), hi=(1, 1, 1), n=(3, 2, 2), name="body", perturb=0.0, seed=0):
+    """A box whose cells along x are, by thirds: hexahedra, six pyramids around each hex's centre
+    (a node added there), two prisms per hex (split along the diagonal of its z faces, so their
+    triangles lie on z layers): conforming, in Gmsh order, positive. Surfaces xmin ... zmax of
+    quads and (prisms' z faces) triangles. With perturb the interior vertices move as box()'s."""
+    points, hexes, _ = _box_arrays(lo, hi, n, "hex8", perturb, seed)
+    h = (np.asarray(hi, float) - np.asarray(lo, float)) / np.asarray(n)
+    third = [n[0] / 3, 2 * n[0] / 3]
+    points = list(points)
+    blocks = {"hexahedron": [], "pyramid": [], "wedge": []}
+    faces = {s: {"quad": [], "triangle": []} for s in SIDES}
+    outward = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
+    side_of = ["zmin", "zmax", "ymin", "xmax", "ymax", "xmin"]
+    for index, cell in enumerate(hexes):
+        i = index // (n[1] * n[2])  # _box_arrays numbers hexes x-major
+        j, k = (index // n[2]) % n[1], index % n[2]
+        x0 = np.asarray(lo) + h * (i, j, k)
+        kind = "hex" if i < third[0] else "pyr" if i < third[1] else "wedge"
+        on = {"xmin": i == 0, "xmax": i == n[0] - 1, "ymin": j == 0, "ymax": j == n[1] - 1, "zmin": k == 0, "zmax": k == n[2] - 1}
+        if kind == "hex":
+            blocks["hexahedron"].append(cell)
+        elif kind == "pyr":
+            points.append(np.asarray(points)[cell].mean(axis=0))
+            c = len(points) - 1
+            for f in outward:
+                blocks["pyramid"].append([*cell[f][::-1], c])  # base wound towards the apex
+        else:
+            blocks["wedge"] += [[cell[0], cell[1], cell[2], cell[4], cell[5], cell[6]],
+                                [cell[0], cell[2], cell[3], cell[4], cell[6], cell[7]]]
+        for f, side in zip(outward, side_of):
+            if not on[side]:
+                continue
+            if kind == "wedge" and side in ("zmin", "zmax"):
+                q = cell[f]
+                faces[side]["triangle"] += [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+            else:
+                faces[side]["quad"].append(cell[f])
+        del x0
+    points = np.asarray(points)
+    regions = [(name, 3, t, np.array(c)) for t, c in blocks.items() if c]
+    for side in SIDES:
+        for t, c in faces[side].items():
+            if c:
+                regions.append((f"{side}" if t == "quad" else f"{side}_tri", 2, t, np.array(c)))
+    # one region per side: the triangles join the quads' name
+    cells, physical, field_data = [], [], {}
+    tags = {}
+    for region, dim, t, data in regions:
+        base = region[:-4] if region.endswith("_tri") else region
+        tag = tags.setdefault(base, len(tags) + 1)
+        cells.append((t, data))
+        physical.append(np.full(len(data), tag, dtype=np.int32))
+        field_data[base] = np.array([tag, dim])
+    mesh = meshio.Mesh(points, cells, field_data=field_data,
+                       cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical})
+    meshio.write(str(path), mesh, file_format="gmsh22", binary=False)
+    return mesh
+
+
+def tet10_box(path, lo=(0, 0, 0), hi=(1, 1, 1), n=(2, 2, 2), name="body", perturb=0.0, seed=0, curve=None):
+    """box(cell="tet4") with a midside node on every edge (tet10, Gmsh order), surfaces xmin ...
+    zmax as tri6. curve(points) -> points may move the nodes (corners and midside nodes alike:
+    a curved mapping keeps the midside nodes on the curved edges)."""
+    points, tets, sides = _box_arrays(lo, hi, n, "tet4", perturb, seed)
+    edges = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
+    pairs = np.sort(np.concatenate([tets[:, e] for e in edges]), axis=1)
+    key, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    mid = len(points) + inverse.ravel().reshape(6, -1).T
+    points = np.vstack([points, 0.5 * (points[key[:, 0]] + points[key[:, 1]])])
+    cells10 = np.hstack([tets, mid])
+    lookup = {tuple(k): len(points) - len(key) + m for m, k in enumerate(key)}
+
+    def tri6(faces):
+        out = []
+        for a, b, c in faces:
+            out.append([a, b, c] + [lookup[tuple(sorted(e))] for e in ((a, b), (b, c), (c, a))])
+        return np.array(out)
+
+    if curve is not None:
+        points = curve(points)
+    regions = [(name, 3, "tetra10", cells10)] + [(side, 2, "triangle6", tri6(faces)) for side, faces in sides.items()]
+    _write_gmsh(path, points, regions)

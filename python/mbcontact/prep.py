@@ -18,7 +18,9 @@ import tempfile
 import numpy as np
 
 from . import __version__
-from .bodies import build_bodies, couple_exclusions, face_labels, read_mesh, surface_faces
+from .bodies import (build_bodies, build_node_sets, couple_exclusions, face_labels, line_weights, nodes_of, pairs,
+                     read_mesh, surface_faces)
+from .cells import NODES, XDMF  # noqa: F401 (XDMF: the result file's cell names, docs)
 from .scene import InputError, Time, load_yaml, parse_scene, warn
 
 PROG = "mbcontact-prep"
@@ -67,32 +69,43 @@ def _run(args):
     for name in scene.meshes:
         if name not in used:
             warn(f"meshes.{name} is not used by any body")
-    meshes = {name: read_mesh(name, path) for name, path in scene.meshes.items() if name in used}
+    meshes = {name: read_mesh(name, path, scene.extrude.get(name)) for name, path in scene.meshes.items() if name in used}
     bodies = build_bodies(scene, meshes)
     labels, face_counts = face_labels(scene, bodies)
-    exclude = couple_exclusions(scene, bodies, labels)
+    sets = build_node_sets(scene, bodies)
+    exclude = couple_exclusions(scene, bodies, labels, sets)
     _reservoir_floors(scene, bodies)
+    nodal = _nodal_inputs(scene, bodies, sets)
 
     if not args.check:
-        _write(output, scene, bodies, labels, face_counts, exclude)
+        _write(output, scene, bodies, labels, face_counts, exclude, nodal)
     if not args.quiet:
-        _print_summary(output, args.check, scene, bodies, face_counts, exclude)
+        _print_summary(output, args.check, scene, bodies, face_counts, exclude, nodal)
 
 
-def _print_summary(output, check_only, scene, bodies, face_counts, exclude):
+def _print_summary(output, check_only, scene, bodies, face_counts, exclude, nodal=None):
     if scene.stages:
         print(f"{'checked' if check_only else 'wrote ' + output}: {len(scene.stages)} stages: "
               + ", ".join(f"{st.name} ({st.analysis.type}, t {st.start_time:g} to {st.analysis.final_time:g})"
                           for st in scene.stages))
     else:
         print(f"{'checked' if check_only else 'wrote ' + output}: {scene.analysis.type} analysis")
-    for b in bodies:
-        print(f"  body {b.name}: {len(b.cells)} {b.cell_type} cells, {len(b.coords)} vertices")
+    for b, sb in zip(bodies, scene.bodies):
+        kinds = ", ".join(f"{np.count_nonzero(b.types == t)} {t}" for t in np.unique(b.types)) if b.cell_type == "mixed" else b.cell_type
+        nodes = f", {len(b.coords)} nodes" if len(b.coords) != b.num_vertices else ""
+        print(f"  body {b.name}: {len(b.cells)} {kinds} cells, {b.num_vertices} vertices{nodes}"
+              + (", rigid" if sb.rigid is not None else ""))
     for sid, (name, count) in enumerate(face_counts.items(), start=1):
         print(f"  surface {sid} {name}: {count} faces")
     for c in scene.couples:
         out = f", {len(exclude[scene.couples.index(c)])} master nodes out of contact" if c.exclude else ""
         print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{out}")
+    if nodal:
+        for i, rows in enumerate(nodal["dirichlet"]):
+            if rows is not None:
+                print(f"  dirichlet[{i}]: {len(rows)} nodes")
+        for i, sp in enumerate(nodal["springs"]):
+            print(f"  springs[{i}]: {len(sp[0])} {'node-to-node' if sp[1] is not None else 'node-to-ground'} springs")
 
 
 def _reservoir_floors(scene, bodies):
@@ -111,9 +124,124 @@ def _reservoir_floors(scene, bodies):
             raise InputError(f"added_mass[{i}].level: {m.level:g} is not above the reservoir's floor {m.bottom:g}")
 
 
+def _nodal_inputs(scene, bodies, sets):
+    """The node-based inputs resolved to (body, node) rows: Dirichlet conditions on nodes and
+    bodies, nodal and line loads, initial conditions, springs; rigid bodies' reference points."""
+    rigid = {i for i, b in enumerate(scene.bodies) if b.rigid is not None}
+    out = {"dirichlet": [], "loads": [], "initial": {}, "springs": [], "rigid": {}}
+    for i, d in enumerate(scene.dirichlet):
+        where = f"dirichlet[{i}]"
+        if d.body:
+            b = [sb.name for sb in scene.bodies].index(d.body)
+            out["dirichlet"].append(None if b in rigid else pairs({b: np.arange(len(bodies[b].coords))}))
+            continue
+        if d.surface:
+            faces = surface_faces(d.surface, scene.surfaces[d.surface], bodies)
+            hit = sorted(set(faces) & rigid)
+            if hit:
+                raise InputError(f"{where}.surface: '{d.surface}' lies on rigid body '{bodies[hit[0]].name}'; "
+                                 "prescribe a rigid body's motion with `body:` (components x, y, z, rx, ry, rz)")
+            out["dirichlet"].append(None)
+            continue
+        per_body = nodes_of(d.nodes, bodies, f"{where}.nodes", sets)
+        hit = sorted(set(per_body) & rigid)
+        if hit:
+            raise InputError(f"{where}.nodes: {', '.join(d.nodes)} has nodes on rigid body '{bodies[hit[0]].name}'; "
+                             "prescribe a rigid body's motion with `body:` (components x, y, z, rx, ry, rz)")
+        out["dirichlet"].append(pairs(per_body))
+    for i, load in enumerate(scene.loads):
+        where = load.where or f"loads[{i}]"
+        if load.kind == "nodal_force":
+            rows = pairs(nodes_of(load.nodes, bodies, f"{where}.nodes", sets))
+            out["loads"].append((rows, np.ones(len(rows))))
+        elif load.kind == "line_force":
+            per_body = line_weights(load.line, bodies, f"{where}.line")
+            rows = pairs({b: n for b, (n, w) in per_body.items()})
+            out["loads"].append((rows, np.concatenate([per_body[b][1] for b in sorted(per_body)])))
+        else:
+            out["loads"].append(None)
+    for i, e in enumerate(scene.initial):
+        where = f"initial[{i}]"
+        if e.body:
+            b = [sb.name for sb in scene.bodies].index(e.body)
+            per_body = {b: np.arange(len(bodies[b].coords))}
+        else:
+            per_body = nodes_of(e.nodes, bodies, f"{where}.nodes", sets)
+        for b, nodes in per_body.items():
+            state = out["initial"].setdefault(b, {})
+            for key in ("displacement", "velocity"):
+                value = getattr(e, key)
+                if value is None:
+                    continue
+                array = state.setdefault(key, np.zeros((len(bodies[b].coords), 3)))
+                if isinstance(value, tuple):
+                    field = bodies[b].mesh.point_data.get(value[1])
+                    if field is None or field.shape[1] != 3:
+                        have = ", ".join(f"{k} ({v.shape[1]} components)" for k, v in bodies[b].mesh.point_data.items()) or "none"
+                        raise InputError(f"{where}.{key}.field: '{value[1]}' is no point field of 3 components of "
+                                         f"{bodies[b].mesh.describe()} (point fields there: {have})")
+                    inverse = np.full(len(bodies[b].coords), -1)
+                    inverse[bodies[b].vertex_map[bodies[b].vertex_map >= 0]] = np.nonzero(bodies[b].vertex_map >= 0)[0]
+                    array[nodes] = field[inverse[nodes]]
+                else:
+                    array[nodes] = value
+    for i, sp in enumerate(scene.springs):
+        where = f"springs[{i}]"
+        rows = pairs(nodes_of(sp.nodes, bodies, f"{where}.nodes", sets))
+        to = None
+        if sp.to:
+            other = pairs(nodes_of(sp.to, bodies, f"{where}.to", sets))
+            xo = np.array([bodies[b].coords[v] for b, v in other])
+            to = np.empty_like(rows)
+            for r, (b, v) in enumerate(rows):
+                k = np.argmin(np.linalg.norm(xo - bodies[b].coords[v], axis=1))
+                if other[k][0] != b:
+                    raise InputError(f"{where}.to: a spring joins two nodes of one body (body '{bodies[b].name}' to "
+                                     f"'{bodies[other[k][0]].name}'): a spring between bodies would couple their "
+                                     "factorizations; join the bodies by a couple, or give both ends to one body")
+                if other[k][1] == v:
+                    raise InputError(f"{where}.to: node {v} of body '{bodies[b].name}' is its own nearest node of `to`")
+                to[r] = other[k]
+            if len(np.unique(to, axis=0)) != len(to):
+                raise InputError(f"{where}.to: two nodes of `nodes` share their nearest node of `to`; give sets of one node each, or of matching nodes")
+        hit = sorted(set(rows[:, 0]) & rigid)
+        if hit:
+            raise InputError(f"{where}.nodes: a spring on rigid body '{bodies[hit[0]].name}': give its nodes to a "
+                             "deformable body (a rigid body's DOFs are its reference point's)")
+        out["springs"].append((rows, to))
+    for i in rigid:
+        b, spec = bodies[i], scene.bodies[i].rigid
+        out["rigid"][i] = spec.get("reference", _centroid(b))
+    return out
+
+
+def _centroid(b):
+    """The centroid of a body's cells (volume) or faces (a surface): each cell's corner centroid
+    weighted by its size (corner tets' volumes, triangle fans' areas)."""
+    from .cells import CORNER_TETS
+    total, moment = 0.0, np.zeros(3)
+    for t in np.unique(b.types):
+        cells = b.cells[b.types == t]
+        if t in ("tri3", "quad4"):
+            nv = 3 if t == "tri3" else 4
+            x = b.coords[cells[:, :nv]]
+            centre = x.mean(axis=1)
+            w = sum(0.5 * np.linalg.norm(np.cross(x[:, k] - centre, x[:, (k + 1) % nv] - centre), axis=1) for k in range(nv))
+        else:
+            ncorner = {"tet4": 4, "tet10": 4, "hex8": 8, "wedge6": 6, "pyr5": 5}[t]
+            x = b.coords[cells[:, :ncorner]]
+            centre = x.mean(axis=1)
+            w = np.zeros(len(cells))
+            for a, p, q, r in CORNER_TETS[t]:
+                w += np.abs(np.linalg.det(np.stack([x[:, p] - x[:, a], x[:, q] - x[:, a], x[:, r] - x[:, a]], axis=1)))
+        total += w.sum()
+        moment += (w[:, None] * centre).sum(axis=0)
+    return moment / total
+
+
 # ---------------------------------------------------------------- writing
 
-def _write(output, scene, bodies, labels, face_counts, exclude):
+def _write(output, scene, bodies, labels, face_counts, exclude, nodal=None):
     """Write meshes (subprocess) then metadata into a temporary file, then rename."""
     folder = os.path.dirname(os.path.abspath(output))
     with tempfile.TemporaryDirectory(prefix="mbcontact-prep-") as tmp:
@@ -127,7 +255,7 @@ def _write(output, scene, bodies, labels, face_counts, exclude):
             os.umask(mask)
             os.chmod(partial, 0o666 & ~mask)
             _write_meshes(npz, partial)
-            write_metadata(partial, scene, bodies, face_counts, labels, exclude)
+            write_metadata(partial, scene, bodies, face_counts, labels, exclude, nodal)
             os.replace(partial, output)
         except OSError as err:
             raise InputError(f"cannot write {output}: {err.strerror or err}") from None
@@ -141,9 +269,13 @@ def _save_bodies(path, bodies, labels):
     for i, (body, values) in enumerate(zip(bodies, labels)):
         labelled = np.any(values != 0, axis=1)
         arrays[f"cells{i}"] = body.petsc_cells()
-        arrays[f"coords{i}"] = body.coords
-        arrays[f"faces{i}"] = body.boundary_faces[labelled].astype(np.int32)
+        arrays[f"types{i}"] = np.array([str(t) for t in body.types])
+        arrays[f"dim{i}"] = np.array(body.dim)
+        arrays[f"coords{i}"] = body.coords[:body.num_vertices]
+        arrays[f"faces{i}"] = body.boundary_faces[labelled][:, :4].astype(np.int32)
+        arrays[f"facenv{i}"] = np.where(body.boundary_nv[labelled] == 6, 3, body.boundary_nv[labelled]).astype(np.int32)
         arrays[f"labels{i}"] = values[labelled]
+        arrays[f"faceidx{i}"] = np.nonzero(labelled)[0].astype(np.int64)  # a surface body's faces are its cells
     np.savez(path, **arrays)
 
 
@@ -162,7 +294,15 @@ def _write_meshes(npz, h5):
                             + done.stderr.strip()[:6000])
 
 
-def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
+def _scheme(a):
+    """A dynamic analysis' time integrator beyond Newmark's (absent: Newmark with its beta, gamma)."""
+    if a.scheme == "newmark":
+        return {}
+    return dict(scheme=a.scheme, alpha_m=a.alpha_m, alpha_f=a.alpha_f,
+                **({"hht_alpha": a.alpha} if a.scheme == "hht" else {"rho_inf": a.rho_inf}))
+
+
+def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, nodal=None):
     """Add the /mbcontact group (docs/scene-h5.md) to an existing HDF5 file."""
     import h5py
 
@@ -180,15 +320,34 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
         _attrs(root, format_version=FORMAT_VERSION, title=scene.title)
         a = scene.analysis
         _attrs(root.create_group("analysis"), type=a.type, dt=a.dt, final_time=a.final_time,
-               newmark_beta=a.newmark_beta, newmark_gamma=a.newmark_gamma, mass=a.mass,
+               newmark_beta=a.newmark_beta, newmark_gamma=a.newmark_gamma, mass=a.mass, **_scheme(a),
                **(dict(modes=a.modes, tie=int(a.tie)) if a.type == "modal" else {}))
         _list(root, "surfaces", face_counts.items(), lambda g, item: _attrs(
             g, name=item[0], id=surface_ids[item[0]], num_faces=item[1]))
-        _list(root, "bodies", zip(scene.bodies, bodies), lambda g, item: _attrs(
-            g, name=item[0].name, cell_type=item[1].cell_type, num_cells=len(item[1].cells),
-            num_vertices=len(item[1].coords), **item[0].material,
-            **({"element": item[0].element} if item[0].element else {}),
-            **({"massless": 1} if item[0].massless else {})))
+        def body(g, item):
+            i, (sb, b) = item
+            _attrs(g, name=sb.name, cell_type=b.cell_type, num_cells=len(b.cells),
+                   num_vertices=b.num_vertices, **sb.material,
+                   **({"num_nodes": len(b.coords)} if len(b.coords) != b.num_vertices else {}),
+                   **({"element": sb.element} if sb.element else {}),
+                   **({"massless": 1} if sb.massless else {}))
+            if b.cell_type == "mixed":  # each cell's type, in the scene's cell order
+                codes = {"tet4": 0, "hex8": 1, "wedge6": 2, "pyr5": 3}
+                g.create_dataset("cell_types", data=np.array([codes[t] for t in b.types], dtype=np.int32))
+            if b.cell_type == "surface":
+                g.create_dataset("cell_types", data=np.array([4 if t == "tri3" else 5 for t in b.types], dtype=np.int32))
+            if len(b.coords) != b.num_vertices:  # tet10: each midside node's edge (its corners) and position
+                g.create_dataset("midside", data=b.midside().astype(np.int32))
+                g.create_dataset("midside_coords", data=b.coords[b.num_vertices:].astype(np.float64))
+            if sb.rigid is not None:
+                r = sb.rigid
+                _attrs(g, rigid=1, reference=nodal["rigid"][i] if nodal else np.zeros(3), rigid_mass=r.get("mass", 0.0),
+                       rigid_inertia=r["inertia"].ravel() if "inertia" in r else np.zeros(9))
+            if nodal and i in nodal["initial"]:
+                for key, array in nodal["initial"][i].items():
+                    g.create_dataset(f"initial_{key}", data=array.astype(np.float64))
+
+        _list(root, "bodies", enumerate(zip(scene.bodies, bodies)), body)
         def side_faces(c, column):  # faces of each body on one side of couple c: the edge weights of the decomposition
             if labels is None:
                 return np.zeros(len(bodies), dtype=np.int32)
@@ -204,21 +363,49 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
         _list(root, "couples", enumerate(scene.couples), couple)
 
         dirichlet = []
-        for d in scene.dirichlet:
+        names = [b.name for b in scene.bodies]
+        for i, d in enumerate(scene.dirichlet):
             index = time_function(d.time)
-            dirichlet += [dict(surface=d.surface, surface_id=surface_ids[d.surface], component=comp,
-                               value=d.value, time=d.time.kind, time_function=index)
+            rows = nodal["dirichlet"][i] if nodal else None
+            label = d.surface or (f"body:{d.body}" if d.body else "nodes:" + "+".join(d.nodes).replace(",", " "))[:200]
+            where = dict(surface=d.surface, surface_id=surface_ids[d.surface]) if d.surface else \
+                dict(surface=label, surface_id=-1, **({"body": names.index(d.body)} if d.body and rows is None else {}))
+            dirichlet += [(dict(**where, component=comp, value=d.value, time=d.time.kind, time_function=index), rows)
                           for comp in d.components]
-        _list(root, "dirichlet", dirichlet, lambda g, d: _attrs(g, **d))
-        _list(root, "loads", scene.loads, lambda g, load: _attrs(
-            g, kind=load.kind, vector=load.vector, value=load.value, surface=load.surface,
-            surface_id=surface_ids.get(load.surface, -1), bodies=",".join(load.bodies),
-            time=load.time.kind, time_function=time_function(load.time), stage=load.stage,
-            **(dict(level=load.level, unit_weight=load.unit_weight, axis=load.axis)
-               if load.kind == "hydrostatic" else {}),
-            **(dict(velocity_function=time_function(Time("table", load.velocity)),
-                    displacement_function=time_function(Time("table", load.displacement)))
-               if load.kind == "ground_acceleration" else {})))
+
+        def dirichlet_entry(g, item):
+            attrs, rows = item
+            _attrs(g, **attrs)
+            if rows is not None:  # (body, node) of each prescribed node
+                g.create_dataset("nodes", data=rows.astype(np.int32))
+
+        _list(root, "dirichlet", dirichlet, dirichlet_entry)
+
+        def load(g, item):
+            i, load = item
+            if nodal and nodal["loads"][i] is not None:  # nodal and line forces: (body, node), weight
+                rows, weights = nodal["loads"][i]
+                g.create_dataset("nodes", data=rows.astype(np.int32))
+                g.create_dataset("weights", data=np.asarray(weights, dtype=np.float64))
+            _attrs(g, kind=load.kind, vector=load.vector, value=load.value, surface=load.surface,
+                   surface_id=surface_ids.get(load.surface, -1), bodies=",".join(load.bodies),
+                   time=load.time.kind, time_function=time_function(load.time), stage=load.stage,
+                   **(dict(level=load.level, unit_weight=load.unit_weight, axis=load.axis)
+                      if load.kind == "hydrostatic" else {}),
+                   **(dict(velocity_function=time_function(Time("table", load.velocity)),
+                           displacement_function=time_function(Time("table", load.displacement)))
+                      if load.kind == "ground_acceleration" else {}))
+
+        _list(root, "loads", enumerate(scene.loads), load)
+
+        def spring(g, item):
+            rows, to = item[1]
+            _attrs(g, stiffness=item[0].stiffness, damping=item[0].damping)
+            g.create_dataset("nodes", data=rows.astype(np.int32))
+            if to is not None:
+                g.create_dataset("to", data=to.astype(np.int32))
+
+        _list(root, "springs", zip(scene.springs, nodal["springs"] if nodal else []), spring)
         _list(root, "added_mass", scene.added_mass, lambda g, m: _attrs(
             g, model="westergaard", surface=m.surface, surface_id=surface_ids[m.surface], density=m.density,
             level=m.level, bottom=m.bottom, axis=m.axis))
@@ -227,7 +414,7 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None):
         _list(root, "stages", scene.stages, lambda g, st: _attrs(
             g, name=st.name, type=st.analysis.type, start_time=st.start_time, dt=st.analysis.dt,
             final_time=st.analysis.final_time, newmark_beta=st.analysis.newmark_beta,
-            newmark_gamma=st.analysis.newmark_gamma, mass=st.analysis.mass))
+            newmark_gamma=st.analysis.newmark_gamma, mass=st.analysis.mass, **_scheme(st.analysis)))
         _list(root, "time_functions", tables, lambda g, table: (
             _attrs(g, kind="table"), g.create_dataset("table", data=table.astype(np.float64))))
 

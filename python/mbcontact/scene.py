@@ -21,6 +21,11 @@ def warn(message):
     print(f"mbcontact-prep: warning: {message}", file=sys.stderr)
 
 
+def note(message):
+    """What the prep did to the input that the user should know (stderr, exit status 0)."""
+    print(f"mbcontact-prep: note: {message}", file=sys.stderr)
+
+
 # ---------------------------------------------------------------- YAML loading
 
 class _StrictLoader(yaml.SafeLoader):
@@ -259,7 +264,10 @@ def _csv_table(path, where):
 
 MATERIAL_DEFAULTS = dict(nu=0.0, density=0.0, damping=0.0, rayleigh_alpha=0.0, rayleigh_beta=0.0)
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
-LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration")
+LOAD_KINDS = ("gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration",
+              "nodal_force", "line_force")
+RIGID_COMPONENTS = {"x": 0, "y": 1, "z": 2, "rx": 3, "ry": 4, "rz": 5}
+SCHEMES = ("newmark", "hht", "generalized_alpha")
 FIELDS = ("displacement", "stress", "envelope")
 DEFAULT_FIELDS = ("displacement", "stress")
 ABSORBING_INPUTS = ("none", "outcrop", "incident")
@@ -275,6 +283,7 @@ class Body:
     material: dict
     element: str = ""  # hex bodies: "hex8" | "hex8i" | "hex8b"; "" = the solver's default
     massless: bool = False  # no inertia in a dynamic analysis (a massless foundation)
+    rigid: dict = None      # a rigid body: {reference, mass, inertia} (None: from its mesh); None: deformable
 
 
 @dataclass
@@ -288,10 +297,12 @@ class Couple:
 
 @dataclass
 class Dirichlet:
-    surface: str
-    components: list
+    surface: str          # one of surface, nodes, body
+    components: list      # 0, 1, 2 = x, y, z; a rigid body's 3, 4, 5 = rx, ry, rz
     value: float
     time: Time
+    nodes: list = field(default_factory=list)  # node sets, node groups or regions: their nodes
+    body: str = ""        # a whole body: its nodes, or a rigid body's motion
 
 
 @dataclass
@@ -309,6 +320,37 @@ class Load:
     where: str = ""           # its key path in the YAML (stages[i].loads[j]; "" for loads[i])
     velocity: np.ndarray = None      # ground_acceleration: the record's velocity and displacement
     displacement: np.ndarray = None  # tables (n, 2), integrated exactly from the acceleration's
+    nodes: list = field(default_factory=list)  # nodal_force: the node sets it acts on (per node)
+    line: list = field(default_factory=list)   # line_force: the line regions it acts on (per length)
+
+
+@dataclass
+class NodeSet:
+    kind: str             # plane | sphere | box | union | difference | intersection
+    names: list = field(default_factory=list)  # union, difference (the first minus the others), intersection
+    point: np.ndarray = None   # plane: a point of it; sphere: the centre
+    normal: np.ndarray = None  # plane
+    radius: float = 0.0        # sphere
+    lo: np.ndarray = None      # box
+    hi: np.ndarray = None
+    tolerance: float = None    # None: 1e-6 of the bodies' extent
+    bodies: list = field(default_factory=list)  # restricted to these bodies ([]: all)
+
+
+@dataclass
+class Initial:
+    body: str             # one of body, nodes
+    nodes: list
+    displacement: object  # None, a 3-vector, or ("field", name)
+    velocity: object
+
+
+@dataclass
+class Spring:
+    nodes: list
+    to: list              # [] : to the ground
+    stiffness: np.ndarray
+    damping: np.ndarray
 
 
 @dataclass
@@ -334,6 +376,11 @@ class Analysis:
     newmark_beta: float = 0.25
     newmark_gamma: float = 0.5
     mass: str = "consistent"
+    scheme: str = "newmark"  # newmark | hht | generalized_alpha
+    alpha: float = -0.3      # hht (Hilber-Hughes-Taylor, Code_Aster's sign): in [-1/3, 0]
+    rho_inf: float = 0.8     # generalized_alpha (Chung-Hulbert): spectral radius at infinite frequency, in [0, 1]
+    alpha_m: float = 0.0     # the generalized-alpha weights the solver uses (0, 0: Newmark)
+    alpha_f: float = 0.0
     modes: int = 6        # modal: how many of the lowest modes
     tie: bool = True      # modal: the couples tied (bonded) or the bodies alone
 
@@ -374,9 +421,14 @@ class Scene:
     stages: list = field(default_factory=list)  # empty: one analysis (`analysis`)
     added_mass: list = field(default_factory=list)
     absorbing: list = field(default_factory=list)
+    node_sets: dict = field(default_factory=dict)  # name -> NodeSet, in file order
+    initial: list = field(default_factory=list)
+    springs: list = field(default_factory=list)
+    extrude: dict = field(default_factory=dict)  # mesh name -> (length, layers): a 2D mesh extruded along z
 
 
-TOP_KEYS = ("title", "meshes", "bodies", "couples", "dirichlet", "loads", "added_mass", "absorbing",
+TOP_KEYS = ("title", "meshes", "bodies", "node_sets", "couples", "dirichlet", "loads", "initial", "springs",
+            "added_mass", "absorbing",
             "analysis", "stages", "output")
 
 
@@ -385,11 +437,15 @@ def parse_scene(doc, base_dir):
     mapping(doc, "", TOP_KEYS, required=("meshes", "bodies"))
     title = doc.get("title")
     title = "" if title in (None, "") else string(str(title), "title")
-    meshes = _meshes(doc["meshes"], base_dir)
+    extrude = {}
+    meshes = _meshes(doc["meshes"], base_dir, extrude)
     bodies = _bodies(doc["bodies"], meshes)
     body_names = [b.name for b in bodies]
     couples = _couples(doc.get("couples"))
-    dirichlet = [_dirichlet(e, f"dirichlet[{i}]", base_dir) for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
+    node_sets = _node_sets(doc.get("node_sets"), body_names)
+    dirichlet = [_dirichlet(e, f"dirichlet[{i}]", base_dir, bodies) for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
+    initial = [_initial(e, f"initial[{i}]", body_names) for i, e in enumerate(entries(doc.get("initial"), "initial"))]
+    springs = [_spring(e, f"springs[{i}]") for i, e in enumerate(entries(doc.get("springs"), "springs"))]
     loads = [load for i, e in enumerate(entries(doc.get("loads"), "loads"))
              for load in _loads(e, f"loads[{i}]", body_names, base_dir)]
     added_mass = [_added_mass(e, f"added_mass[{i}]") for i, e in enumerate(entries(doc.get("added_mass"), "added_mass"))]
@@ -404,7 +460,7 @@ def parse_scene(doc, base_dir):
         if a.type not in ("dynamic", "modal"):
             continue
         for b in bodies:
-            if b.material["density"] == 0 and not b.massless:
+            if b.material["density"] == 0 and not b.massless and b.rigid is None:
                 raise InputError(f"bodies.{b.name}.material.density: a {a.type} analysis ({where}) needs "
                                  f"density > 0 for every body (body '{b.name}' has 0; `massless: true` "
                                  "makes a body without inertia)")
@@ -420,16 +476,35 @@ def parse_scene(doc, base_dir):
         raise InputError("absorbing: an input surface (input: outcrop or incident) needs a ground_acceleration "
                          "load (the record that enters through it)")
     surfaces = _surface_references(doc, couples, dirichlet, loads, added_mass, absorbing)
+    if initial and not dynamic:
+        raise InputError("initial: initial conditions start a dynamic analysis (or a first dynamic stage)")
+    if initial and stages and stages[0].analysis.type != "dynamic":
+        raise InputError("initial: initial conditions need the first stage to be dynamic (a static stage starts "
+                         "from rest and from its own equilibrium)")
     return Scene(title, meshes, bodies, couples, dirichlet, loads, analysis, output, surfaces, stages,
-                 added_mass, absorbing)
+                 added_mass, absorbing, node_sets, initial, springs, extrude)
 
 
-def _meshes(value, base_dir):
+def _meshes(value, base_dir, extrude=None):
+    """name -> file, or name -> {file: FILE, extrude: {length: L, layers: n}} (a 2D mesh made 3D by
+    extruding it along z, as a plane-strain model of another code); extrude collects the latter."""
     meshes = named(value, "meshes")
     if not meshes:
         raise InputError("meshes: at least one mesh is needed (name: file)")
-    return {name: os.path.join(base_dir, string(path, f"meshes.{name}", maxlen=None))
-            for name, path in meshes.items()}
+    out = {}
+    for name, spec in meshes.items():
+        where = f"meshes.{name}"
+        if isinstance(spec, dict):
+            spec = mapping(spec, where, ("file", "extrude"), required=("file",))
+            if "extrude" in spec:
+                ex = mapping(spec["extrude"], f"{where}.extrude", ("length", "layers"), required=("length",))
+                length = real(ex["length"], f"{where}.extrude.length", gt=0)
+                layers = integer(ex.get("layers", 1), f"{where}.extrude.layers", ge=1, le=10000)
+                if extrude is not None:
+                    extrude[name] = (length, layers)
+            spec = spec["file"]
+        out[name] = os.path.join(base_dir, string(spec, where, maxlen=None))
+    return out
 
 
 def _bodies(value, meshes):
@@ -444,22 +519,61 @@ def _body(name, spec, meshes):
     if not IDENTIFIER.match(name):
         raise InputError(f"{where}: body names must be identifiers ([A-Za-z_][A-Za-z0-9_]*), "
                          f"got {name!r}")
-    spec = mapping(spec, where, ("mesh", "regions", "material", "element", "massless"), required=("mesh", "regions", "material"))
+    spec = mapping(spec, where, ("mesh", "regions", "material", "element", "massless", "rigid"), required=("mesh", "regions"))
+    rigid = _rigid(spec.get("rigid", False), f"{where}.rigid")
+    if "material" not in spec and rigid is None:
+        raise InputError(f"{where}: missing required key 'material'")
     mesh = string(spec["mesh"], f"{where}.mesh")
     if mesh not in meshes:
         raise InputError(f"{where}.mesh: unknown mesh {mesh!r} (meshes: {', '.join(meshes)})")
     regions = name_list(spec["regions"], f"{where}.regions")
     element = string(spec["element"], f"{where}.element", choices=ELEMENTS) if "element" in spec else ""
     massless = boolean(spec.get("massless", False), f"{where}.massless")
-    return Body(name, mesh, regions, _material(spec["material"], f"{where}.material"), element, massless)
+    if rigid is not None and (element or massless):
+        raise InputError(f"{where}.{'element' if element else 'massless'}: not for a rigid body")
+    material = _material(spec.get("material", {}), f"{where}.material", rigid=rigid is not None)
+    return Body(name, mesh, regions, material, element, massless, rigid)
+
+
+def _rigid(value, where):
+    """`rigid: true` or {reference: [x, y, z], mass: m, inertia: [[...], [...], [...]]}: a body of six
+    DOFs (the reference point's translation and the rotation about it); what is not given comes
+    from its mesh and density. None for a deformable body."""
+    if value is False or value is None:
+        return None
+    if value is True:
+        return {}
+    spec = mapping(value, where, ("reference", "mass", "inertia"))
+    out = {}
+    if "reference" in spec:
+        out["reference"] = vector3(spec["reference"], f"{where}.reference")
+    if "mass" in spec:
+        out["mass"] = real(spec["mass"], f"{where}.mass", gt=0)
+    if "inertia" in spec:
+        rows = spec["inertia"]
+        if not isinstance(rows, list) or len(rows) != 3:
+            raise InputError(f"{where}.inertia: expected a 3 x 3 matrix [[Ixx, Ixy, Ixz], [...], [...]] about the reference point")
+        inertia = np.array([vector3(r, f"{where}.inertia[{i}]") for i, r in enumerate(rows)])
+        if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0) or np.any(np.linalg.eigvalsh(inertia) <= 0):
+            raise InputError(f"{where}.inertia: must be symmetric and positive definite, got {inertia.tolist()}")
+        out["inertia"] = inertia
+        if "mass" not in spec:
+            raise InputError(f"{where}.inertia: give the mass with it (an inertia about the reference point, taken as "
+                             "the mass centre); without both, the mass and inertia come from the cells and the density")
+    return out
 
 
 MATERIAL_RANGE = (1e-100, 1e100)  # the solver's MBC_MATERIAL_MIN/MAX: squares stay normal doubles
 
 
-def _material(value, where):
-    spec = mapping(value, where, ("E",) + tuple(MATERIAL_DEFAULTS), required=("E",))
-    material = dict(E=real(spec["E"], f"{where}.E", gt=0))
+def _material(value, where, rigid=False):
+    """A rigid body needs no E (1 is written: unused) and takes density alone."""
+    spec = mapping(value, where, ("E",) + tuple(MATERIAL_DEFAULTS), required=() if rigid else ("E",))
+    if rigid:
+        for key in spec:
+            if key not in ("density",):
+                raise InputError(f"{where}.{key}: a rigid body's material has a density only")
+    material = dict(E=real(spec.get("E", 1.0), f"{where}.E", gt=0))
     for key, default in MATERIAL_DEFAULTS.items():
         bounds = dict(gt=-1, lt=0.5) if key == "nu" else dict(ge=0)
         material[key] = real(spec.get(key, default), f"{where}.{key}", **bounds)
@@ -490,27 +604,46 @@ def _couples(value):
     return couples
 
 
-def _dirichlet(spec, where, base_dir="."):
-    spec = mapping(spec, where, ("surface", "components", "value", "time"), required=("surface",))
-    return Dirichlet(string(spec["surface"], f"{where}.surface"),
-                     _components(spec.get("components", "all"), f"{where}.components"),
-                     real(spec.get("value", 0.0), f"{where}.value"),
-                     time_spec(spec.get("time"), f"{where}.time", ("constant",), base_dir))
+def _dirichlet(spec, where, base_dir=".", bodies=()):
+    """On a surface (its faces' nodes), on nodes (node sets, node groups, the nodes of regions of any
+    dimension) or on a body (all its nodes; a rigid body's motion: x, y, z, rx, ry, rz)."""
+    spec = mapping(spec, where, ("surface", "nodes", "body", "components", "value", "time"))
+    given = [k for k in ("surface", "nodes", "body") if k in spec]
+    if len(given) != 1:
+        raise InputError(f"{where}: give one of surface, nodes or body (got {', '.join(given) or 'none'})")
+    rigid = False
+    if "body" in spec:
+        body = string(spec["body"], f"{where}.body")
+        known = {b.name: b for b in bodies}
+        if body not in known:
+            raise InputError(f"{where}.body: unknown body {body!r} (bodies: {', '.join(known)})")
+        rigid = known[body].rigid is not None
+    d = Dirichlet(string(spec["surface"], f"{where}.surface") if "surface" in spec else "",
+                  _components(spec.get("components", "all"), f"{where}.components", rigid),
+                  real(spec.get("value", 0.0), f"{where}.value"),
+                  time_spec(spec.get("time"), f"{where}.time", ("constant",), base_dir))
+    if "nodes" in spec:
+        d.nodes = name_list(spec["nodes"], f"{where}.nodes")
+    if "body" in spec:
+        d.body = spec["body"]
+    return d
 
 
-def _components(value, where):
+def _components(value, where, rigid=False):
+    names = RIGID_COMPONENTS if rigid else COMPONENTS
     if value == "all":
-        return [0, 1, 2]
-    names = [value] if isinstance(value, str) else value
-    if not isinstance(names, list) or not names:
-        raise InputError(f"{where}: expected 'all' or a list of x, y, z, got {value!r}")
+        return list(names.values())
+    listed = [value] if isinstance(value, str) else value
+    if not isinstance(listed, list) or not listed:
+        raise InputError(f"{where}: expected 'all' or a list of {', '.join(names)}, got {value!r}")
     components = []
-    for n in names:
-        if not isinstance(n, str) or n not in COMPONENTS:
-            raise InputError(f"{where}: unknown component {n!r} (expected x, y, z or all)")
-        if COMPONENTS[n] in components:
+    for n in listed:
+        if not isinstance(n, str) or n not in names:
+            raise InputError(f"{where}: unknown component {n!r} (expected {', '.join(names)} or all"
+                             + ("" if rigid else "; rx, ry, rz only for a rigid body") + ")")
+        if names[n] in components:
             raise InputError(f"{where}: component {n!r} listed twice")
-        components.append(COMPONENTS[n])
+        components.append(names[n])
     return components
 
 
@@ -520,6 +653,8 @@ _LOAD_KEYS = {  # kind -> (required keys, optional keys) besides kind and time
     "pressure": (("surface", "value"), ()),
     "traction": (("surface", "vector"), ()),
     "hydrostatic": (("surface", "level", "unit_weight"), ("axis",)),
+    "nodal_force": (("nodes", "vector"), ()),
+    "line_force": (("line", "vector"), ()),
 }
 
 
@@ -644,20 +779,121 @@ def _load(spec, where, body_names, base_dir="."):
         if not isinstance(axis, str) or axis not in COMPONENTS:
             raise InputError(f"{where}.axis: expected x, y or z (the upward axis), got {axis!r}")
         load.axis = COMPONENTS[axis]
+    if kind == "nodal_force":
+        load.nodes = name_list(spec["nodes"], f"{where}.nodes")
+    if kind == "line_force":
+        load.line = name_list(spec["line"], f"{where}.line")
     return load
+
+
+def _node_sets(value, body_names):
+    """node_sets: name -> a selection of the bodies' nodes, as Code_Aster's DEFI_GROUP/CREA_GROUP_NO:
+    {plane: {point, normal}} (within `tolerance` of it), {sphere: {centre, radius}},
+    {box: {lo, hi}}, {union | intersection | difference: [names]} (difference: the first minus the
+    others); `bodies` restricts any of them."""
+    sets = {}
+    for name, spec in named(value, "node_sets").items():
+        where = f"node_sets.{name}"
+        string(name, where)
+        if "," in name:
+            raise InputError(f"{where}: a name must not contain ','")
+        kinds = ("plane", "sphere", "box", "union", "difference", "intersection")
+        spec = mapping(spec, where, kinds + ("tolerance", "bodies"))
+        given = [k for k in kinds if k in spec]
+        if len(given) != 1:
+            raise InputError(f"{where}: give one of {', '.join(kinds)} (got {', '.join(given) or 'none'})")
+        kind = given[0]
+        ns = NodeSet(kind)
+        if "tolerance" in spec:
+            ns.tolerance = real(spec["tolerance"], f"{where}.tolerance", ge=0)
+        if "bodies" in spec:
+            ns.bodies = name_list(spec["bodies"], f"{where}.bodies")
+            for b in ns.bodies:
+                if b not in body_names:
+                    raise InputError(f"{where}.bodies: unknown body {b!r} (bodies: {', '.join(body_names)})")
+        sub = spec[kind]
+        if kind == "plane":
+            sub = mapping(sub, f"{where}.plane", ("point", "normal"), required=("point", "normal"))
+            ns.point = vector3(sub["point"], f"{where}.plane.point")
+            normal = vector3(sub["normal"], f"{where}.plane.normal")
+            if not np.linalg.norm(normal) > 0:
+                raise InputError(f"{where}.plane.normal: must not be zero")
+            ns.normal = normal / np.linalg.norm(normal)
+        elif kind == "sphere":
+            sub = mapping(sub, f"{where}.sphere", ("centre", "radius"), required=("centre", "radius"))
+            ns.point = vector3(sub["centre"], f"{where}.sphere.centre")
+            ns.radius = real(sub["radius"], f"{where}.sphere.radius", ge=0)
+        elif kind == "box":
+            sub = mapping(sub, f"{where}.box", ("lo", "hi"), required=("lo", "hi"))
+            ns.lo, ns.hi = vector3(sub["lo"], f"{where}.box.lo"), vector3(sub["hi"], f"{where}.box.hi")
+            if np.any(ns.lo > ns.hi):
+                raise InputError(f"{where}.box: lo {ns.lo.tolist()} must not exceed hi {ns.hi.tolist()}")
+        else:
+            ns.names = name_list(sub, f"{where}.{kind}")
+            for n in ns.names:
+                if n == name:
+                    raise InputError(f"{where}.{kind}: a node set cannot use itself")
+        sets[name] = ns
+    return sets
+
+
+def _nodal_value(value, where):
+    """An initial displacement or velocity: [x, y, z] for every node, or {field: NAME} (a point
+    field of the body's mesh file, 3 components per node)."""
+    if isinstance(value, dict):
+        spec = mapping(value, where, ("field",), required=("field",))
+        return ("field", string(spec["field"], f"{where}.field", maxlen=None))
+    return vector3(value, where)
+
+
+def _initial(spec, where, body_names):
+    spec = mapping(spec, where, ("body", "nodes", "displacement", "velocity"))
+    given = [k for k in ("body", "nodes") if k in spec]
+    if len(given) != 1:
+        raise InputError(f"{where}: give one of body or nodes (got {', '.join(given) or 'none'})")
+    if "displacement" not in spec and "velocity" not in spec:
+        raise InputError(f"{where}: give a displacement, a velocity or both")
+    body = string(spec["body"], f"{where}.body") if "body" in spec else ""
+    if body and body not in body_names:
+        raise InputError(f"{where}.body: unknown body {body!r} (bodies: {', '.join(body_names)})")
+    return Initial(body, name_list(spec["nodes"], f"{where}.nodes") if "nodes" in spec else [],
+                   _nodal_value(spec["displacement"], f"{where}.displacement") if "displacement" in spec else None,
+                   _nodal_value(spec["velocity"], f"{where}.velocity") if "velocity" in spec else None)
+
+
+def _spring(spec, where):
+    """A discrete spring and dashpot at every node of `nodes`, to the ground or to the nearest node of
+    `to`, with a stiffness and a damping along x, y, z (global axes) each."""
+    spec = mapping(spec, where, ("nodes", "to", "stiffness", "damping"), required=("nodes",))
+    k = np.array([real(v, f"{where}.stiffness[{i}]", ge=0) for i, v in enumerate(_triple(spec.get("stiffness", [0, 0, 0]), f"{where}.stiffness"))])
+    c = np.array([real(v, f"{where}.damping[{i}]", ge=0) for i, v in enumerate(_triple(spec.get("damping", [0, 0, 0]), f"{where}.damping"))])
+    if not (np.any(k > 0) or np.any(c > 0)):
+        raise InputError(f"{where}: give a stiffness or a damping > 0 along some axis")
+    for key, v in (("stiffness", k), ("damping", c)):
+        for i, x in enumerate(v):
+            if x != 0 and not 1e-100 <= x <= 1e100:
+                raise InputError(f"{where}.{key}[{i}]: {x:g} lies outside [1e-100, 1e100]")
+    return Spring(name_list(spec["nodes"], f"{where}.nodes"),
+                  name_list(spec["to"], f"{where}.to") if "to" in spec else [], k, c)
+
+
+def _triple(value, where):
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise InputError(f"{where}: expected 3 numbers [x, y, z], got {value!r}")
+    return value
 
 
 def _analysis(value, where="analysis", start=0.0):
     """The analysis settings; a stage's (`where` = stages[i].analysis) runs from `start`, the end
     of the stage before, to its final_time (time runs on across stages)."""
-    spec = mapping(value, where, ("type", "dt", "final_time", "newmark", "mass", "modes", "tie"),
+    spec = mapping(value, where, ("type", "dt", "final_time", "newmark", "mass", "modes", "tie", "scheme", "alpha", "rho_inf"),
                    required=("type",) if where != "analysis" else ())
     a = Analysis()
     a.type = string(spec.get("type", a.type), f"{where}.type",
                     choices=("static", "dynamic", "modal") if where == "analysis" else ("static", "dynamic"))
     a.mass = string(spec.get("mass", a.mass), f"{where}.mass", choices=("consistent", "lumped"))
     if a.type == "modal":
-        for key in ("dt", "final_time", "newmark"):
+        for key in ("dt", "final_time", "newmark", "scheme", "alpha", "rho_inf"):
             if key in spec:
                 raise InputError(f"{where}.{key}: a modal analysis has no time steps")
         a.modes = integer(spec.get("modes", a.modes), f"{where}.modes", ge=1, le=10000)
@@ -687,9 +923,29 @@ def _analysis(value, where="analysis", start=0.0):
     if length / a.dt > MAX_STEPS:
         raise InputError(f"{where}.dt: {a.dt:g} to final_time {a.final_time:g} is {length / a.dt:.3g} "
                          f"steps, more than {MAX_STEPS:g}")
+    a.scheme = string(spec.get("scheme", a.scheme), f"{where}.scheme", choices=SCHEMES)
+    for key, scheme in (("alpha", "hht"), ("rho_inf", "generalized_alpha")):
+        if key in spec and a.scheme != scheme:
+            raise InputError(f"{where}.{key}: only with scheme: {scheme}")
+    if "newmark" in spec and a.scheme != "newmark":
+        raise InputError(f"{where}.newmark: the {a.scheme} scheme sets beta and gamma itself")
     newmark = mapping(spec.get("newmark"), f"{where}.newmark", ("beta", "gamma"))
     a.newmark_beta = real(newmark.get("beta", a.newmark_beta), f"{where}.newmark.beta", gt=0)
     a.newmark_gamma = real(newmark.get("gamma", a.newmark_gamma), f"{where}.newmark.gamma", gt=0)
+    if a.scheme == "hht":  # Hilber-Hughes-Taylor in Code_Aster's sign: alpha_f = -alpha, alpha_m = 0
+        a.alpha = real(spec.get("alpha", a.alpha), f"{where}.alpha")
+        if not -1.0 / 3.0 - 1e-12 <= a.alpha <= 0:
+            raise InputError(f"{where}.alpha: HHT's alpha must lie in [-1/3, 0] (0: the trapezoidal rule), got {a.alpha:g}")
+        a.alpha_m, a.alpha_f = 0.0, -a.alpha
+    elif a.scheme == "generalized_alpha":  # Chung and Hulbert (1993)
+        a.rho_inf = real(spec.get("rho_inf", a.rho_inf), f"{where}.rho_inf", ge=0)
+        if a.rho_inf > 1:
+            raise InputError(f"{where}.rho_inf: the spectral radius at infinite frequency lies in [0, 1], got {a.rho_inf:g}")
+        a.alpha_m = (2 * a.rho_inf - 1) / (a.rho_inf + 1)
+        a.alpha_f = a.rho_inf / (a.rho_inf + 1)
+    if a.scheme != "newmark":
+        a.newmark_gamma = 0.5 - a.alpha_m + a.alpha_f
+        a.newmark_beta = 0.25 * (1 - a.alpha_m + a.alpha_f) ** 2
     stable = a.newmark_gamma >= 0.5 and a.newmark_beta >= (a.newmark_gamma + 0.5) ** 2 / 4 * (1 - 1e-12)
     if a.type == "dynamic" and not stable:
         warn(f"{where}.newmark: beta={a.newmark_beta:g}, gamma={a.newmark_gamma:g} is not "
@@ -776,7 +1032,8 @@ def _surface_references(doc, couples, dirichlet, loads, added_mass=(), absorbing
                         add(name, f"couples[{i}].{side} (couple k={c.k})")
         elif section == "dirichlet":
             for i, d in enumerate(dirichlet):
-                add(d.surface, f"dirichlet[{i}].surface")
+                if d.surface:
+                    add(d.surface, f"dirichlet[{i}].surface")
         elif section in ("loads", "stages"):
             for load in loads:
                 if load.surface and load.where.startswith("stages") == (section == "stages"):

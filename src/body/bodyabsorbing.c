@@ -44,7 +44,7 @@ static PetscErrorCode AreaWeights(PetscInt nv, const PetscReal X[4][3], void *ct
 }
 
 /* A matrix of nodal 3 x 3 blocks with the layout and local numbering of K. */
-static PetscErrorCode NodalBlockMatrix(MBCBody body, Mat *A)
+PetscErrorCode MBCBodyNodalBlockMatrix(MBCBody body, Mat *A)
 {
   ISLocalToGlobalMapping rl2g, cl2g;
   PetscInt               m, n, M, N;
@@ -201,8 +201,8 @@ PetscErrorCode MBCBodyAbsorbingSetUp(MBCBody body)
   PetscCheck(rho > 0 && !body->desc.massless, body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has an absorbing boundary but no mass: its dashpots rho c would be 0 (a massless body radiates nothing)", scene->filename, body->name);
   cp = PetscSqrtReal((body->lambda + 2 * body->mu) / rho);
   cs = PetscSqrtReal(body->mu / rho);
-  PetscCall(NodalBlockMatrix(body, &body->Cb));
-  if (any[1]) PetscCall(NodalBlockMatrix(body, &body->Cin));
+  PetscCall(MBCBodyNodalBlockMatrix(body, &body->Cb));
+  if (any[1]) PetscCall(MBCBodyNodalBlockMatrix(body, &body->Cin));
   for (PetscInt i = 0; i < scene->nabsorbing; i++) {
     const MBCAbsorbingDesc *a = &scene->absorbing[i];
     PetscCall(MBCBodySurfaceBlocks(body, a->surface_id, AreaWeights, NULL, rho * cp, rho * cs, body->Cb));

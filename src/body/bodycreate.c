@@ -1,57 +1,38 @@
 /* A body: its DMPlex, loaded and distributed by PETSc from the scene file, on its own communicator. */
 #include <mbc/private/bodyimpl.h>
-#include <mbc/private/pointwise.h>
+#include <mbc/private/element.h>
 #include <petscsf.h>
 
-/* Every cell must have a positive Jacobian determinant at every quadrature point. */
+/* Every cell must have a positive Jacobian determinant at every quadrature point of its element,
+   and not vanishingly small next to the cube of its longest edge. A rigid surface has no volume. */
 static PetscErrorCode BodyCheckGeometry(MBCBody body)
 {
-  PetscQuadrature q;
-  PetscInt        cStart, cEnd, nq, bad = -1, badq = -1;
-  PetscReal      *v0, *J, *invJ, *detJ, worst = 0, worstq = 0;
-  IS              cellNumbering;
-  const PetscInt *gnum;
+  Vec                coords;
+  const PetscScalar *x;
+  PetscInt           cStart, cEnd, bad = -1, badq = -1;
+  PetscReal          worst = 0, worstq = 0;
+  IS                 cellNumbering;
+  const PetscInt    *gnum;
 
   PetscFunctionBegin;
-  PetscCall(PetscFEGetQuadrature(body->fe, &q));
-  PetscCall(PetscQuadratureGetData(q, NULL, NULL, &nq, NULL, NULL));
-  PetscCall(PetscMalloc4(3 * nq, &v0, 9 * nq, &J, 9 * nq, &invJ, nq, &detJ));
+  if (body->surface) PetscFunctionReturn(0);
+  PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
+  PetscCall(VecGetArrayRead(coords, &x));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
   PetscCall(DMPlexGetCellNumbering(body->dm, &cellNumbering));
   PetscCall(ISGetIndices(cellNumbering, &gnum));
   for (PetscInt c = cStart; c < cEnd && bad < 0 && badq < 0; c++) {
-    PetscBool          isDG;
-    PetscInt           nx;
-    const PetscScalar *array;
-    PetscScalar       *x;
-    PetscReal          L = 0;
-    PetscCall(DMPlexComputeCellGeometryFEM(body->dm, c, q, v0, J, invJ, detJ));
-    for (PetscInt i = 0; i < nq; i++) {
-      if (!(detJ[i] > 0)) {
-        bad   = gnum[c - cStart] < 0 ? -(gnum[c - cStart] + 1) : gnum[c - cStart];
-        worst = detJ[i];
-        break;
-      }
-    }
+    PetscReal X[3 * MBC_MAX_CELL_NODES], L, det;
+    PetscInt  idx[3 * MBC_MAX_CELL_NODES], nv;
+    PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
+    det = MBCElementMinJacobian(nv, X, &L);
     /* a cell stretched far beyond its volume (one vertex moved 1e9 away) is not inverted but no
        mesh: detJ / L^3 is 1e-6 for a sliver of aspect 1000, 1e-18 for that one */
-    PetscCall(DMPlexGetCellCoordinates(body->dm, c, &isDG, &nx, &array, &x));
-    for (PetscInt a = 0; a < nx / 3; a++)
-      for (PetscInt b = a + 1; b < nx / 3; b++) {
-        PetscReal d2 = 0;
-        for (PetscInt k = 0; k < 3; k++) d2 += PetscSqr(PetscRealPart(x[3 * a + k] - x[3 * b + k]));
-        L = PetscMax(L, PetscSqrtReal(d2));
-      }
-    PetscCall(DMPlexRestoreCellCoordinates(body->dm, c, &isDG, &nx, &array, &x));
-    for (PetscInt i = 0; i < nq && bad < 0; i++)
-      if (detJ[i] < 1e-12 * L * L * L) {
-        badq   = gnum[c - cStart] < 0 ? -(gnum[c - cStart] + 1) : gnum[c - cStart];
-        worstq = detJ[i] / (L * L * L);
-        break;
-      }
+    if (!(det > 0)) bad = gnum[c - cStart] < 0 ? -(gnum[c - cStart] + 1) : gnum[c - cStart], worst = det;
+    else if (det < 1e-12 * L * L * L) badq = gnum[c - cStart] < 0 ? -(gnum[c - cStart] + 1) : gnum[c - cStart], worstq = det / (L * L * L);
   }
   PetscCall(ISRestoreIndices(cellNumbering, &gnum));
-  PetscCall(PetscFree4(v0, J, invJ, detJ));
+  PetscCall(VecRestoreArrayRead(coords, &x));
   PetscCheck(bad < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s': cell %" PetscInt_FMT " is inverted or degenerate (Jacobian determinant %g at a quadrature point)", body->scene->filename, body->name, bad, (double)worst);
   PetscCheck(badq < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s': cell %" PetscInt_FMT " is degenerate (its Jacobian determinant is %g times the cube of its longest edge)", body->scene->filename, body->name, badq, (double)worstq);
   PetscFunctionReturn(0);
@@ -135,24 +116,34 @@ static PetscErrorCode BodyLoadMesh(MBCBody body)
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(BodySceneNumbering(body, sfXC));
   PetscCall(PetscSFDestroy(&sfXC));
-  PetscCall(DMPlexIsSimplex(body->dm, &body->simplex));
   PetscFunctionReturn(0);
 }
 
-const char *const MBCElementTypes[] = {"tet4", "hex8", "hex8i", "hex8b", "MBCElementType", "MBC_ELEMENT_", NULL};
+const char *const MBCElementTypes[] = {"tet4", "hex8", "hex8i", "hex8b", "tet10", "mixed", "rigid", "MBCElementType", "MBC_ELEMENT_", NULL};
 
-/* The element of the body's cells: tet4 for a tet mesh (the choice below is ignored); for hexes
-   -body_<name>_element (or -body_element, copied to every body by the solver), else the scene's
-   body key `element`, else hex8i (issue 12: as accurate on the Hertz cylinders as hex8 for ~2 %
-   more time, free of hex8's shear locking in bending; docs/performance.md). */
+/* The element of the body's hex cells: -body_<name>_element (or -body_element, copied to every
+   body by the solver), else the scene's body key `element`, else hex8i (issue 12: as accurate on
+   the Hertz cylinders as hex8 for ~2 % more time, free of hex8's shear locking in bending;
+   docs/performance.md). A body without hexes has its cells' own elements (the choice is ignored). */
 static PetscErrorCode BodyChooseElement(MBCBody body, const char prefix[])
 {
   char      value[64] = "";
-  PetscBool set       = PETSC_FALSE;
+  PetscBool set       = PETSC_FALSE, hex = PETSC_FALSE, other = PETSC_FALSE;
+  PetscInt  cStart, cEnd;
 
   PetscFunctionBegin;
-  body->element = body->simplex ? MBC_ELEMENT_TET4 : MBC_ELEMENT_HEX8I;
-  if (body->simplex) PetscFunctionReturn(0);
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
+  for (PetscInt c = cStart; c < cEnd; c++) {
+    if (MBCBodyCellType(body, c) == MBC_CELL_HEX8) hex = PETSC_TRUE;
+    else if (MBCBodyCellType(body, c) != MBC_CELL_TET4) other = PETSC_TRUE;
+  }
+  { /* the same on every rank of the body */
+    PetscBool l[2] = {hex, other}, g[2];
+    PetscCall(MPIU_Allreduce(l, g, 2, MPIU_BOOL, MPI_LOR, body->comm));
+    hex = g[0], other = g[1];
+  }
+  body->element = body->desc.rigid ? MBC_ELEMENT_RIGID : body->enode ? MBC_ELEMENT_TET10 : hex ? MBC_ELEMENT_HEX8I : other ? MBC_ELEMENT_MIXED : MBC_ELEMENT_TET4;
+  if (!hex || body->desc.rigid) PetscFunctionReturn(0);
   if (body->desc.element[0]) PetscCall(PetscStrncpy(value, body->desc.element, sizeof(value)));
   PetscCall(PetscOptionsGetString(NULL, prefix, "-element", value, sizeof(value), &set));
   if (!value[0]) PetscFunctionReturn(0);
@@ -172,9 +163,6 @@ static PetscErrorCode BodyChooseElement(MBCBody body, const char prefix[])
 PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, const char solverprefix[], MBCBody *newbody)
 {
   MBCBody     body;
-  PetscDS     ds;
-  PetscFE     feStress;
-  PetscScalar constants[MBC_NUM_CONSTANTS] = {0};
   char        prefix[MBC_NAME_LEN + 8];
   const char *bodyprefix;
 
@@ -194,33 +182,13 @@ PetscErrorCode MBCBodyCreate(MPI_Comm comm, MBCScene scene, PetscInt index, cons
   PetscCall(BodyLoadMesh(body));
   PetscCall(PetscLogEventEnd(MBC_BodyLoad, 0, 0, 0, 0));
 
-  /* P1/Q1 displacement; quadrature of order 2 integrates the mass matrix of affine cells exactly
-     and gives hexahedra the full 2x2x2 Gauss rule (no hourglass modes). */
+  PetscCall(MBCBodyLayoutSetUp(body)); /* the DOFs on the nodes, the stress per cell, the cells' nodes */
   PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "body_%s_", body->name));
   PetscCall(PetscObjectSetOptionsPrefix((PetscObject)body, solverprefix));
   PetscCall(PetscObjectAppendOptionsPrefix((PetscObject)body, prefix));
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)body, &bodyprefix));
   PetscCall(BodyChooseElement(body, bodyprefix));
-  PetscCall(PetscFECreateLagrange(comm, 3, 3, body->simplex, 1, 2, &body->fe));
-  PetscCall(PetscObjectSetName((PetscObject)body->fe, "displacement"));
-  PetscCall(DMSetField(body->dm, 0, NULL, (PetscObject)body->fe));
-  PetscCall(DMCreateDS(body->dm));
-  constants[0] = body->lambda;
-  constants[1] = body->mu;
-  PetscCall(DMGetDS(body->dm, &ds));
-  PetscCall(PetscDSSetJacobian(ds, 0, 0, NULL, NULL, NULL, MBCPointwiseElasticity_g3));
-  PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, constants));
   PetscCall(BodyCheckGeometry(body));
-
-  /* Cellwise stress: piecewise constant, 6 components. */
-  PetscCall(DMClone(body->dm, &body->dmStress));
-  PetscCall(PetscFECreateLagrange(comm, 3, 6, body->simplex, 0, 2, &feStress));
-  PetscCall(PetscObjectSetName((PetscObject)feStress, "stress"));
-  PetscCall(DMSetField(body->dmStress, 0, NULL, (PetscObject)feStress));
-  PetscCall(PetscFEDestroy(&feStress));
-  PetscCall(DMCreateDS(body->dmStress));
-  PetscCall(DMGetDS(body->dmStress, &ds));
-  PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, constants));
   *newbody = body;
   PetscFunctionReturn(0);
 }
@@ -259,6 +227,8 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   }
   PetscCall(VecDestroy(&b->ustart));
   PetscCall(VecDestroy(&b->u));
+  PetscCall(VecDestroy(&b->u0));
+  PetscCall(VecDestroy(&b->v0));
   PetscCall(VecDestroy(&b->v));
   PetscCall(VecDestroy(&b->a));
   PetscCall(VecDestroy(&b->du));
@@ -268,11 +238,11 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(VecDestroy(&b->g));
   PetscCall(VecDestroy(&b->work));
   PetscCall(VecDestroy(&b->work2));
-  PetscCall(PetscFEDestroy(&b->fe));
   PetscCall(DMDestroy(&b->dmStress));
   PetscCall(DMDestroy(&b->dm));
   PetscCall(PetscFree2(b->vnum, b->cnum));
-  PetscCall(PetscFree2(b->cellvoff, b->cellv));
+  PetscCall(MBCBodyLayoutDestroy(b));
+  PetscCall(MBCBodyRigidDestroy(b));
   PetscCall(MBCSceneDestroy(&b->scene));
   comm = b->comm; /* split by the solver for this body: freed after the header lets go of it */
   PetscCall(PetscHeaderDestroy(body));

@@ -1,8 +1,8 @@
-/* Element stiffness and mass of linear elasticity for tet4 and hex8 cells, volume loads, and their
-   assembly. Hand-written because PETSc 3.18's generic PetscFE integration costs ~2 ms per hex8 cell
-   for a 3-component field (measured; 12x the scalar cost), i.e. minutes per matrix at a million
-   DOFs; these kernels take microseconds. The cell stress uses them too (bodysolve.c); surface
-   loads and geometry checks stay with PetscFE. */
+/* Element stiffness and mass of linear elasticity for tet4 and hex8 cells (wedge6, pyr5, tet10:
+   bodyelementmixed.c), volume loads, and their assembly. Hand-written because PETSc 3.18's generic
+   PetscFE integration costs ~2 ms per hex8 cell for a 3-component field (measured; 12x the scalar
+   cost), i.e. minutes per matrix at a million DOFs; these kernels take microseconds. The cell
+   stress, the surface loads (bodyfaceload.c) and the geometry check use them too. */
 #include <mbc/private/bodyimpl.h>
 #include <mbc/private/element.h>
 
@@ -196,6 +196,17 @@ void MBCElementCentreGradient(PetscInt nv, const PetscReal X[], const PetscReal 
 {
   PetscReal G[8][3];
 
+  if (nv == 6 || nv == 10) {
+    MBCElementCentreGradientMixed(nv, X, U, gu);
+    return;
+  }
+  if (nv == 5) { /* the collapsed hex's: the apex's gradient is the sum of the four collapsed corners' */
+    PetscReal X8[24], U8[24];
+    MBCElementPyr5AsHex(X, X8);
+    MBCElementPyr5AsHex(U, U8);
+    MBCElementCentreGradient(8, X8, U8, gu);
+    return;
+  }
   if (nv == 4) (void)Tet4Gradients(X, G);
   else {
     const PetscReal xi[3] = {0, 0, 0};
@@ -274,11 +285,25 @@ PetscBool MBCElementHex8I(const PetscReal X[], PetscReal lambda, PetscReal mu, P
   return PETSC_TRUE;
 }
 
-/* w[a] = int N_a dV over the cell with vertices X (nv 4 or 8): tet4 V/4; a hex (every variant: a
-   load acts on the compatible trilinear functions) by the 2x2x2 rule, exact for N_a det J. */
-static void ElementNodalWeights(PetscInt nv, const PetscReal X[], PetscReal w[])
+/* w[a] = int N_a dV over the cell with nodes X: tet4 V/4; a hex (every variant: a load acts on
+   the compatible trilinear functions) by the 2x2x2 rule, exact for N_a det J; a pyramid as its
+   collapsed hex; wedge6 and tet10 by their rules. */
+void MBCElementNodalWeights(PetscInt nv, const PetscReal X[], PetscReal w[])
 {
   PetscReal Ji[9];
+
+  if (nv == 6 || nv == 10) {
+    MBCElementNodalWeightsMixed(nv, X, w);
+    return;
+  }
+  if (nv == 5) {
+    PetscReal X8[24], w8[8];
+    MBCElementPyr5AsHex(X, X8);
+    MBCElementNodalWeights(8, X8, w8);
+    for (PetscInt a = 0; a < 4; a++) w[a] = w8[a];
+    w[4] = w8[4] + w8[5] + w8[6] + w8[7];
+    return;
+  }
 
   if (nv == 4) {
     PetscReal G[4][3], vol = Tet4Gradients(X, G);
@@ -293,59 +318,35 @@ static void ElementNodalWeights(PetscInt nv, const PetscReal X[], PetscReal w[])
   }
 }
 
-/* Every local cell's vertices in closure order, once: DMPlexGetTransitiveClosure looks up the cell
-   type of every point of the closure (DMLabelGetValue, 2-3 % of a whole dam run), and the cells'
-   vertices serve K's pattern and values, the volume loads and every output's stress. */
-static PetscErrorCode BodyCellVerticesSetUp(MBCBody body)
+/* The smallest Jacobian determinant over the element's quadrature points (the Gauss points of
+   tet4 and hex8 kernels, the centre), positive for a valid cell, and the longest distance L
+   between its corners (a cell with det J << L^3 is degenerate). */
+PetscReal MBCElementMinJacobian(PetscInt nv, const PetscReal X[], PetscReal *L)
 {
-  PetscInt cStart, cEnd, vStart, vEnd, n = 0;
+  const PetscInt nc = nv == 10 ? 4 : nv;
+  PetscReal      dmin = PETSC_MAX_REAL;
 
-  PetscFunctionBegin;
-  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
-  PetscCall(PetscMalloc2(cEnd - cStart + 1, &body->cellvoff, 8 * (cEnd - cStart) + 1, &body->cellv));
-  body->cellvoff[0] = 0;
-  for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscInt nv = 0, *closure = NULL, nclosure;
-    PetscCall(DMPlexGetTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-      if (closure[p] < vStart || closure[p] >= vEnd) continue;
-      PetscCheck(++nv <= 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with more than 8 vertices", body->name);
-      body->cellv[n++] = closure[p];
-    }
-    PetscCall(DMPlexRestoreTransitiveClosure(body->dm, c, PETSC_TRUE, &nclosure, &closure));
-    body->cellvoff[c - cStart + 1] = n;
+  *L = 0;
+  for (PetscInt a = 0; a < nc; a++)
+    for (PetscInt b = a + 1; b < nc; b++) *L = PetscMax(*L, PetscSqrtReal(PetscSqr(X[3 * a] - X[3 * b]) + PetscSqr(X[3 * a + 1] - X[3 * b + 1]) + PetscSqr(X[3 * a + 2] - X[3 * b + 2])));
+  if (nv == 6 || nv == 10) return MBCElementMinJacobianMixed(nv, X);
+  if (nv == 4) { /* x = xi X0 + (1 - xi - eta - zeta) X1 + eta X2 + zeta X3: PETSc's tet swaps Gmsh's first two */
+    PetscReal J[9], Ji[9];
+    for (PetscInt i = 0; i < 3; i++) J[i * 3 + 0] = X[i] - X[3 + i], J[i * 3 + 1] = X[6 + i] - X[3 + i], J[i * 3 + 2] = X[9 + i] - X[3 + i];
+    return Invert3(J, Ji);
   }
-  PetscFunctionReturn(0);
-}
-
-/* Cell c's vertices in closure order: their coordinates X (3 each, from the local coordinate
-   array x) and the local DOF offsets idx of the displacement (3 each); *nv their count. */
-PetscErrorCode MBCBodyCellVertices(MBCBody body, PetscInt c, const PetscScalar x[], PetscReal X[24], PetscInt idx[24], PetscInt *nv)
-{
-  DM           cdm;
-  PetscSection lsec, csec;
-  PetscInt     cStart;
-
-  PetscFunctionBegin;
-  if (!body->cellvoff) PetscCall(BodyCellVerticesSetUp(body));
-  PetscCall(DMGetLocalSection(body->dm, &lsec));
-  PetscCall(DMGetCoordinateDM(body->dm, &cdm));
-  PetscCall(DMGetLocalSection(cdm, &csec));
-  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, NULL));
-  *nv = body->cellvoff[c - cStart + 1] - body->cellvoff[c - cStart];
-  for (PetscInt a = 0; a < *nv; a++) {
-    const PetscInt v = body->cellv[body->cellvoff[c - cStart] + a];
-    PetscInt       off, coff;
-    PetscCall(PetscSectionGetOffset(lsec, v, &off));
-    PetscCall(PetscSectionGetOffset(csec, v, &coff));
-    for (PetscInt i = 0; i < 3; i++) {
-      idx[3 * a + i] = off + i;
-      X[3 * a + i]   = PetscRealPart(x[coff + i]);
+  {
+    PetscReal       X8[24];
+    const PetscReal g = 1.0 / PetscSqrtReal(3.0);
+    if (nv == 5) MBCElementPyr5AsHex(X, X8);
+    else PetscArraycpy(X8, X, 24);
+    for (PetscInt q = 0; q < 9; q++) {
+      const PetscReal xi[3] = {q < 8 ? HexCorner[q][0] * g : 0, q < 8 ? HexCorner[q][1] * g : 0, q < 8 ? HexCorner[q][2] * g : 0};
+      PetscReal       N[8], dN[8][3], Ji[9];
+      dmin = PetscMin(dmin, HexMap(X8, xi, N, dN, Ji));
     }
   }
-  PetscCheck(*nv == 4 || *nv == 8, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': cell with %" PetscInt_FMT " vertices; only tet4 and hex8 are supported", body->name, *nv);
-  PetscFunctionReturn(0);
+  return dmin;
 }
 
 /* *K: the body's operator, preallocated from its cells' vertices (the pattern assembly fills) by
@@ -372,6 +373,7 @@ PetscErrorCode MBCBodyCreateOperator(MBCBody body, Mat *K)
   PetscCall(MatSetLocalToGlobalMapping(pre, rl2g, cl2g));
   PetscCall(MatSetUp(pre));
   PetscCall(MBCBodyAssembleElasticity(body, pre, NULL)); /* the pattern only */
+  PetscCall(MBCBodySpringPattern(body, pre));
   PetscCall(MatPreallocatorPreallocate(pre, PETSC_TRUE, *K));
   PetscCall(MatDestroy(&pre));
   PetscFunctionReturn(0);
@@ -385,8 +387,8 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
   Vec                coords;
   const PetscScalar *x;
   PetscInt           cStart, cEnd;
-  PetscReal          Ke[576], Me[576], X[24];
-  PetscInt           idx[24];
+  PetscReal          Ke[900], Me[900], X[3 * MBC_MAX_CELL_NODES];
+  PetscInt           idx[3 * MBC_MAX_CELL_NODES];
   PetscBool          pattern;
 
   PetscFunctionBegin;
@@ -405,6 +407,9 @@ PetscErrorCode MBCBodyAssembleElasticity(MBCBody body, Mat K, Mat M)
     }
     if (M) PetscCall(PetscArrayzero(Me, 9 * nv * nv));
     if (nv == 4) MBCElementTet4(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
+    else if (nv == 5) MBCElementPyr5(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
+    else if (nv == 6) MBCElementWedge6(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
+    else if (nv == 10) MBCElementTet10(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     else if (body->element == MBC_ELEMENT_HEX8I) PetscCheck(MBCElementHex8I(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': cell %" PetscInt_FMT " is degenerate (hex8i: its incompatible-mode stiffness is not positive definite)", body->name, c);
     else if (body->element == MBC_ELEMENT_HEX8B) MBCElementHex8B(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
     else MBCElementHex8(X, body->lambda, body->mu, body->desc.density, Ke, M ? Me : NULL);
@@ -438,11 +443,11 @@ PetscErrorCode MBCBodyAssembleVolumeLoad(MBCBody body, const PetscReal f[3], Vec
   PetscCall(VecGetArray(Floc, &fl));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
   for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscReal X[24], w[8];
-    PetscInt  idx[24], nv;
+    PetscReal X[3 * MBC_MAX_CELL_NODES], w[MBC_MAX_CELL_NODES];
+    PetscInt  idx[3 * MBC_MAX_CELL_NODES], nv;
 
     PetscCall(MBCBodyCellVertices(body, c, x, X, idx, &nv));
-    ElementNodalWeights(nv, X, w);
+    MBCElementNodalWeights(nv, X, w);
     for (PetscInt a = 0; a < nv; a++)
       for (PetscInt i = 0; i < 3; i++) fl[idx[3 * a + i]] += w[a] * f[i];
   }

@@ -9,12 +9,12 @@
 static PetscErrorCode BodyContactDofs(MBCBody body, PetscBool mask[])
 {
   const char  *labels[2] = {"contact_master", "contact_slave"};
-  PetscSection gsec;
-  PetscInt     vStart, vEnd, rstart;
+  PetscSection gsec, lsec;
+  PetscInt     rstart;
 
   PetscFunctionBegin;
   PetscCall(DMGetGlobalSection(body->dm, &gsec));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(DMGetLocalSection(body->dm, &lsec));
   PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
   for (PetscInt side = 0; side < 2; side++) {
     DMLabel label;
@@ -38,8 +38,9 @@ static PetscErrorCode BodyContactDofs(MBCBody body, PetscBool mask[])
         PetscInt *closure = NULL, nclosure;
         PetscCall(DMPlexGetTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
         for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-          PetscInt off;
-          if (closure[p] < vStart || closure[p] >= vEnd) continue;
+          PetscInt off, dof;
+          PetscCall(PetscSectionGetDof(lsec, closure[p], &dof));
+          if (!dof) continue; /* the face's nodes */
           PetscCall(PetscSectionGetOffset(gsec, closure[p], &off));
           if (off < 0) continue; /* owned by another rank */
           for (PetscInt d = 0; d < 3; d++) mask[off + d - rstart] = PETSC_TRUE;
@@ -62,27 +63,27 @@ static PetscErrorCode BodyContactDofs(MBCBody body, PetscBool mask[])
    the body's size, not of its distance from the origin. Collective on the body. */
 static PetscErrorCode BodyRigidBasis(MBCBody body, Vec modes[6])
 {
-  DM                 cdm;
-  PetscSection       lsec, gsec, csec;
+  PetscSection       lsec, gsec;
   Vec                coords, loc;
   const PetscScalar *x;
   PetscInt           vStart, vEnd;
   PetscReal          c[4] = {0, 0, 0, 0};
 
   PetscFunctionBegin;
-  PetscCall(DMGetCoordinateDM(body->dm, &cdm));
-  PetscCall(DMGetLocalSection(cdm, &csec));
   PetscCall(DMGetLocalSection(body->dm, &lsec));
   PetscCall(DMGetGlobalSection(body->dm, &gsec));
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(DMPlexGetChart(body->dm, &vStart, &vEnd)); /* every node: the vertices and tet10's edges */
   PetscCall(VecGetArrayRead(coords, &x));
-  for (PetscInt v = vStart; v < vEnd; v++) { /* the centroid of the owned vertices, over the ranks */
-    PetscInt goff, coff;
+  for (PetscInt v = vStart; v < vEnd; v++) { /* the centroid of the owned nodes, over the ranks */
+    PetscInt  goff, dof;
+    PetscReal X[3];
+    PetscCall(PetscSectionGetDof(lsec, v, &dof));
+    if (dof < 3) continue;
     PetscCall(PetscSectionGetOffset(gsec, v, &goff));
     if (goff < 0) continue;
-    PetscCall(PetscSectionGetOffset(csec, v, &coff));
-    for (PetscInt d = 0; d < 3; d++) c[d] += PetscRealPart(x[coff + d]);
+    PetscCall(MBCBodyPointCoordinates(body, v, x, X));
+    for (PetscInt d = 0; d < 3; d++) c[d] += X[d];
     c[3] += 1;
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, c, 4, MPIU_REAL, MPIU_SUM, body->comm));
@@ -92,13 +93,13 @@ static PetscErrorCode BodyRigidBasis(MBCBody body, Vec modes[6])
     PetscCall(VecZeroEntries(loc));
     PetscCall(VecGetArray(loc, &l));
     for (PetscInt v = vStart; v < vEnd; v++) {
-      PetscInt  off, coff, dof;
+      PetscInt  off, dof;
       PetscReal X[3];
       PetscCall(PetscSectionGetDof(lsec, v, &dof));
       if (dof < 3) continue;
       PetscCall(PetscSectionGetOffset(lsec, v, &off));
-      PetscCall(PetscSectionGetOffset(csec, v, &coff));
-      for (PetscInt d = 0; d < 3; d++) X[d] = PetscRealPart(x[coff + d]) - c[d] / c[3];
+      PetscCall(MBCBodyPointCoordinates(body, v, x, X));
+      for (PetscInt d = 0; d < 3; d++) X[d] -= c[d] / c[3];
       if (m < 3) l[off + m] = 1;
       else { /* e_k x X */
         const PetscInt k = m - 3, i = (k + 1) % 3, j = (k + 2) % 3;
@@ -122,6 +123,70 @@ static PetscErrorCode BodyRigidBasis(MBCBody body, Vec modes[6])
   PetscFunctionReturn(0);
 }
 
+/* Springs to the ground hold some of the modes the supports leave free: of the free combinations
+   (the columns a of V with ev[a] < 1e-12), those K does not annihilate. S = R^T K R over them
+   (the elements' part is rounding, eps |K|), its eigenvectors with eigenvalues below 1e-9 max
+   diag K stay free: V and ev are rewritten to hold them (ev 0) and the others (ev 1), *k their count. */
+static PetscErrorCode BodySpringHeldModes(MBCBody body, Vec modes[6], PetscScalar V[36], PetscReal ev[6], PetscInt *k)
+{
+  PetscInt     f[6], nf = 0;
+  PetscScalar  S[36], W[36], work[200], out[36];
+  PetscReal    es[6], dmax;
+  PetscBLASInt n, lwork = 200, info;
+  Vec          R, KR, d;
+
+  PetscFunctionBegin;
+  for (PetscInt a = 0; a < 6; a++)
+    if (PetscRealPart(ev[a]) < 1e-12) f[nf++] = a;
+  PetscCall(VecDuplicate(body->u, &R));
+  PetscCall(VecDuplicate(body->u, &KR));
+  PetscCall(VecDuplicate(body->u, &d));
+  PetscCall(MatGetDiagonal(body->K, d));
+  PetscCall(VecNorm(d, NORM_INFINITY, &dmax));
+  for (PetscInt i = 0; i < nf; i++) {
+    Vec Rj;
+    PetscCall(VecZeroEntries(R));
+    for (PetscInt b = 0; b < 6; b++) PetscCall(VecAXPY(R, V[f[i] * 6 + b], modes[b]));
+    PetscCall(MatMult(body->K, R, KR));
+    PetscCall(VecDuplicate(R, &Rj));
+    for (PetscInt j = 0; j < nf; j++) {
+      PetscScalar s;
+      PetscCall(VecZeroEntries(Rj));
+      for (PetscInt b = 0; b < 6; b++) PetscCall(VecAXPY(Rj, V[f[j] * 6 + b], modes[b]));
+      PetscCall(VecDot(KR, Rj, &s));
+      S[i * nf + j] = s;
+    }
+    PetscCall(VecDestroy(&Rj));
+  }
+  PetscCall(VecDestroy(&R));
+  PetscCall(VecDestroy(&KR));
+  PetscCall(VecDestroy(&d));
+  PetscCall(PetscBLASIntCast(nf, &n));
+  PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "U", &n, S, &n, es, work, &lwork, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK syev failed (%d) on body '%s''s spring-held modes", (int)info, body->name);
+  /* new rows of V: the free combinations first (ev 0), then the held (ev 1), the constrained ones as they were */
+  for (PetscInt a = 0; a < 36; a++) out[a] = V[a];
+  {
+    PetscInt row = 0, kept = 0;
+    for (PetscInt pass = 0; pass < 2; pass++)
+      for (PetscInt i = 0; i < nf; i++) {
+        const PetscBool is_free = (PetscBool)(es[i] < 1e-9 * dmax);
+        if (is_free != (pass == 0)) continue;
+        for (PetscInt b = 0; b < 6; b++) {
+          W[b] = 0;
+          for (PetscInt j = 0; j < nf; j++) W[b] += S[i * nf + j] * V[f[j] * 6 + b];
+        }
+        for (PetscInt b = 0; b < 6; b++) out[f[row] * 6 + b] = W[b];
+        ev[f[row]] = is_free ? 0 : 1;
+        row++;
+        kept += is_free;
+      }
+    *k = kept;
+  }
+  for (PetscInt a = 0; a < 36; a++) V[a] = out[a];
+  PetscFunctionReturn(0);
+}
+
 /* body->rigid: the free modes (orthonormal), body->fix_rows: the DOFs held in K^+. The six rigid
    modes of the mesh, combined by the eigenvectors of C^T C (C: the modes on the prescribed DOFs)
    whose eigenvalues vanish: those combinations do not move any prescribed DOF. */
@@ -136,6 +201,10 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
 
   PetscFunctionBegin;
   PetscCall(MBCBodyRigidModesDestroy(body));
+  if (body->desc.rigid) { /* a rigid body: its free components, nothing to hold in K^+ = 0 */
+    PetscCall(MBCBodyRigidFreeModes(body));
+    PetscFunctionReturn(0);
+  }
   PetscCall(BodyRigidBasis(body, modes));
   PetscCall(VecGetOwnershipRange(body->u, &rstart, &rend));
   for (PetscInt a = 0; a < nm; a++) PetscCall(VecGetArrayRead(modes[a], &mv[a]));
@@ -152,6 +221,7 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
      DOFs, 0 for a free motion, at least ~1/N for one that moves a single prescribed DOF */
   for (PetscInt a = 0; a < nm; a++)
     if (PetscRealPart(ev[a]) < 1e-12) k++;
+  if (k && MBCBodyHasSprings(body)) PetscCall(BodySpringHeldModes(body, modes, V, ev, &k));
   body->nrigid = k;
   if (k) {
     PetscReal   *piv, pv;

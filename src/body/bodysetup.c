@@ -1,6 +1,5 @@
 /* Assembly of a body's stiffness, mass and load vectors, and its constrained DOFs. */
 #include <mbc/private/bodyimpl.h>
-#include <mbc/private/pointwise.h>
 
 /* K and, for a dynamic analysis, M: consistent (rho int N_i N_j) or lumped (its row sums). */
 static PetscErrorCode BodyAssembleOperators(MBCBody body, PetscBool mass, MBCMassType type)
@@ -37,19 +36,37 @@ static PetscErrorCode BodySurfaceSize(MBCBody body, PetscInt id, PetscInt *n)
   PetscFunctionReturn(0);
 }
 
-/* The load vector of one scene load for a unit time factor: volume and hydrostatic loads by hand,
-   the other surface loads in a clone of the body's DM whose discrete system holds only that load
-   (the clone shares topology, section and layout). */
+/* F: vector times its weight at each of the load's nodes of this body that this rank owns (nodal
+   and line forces). */
+static PetscErrorCode BodyAssembleNodalLoad(MBCBody body, MBCLoadDesc *load, Vec F)
+{
+  PetscSection gsec;
+  PetscScalar *f;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(VecZeroEntries(F));
+  PetscCall(DMGetGlobalSection(body->dm, &gsec));
+  PetscCall(VecGetOwnershipRange(F, &rstart, NULL));
+  PetscCall(VecGetArray(F, &f));
+  for (PetscInt k = 0; k < load->nnodes; k++) {
+    PetscInt p, off;
+    if (load->nodes[2 * k] != body->index) continue;
+    PetscCall(MBCBodyNodePoint(body, load->nodes[2 * k + 1], &p));
+    if (p < 0) continue;
+    PetscCall(PetscSectionGetOffset(gsec, p, &off));
+    if (off < 0) continue; /* owned by another rank */
+    for (PetscInt c = 0; c < 3; c++) f[off + c - rstart] += load->weights[k] * load->vector[c];
+  }
+  PetscCall(VecRestoreArray(F, &f));
+  PetscFunctionReturn(0);
+}
+
+/* The load vector of one scene load for a unit time factor: volume loads by their element
+   weights, surface loads face by face (bodyfaceload.c, bodyhydrostatic.c), nodal loads at their
+   nodes. */
 static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
 {
-  DM            dm;
-  PetscDS       ds;
-  Vec           zero, Floc;
-  DMLabel       label;
-  PetscWeakForm wf;
-  PetscInt      bd, id = load->surface_id;
-  PetscScalar   c[MBC_NUM_CONSTANTS] = {0};
-
   PetscFunctionBegin;
   if (load->kind == MBC_LOAD_GROUND_ACCELERATION) { /* MBCBodyAssembleLoads assembles it */
     PetscBool applies;
@@ -60,35 +77,22 @@ static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
     PetscCall(MBCBodyAssembleHydrostatic(body, load, F));
     PetscFunctionReturn(0);
   }
+  if (load->kind == MBC_LOAD_NODAL_FORCE || load->kind == MBC_LOAD_LINE_FORCE) {
+    PetscCall(BodyAssembleNodalLoad(body, load, F));
+    PetscFunctionReturn(0);
+  }
+  if (load->kind == MBC_LOAD_GRAVITY && body->desc.rigid) { /* through its mass about the reference point */
+    PetscCall(MBCBodyRigidGravity(body, load->vector, F));
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(!(load->kind == MBC_LOAD_BODY_FORCE && body->surface), body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: a body force acts on the rigid surface '%s', which has no volume", body->scene->filename, body->name);
   if (load->kind == MBC_LOAD_GRAVITY || load->kind == MBC_LOAD_BODY_FORCE) { /* by hand, as K */
     PetscReal f[3];
     for (PetscInt d = 0; d < 3; d++) f[d] = PetscRealPart(load->vector[d]) * (load->kind == MBC_LOAD_GRAVITY ? body->desc.density : 1.0);
     PetscCall(MBCBodyAssembleVolumeLoad(body, f, F));
     PetscFunctionReturn(0);
   }
-  c[0] = body->lambda;
-  c[1] = body->mu;
-  for (PetscInt d = 0; d < 3; d++) c[2 + d] = load->vector[d];
-  if (load->kind == MBC_LOAD_PRESSURE) c[5] = load->value;
-  PetscCall(DMClone(body->dm, &dm));
-  PetscCall(DMSetField(dm, 0, NULL, (PetscObject)body->fe));
-  PetscCall(DMCreateDS(dm));
-  PetscCall(DMGetDS(dm, &ds));
-  PetscCall(DMGetLabel(dm, "Face Sets", &label));
-  PetscCall(DMAddBoundary(dm, DM_BC_NATURAL, load->surface, label, 1, &id, 0, 0, NULL, NULL, NULL, NULL, &bd));
-  PetscCall(PetscDSGetBoundary(ds, bd, &wf, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
-  PetscCall(PetscWeakFormSetIndexBdResidual(wf, label, id, 0, 0, 0, MBCPointwiseTraction_f0, 0, NULL));
-  PetscCall(PetscDSSetConstants(ds, MBC_NUM_CONSTANTS, c));
-  PetscCall(DMGetLocalVector(dm, &zero));
-  PetscCall(DMGetLocalVector(dm, &Floc));
-  PetscCall(VecZeroEntries(zero));
-  PetscCall(VecZeroEntries(Floc));
-  PetscCall(DMPlexSNESComputeResidualFEM(dm, zero, Floc, NULL));
-  PetscCall(VecZeroEntries(F));
-  PetscCall(DMLocalToGlobal(dm, Floc, ADD_VALUES, F));
-  PetscCall(DMRestoreLocalVector(dm, &Floc));
-  PetscCall(DMRestoreLocalVector(dm, &zero));
-  PetscCall(DMDestroy(&dm));
+  PetscCall(MBCBodyAssembleFaceLoad(body, load, F));
   PetscFunctionReturn(0);
 }
 
@@ -110,6 +114,12 @@ PetscErrorCode MBCBodyAssembleLoads(MBCBody body)
       PetscCall(BodySurfaceSize(body, load->surface_id, &n));
       applies = (PetscBool)(n > 0);
     }
+    if (applies && load->nnodes) { /* nodal and line forces: on the bodies their nodes are in */
+      applies = PETSC_FALSE;
+      for (PetscInt k = 0; k < load->nnodes && !applies; k++) applies = (PetscBool)(load->nodes[2 * k] == body->index);
+    }
+    if (applies && body->desc.rigid && (load->kind == MBC_LOAD_PRESSURE || load->kind == MBC_LOAD_TRACTION || load->kind == MBC_LOAD_HYDROSTATIC) && body->surface)
+      SETERRQ(body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: load %" PetscInt_FMT " (%s) acts on the rigid surface '%s', which has no faces of its own: load it by nodal forces", scene->filename, l, MBCLoadKinds[load->kind], body->name);
     if (applies && load->kind == MBC_LOAD_GROUND_ACCELERATION) applies = (PetscBool)(!body->scene->absolute || body->Cin); /* absolute motion: through the input surfaces only */
     if (!applies) continue;
     PetscCall(DMCreateGlobalVector(body->dm, &body->load[body->nloads]));
@@ -167,21 +177,36 @@ static PetscErrorCode BodySetUpConstraints(MBCBody body)
 {
   MBCScene     scene = body->scene;
   DMLabel      label;
-  PetscSection gsec;
-  PetscInt     vStart, vEnd, n = 0, cap = 0, *rows = NULL, *entry = NULL;
+  PetscSection gsec, lsec;
+  PetscInt     n = 0, cap = 0, *rows = NULL, *entry = NULL;
   PetscInt     local[3] = {0, 0, 0}, global[3];
 
   PetscFunctionBegin;
   PetscCall(DMGetLabel(body->dm, "Face Sets", &label));
   PetscCall(DMGetGlobalSection(body->dm, &gsec));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
-  for (PetscInt e = 0; label && e < scene->ndirichlet; e++) {
+  PetscCall(DMGetLocalSection(body->dm, &lsec));
+  for (PetscInt e = 0; e < scene->ndirichlet; e++) {
     MBCDirichletDesc *d = &scene->dirichlet[e];
-    IS                faceIS;
+    IS                faceIS = NULL;
     const PetscInt   *faces;
     PetscInt          nfaces;
 
-    PetscCall(DMLabelGetStratumIS(label, d->surface_id, &faceIS));
+    for (PetscInt k = 0; k < d->nnodes; k++) { /* on nodes */
+      PetscInt point, off;
+      if (d->nodes[2 * k] != body->index) continue;
+      PetscCall(MBCBodyNodePoint(body, d->nodes[2 * k + 1], &point));
+      if (point < 0) continue;
+      PetscCall(PetscSectionGetOffset(gsec, point, &off));
+      if (off < 0) continue; /* owned by another rank */
+      if (n == cap) {
+        cap = 2 * cap + 64;
+        PetscCall(PetscRealloc(cap * sizeof(PetscInt), &rows));
+        PetscCall(PetscRealloc(cap * sizeof(PetscInt), &entry));
+      }
+      rows[n]    = off + d->component;
+      entry[n++] = e;
+    }
+    if (label && d->surface_id >= 1) PetscCall(DMLabelGetStratumIS(label, d->surface_id, &faceIS));
     if (!faceIS) continue;
     PetscCall(ISGetLocalSize(faceIS, &nfaces));
     PetscCall(ISGetIndices(faceIS, &faces));
@@ -190,8 +215,9 @@ static PetscErrorCode BodySetUpConstraints(MBCBody body)
 
       PetscCall(DMPlexGetTransitiveClosure(body->dm, faces[f], PETSC_TRUE, &nclosure, &closure));
       for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-        PetscInt point = closure[p], off;
-        if (point < vStart || point >= vEnd) continue;
+        PetscInt point = closure[p], off, dof;
+        PetscCall(PetscSectionGetDof(lsec, point, &dof));
+        if (!dof) continue; /* the face's nodes: its vertices (and a tet10's edges) */
         PetscCall(PetscSectionGetOffset(gsec, point, &off));
         if (off < 0) continue; /* owned by another rank */
         if (n == cap) {
@@ -236,11 +262,13 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_BodyAssemble, 0, 0, 0, 0));
-  PetscCall(BodyAssembleOperators(body, dynamic, mass));
+  if (body->desc.rigid) PetscCall(MBCBodyRigidSetUp(body, dynamic)); /* K = 0, M of its six DOFs */
+  else PetscCall(BodyAssembleOperators(body, dynamic, mass));
   body->cM = body->desc.damping + body->desc.rayleigh_alpha;
   body->cK = body->desc.rayleigh_beta;
   PetscCall(BodySetUpConstraints(body));
   if (dynamic) PetscCall(MBCBodyAbsorbingSetUp(body)); /* before the loads: the input surfaces' loads use Cin */
+  PetscCall(MBCBodySpringsSetUp(body, dynamic));
   PetscCall(MBCBodyAssembleLoads(body));
   PetscCall(DMCreateGlobalVector(body->dm, &body->u));
   PetscCall(PetscObjectSetName((PetscObject)body->u, "displacement"));
@@ -256,10 +284,12 @@ PetscErrorCode MBCBodySetUp(MBCBody body, PetscBool dynamic, MBCMassType mass)
     PetscCall(VecDuplicate(body->u, &body->work2));
   }
   PetscCall(PetscLogEventEnd(MBC_BodyAssemble, 0, 0, 0, 0));
-  if (!dynamic && !scene->ncouples) {
+  if (!dynamic && !scene->ncouples && !body->desc.rigid) {
     /* K alone: without inertia or contact, every component needs a prescribed DOF somewhere
        (with contact, the static solver stabilises such bodies: -mbc_static_stabilize). */
-    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface, hold it by contact, or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
+    PetscBool held[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+    MBCBodySpringHeld(body, held);
+    for (PetscInt c = 0; c < 3; c++) PetscCheck(body->bc_component[c] || held[c], body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed %c displacement: its static stiffness is singular (rigid-body motion); prescribe it on some surface, hold it by contact, or run a dynamic analysis", scene->filename, body->name, "xyz"[c]);
   }
   PetscFunctionReturn(0);
 }

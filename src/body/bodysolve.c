@@ -89,6 +89,10 @@ PetscErrorCode MBCBodyFactor(MBCBody body, PetscReal aK, PetscReal aM, KSP *newk
   PCFailedReason reason;
 
   PetscFunctionBegin;
+  if (body->desc.rigid) { /* its six DOFs' projected solve */
+    PetscCall(MBCBodyRigidFactor(body, aK, aM, newksp, newA));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscLogEventBegin(MBC_BodyFactor, 0, 0, 0, 0));
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)body, &bodyprefix));
   if (aK != 0) {
@@ -189,6 +193,10 @@ PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, Pets
   KSPConvergedReason reason;
 
   PetscFunctionBegin;
+  if (body->desc.rigid) {
+    PetscCall(MBCBodyRigidSolve(body, ksp, aM, g, rhs, x));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscLogEventBegin(MBC_BodySolve, 0, 0, 0, 0));
   if (g) {
     if (aK != 0) {
@@ -259,6 +267,10 @@ PetscErrorCode MBCBodyPrescribed(MBCBody body, PetscReal t, Vec g)
   PetscInt     rstart;
 
   PetscFunctionBegin;
+  if (body->desc.rigid) {
+    PetscCall(MBCBodyRigidPrescribed(body, t, NULL, g));
+    PetscFunctionReturn(0);
+  }
   PetscCall(VecZeroEntries(g));
   PetscCall(VecGetOwnershipRange(g, &rstart, NULL));
   PetscCall(VecGetArray(g, &gv));
@@ -282,6 +294,10 @@ PetscErrorCode MBCBodyPrescribedIncrement(MBCBody body, PetscReal t, Vec g)
   PetscInt           rstart;
 
   PetscFunctionBegin;
+  if (body->desc.rigid) {
+    PetscCall(MBCBodyRigidPrescribed(body, t, body->u, g));
+    PetscFunctionReturn(0);
+  }
   PetscCall(MBCBodyPrescribed(body, t, g));
   PetscCall(VecGetOwnershipRange(g, &rstart, NULL));
   PetscCall(VecGetArray(g, &gv));
@@ -309,6 +325,10 @@ PetscErrorCode MBCBodyComputeStress(MBCBody body, Vec u, Vec stress)
   const PetscReal    lambda = body->lambda, mu = body->mu, kappa = lambda + 2.0 * mu / 3.0;
 
   PetscFunctionBegin;
+  if (body->desc.rigid) { /* no strain */
+    PetscCall(VecZeroEntries(stress));
+    PetscFunctionReturn(0);
+  }
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(DMGetLocalVector(body->dm, &ul));
   PetscCall(DMGlobalToLocal(body->dm, u, INSERT_VALUES, ul));
@@ -317,8 +337,8 @@ PetscErrorCode MBCBodyComputeStress(MBCBody body, Vec u, Vec stress)
   PetscCall(VecGetArray(stress, &sv));
   PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
   for (PetscInt c = cStart; c < cEnd; c++) {
-    PetscInt     idx[24], nv;
-    PetscReal    X[24], U[24], g[9], tr;
+    PetscInt     idx[3 * MBC_MAX_CELL_NODES], nv;
+    PetscReal    X[3 * MBC_MAX_CELL_NODES], U[3 * MBC_MAX_CELL_NODES], g[9], tr;
     PetscScalar *s;
 
     PetscCall(DMPlexPointGlobalRef(body->dmStress, c, sv, &s));

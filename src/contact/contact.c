@@ -127,16 +127,13 @@ static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscR
       PetscCall(ISGetIndices(faceIS, &faces));
       for (PetscInt fi = 0; fi < nfaces; fi++) {
         const PetscInt f = faces[fi];
-        PetscInt      *closure = NULL, nclosure, nv = 0, vert[MBC_MAX_FACE_NODES], ns;
-        const PetscInt *support;
-        PetscReal     *r, fc[3] = {0, 0, 0}, cc[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
+        PetscInt       pts[6], nv, ncorner;
+        PetscReal     *r, X[6][3];
 
         if (PetscBTLookup(notmine, f)) continue;
-        PetscCall(DMPlexGetTransitiveClosure(dm, f, PETSC_TRUE, &nclosure, &closure));
-        for (PetscInt p = 0; p < 2 * nclosure; p += 2)
-          if (closure[p] >= vStart && closure[p] < vEnd && nv < MBC_MAX_FACE_NODES) vert[nv++] = closure[p];
-        PetscCall(DMPlexRestoreTransitiveClosure(dm, f, PETSC_TRUE, &nclosure, &closure));
-        PetscCheck(nv == 3 || nv == 4, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': contact face with %" PetscInt_FMT " vertices", body->name, nv);
+        /* its nodes wound outward (a rigid surface's: towards the couple's other side, from the prep) */
+        PetscCall(MBCBodyFaceNodes(body, f, x, pts, X, &nv, &ncorner));
+        nv = ncorner;
         if (*n == *cap) {
           *cap = 2 * (*cap) + 64;
           PetscCall(PetscRealloc((size_t)(*cap) * FACE_REC * sizeof(PetscReal), buf));
@@ -147,46 +144,14 @@ static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscR
         r[2] = body->index;
         r[3] = nv;
         for (PetscInt i = 0; i < nv; i++) {
-          PetscInt coff, off, loff;
-          PetscCall(PetscSectionGetOffset(csec, vert[i], &coff));
-          PetscCall(PetscSectionGetOffset(gsec, vert[i], &off));
-          PetscCall(PetscSectionGetOffset(lsec, vert[i], &loff));
+          PetscInt off, loff;
+          PetscCall(PetscSectionGetOffset(gsec, pts[i], &off));
+          PetscCall(PetscSectionGetOffset(lsec, pts[i], &loff));
           for (PetscInt d = 0; d < 3; d++) {
-            r[4 + 7 * i + d]     = PetscRealPart(x[coff + d]);
-            r[4 + 7 * i + 3 + d] = r[4 + 7 * i + d] + (ul ? PetscRealPart(ul[loff + d]) : 0);
-            fc[d] += r[4 + 7 * i + d] / nv;
+            r[4 + 7 * i + d]     = X[i][d];
+            r[4 + 7 * i + 3 + d] = X[i][d] + (ul ? PetscRealPart(ul[loff + d]) : 0);
           }
           r[4 + 7 * i + 6] = off < 0 ? -(off + 1) : off;
-        }
-        for (PetscInt i = 0; i < nv; i++) { /* Newell normal in reference coordinates */
-          const PetscReal *a = &r[4 + 7 * i], *b = &r[4 + 7 * ((i + 1) % nv)];
-          nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
-          nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
-          nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
-        }
-        PetscCall(DMPlexGetSupportSize(dm, f, &ns));
-        PetscCall(DMPlexGetSupport(dm, f, &support));
-        PetscCheck(ns == 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': contact face of couple %" PetscInt_FMT " is not on the boundary", body->name, c->couples[ci].k);
-        PetscCall(DMPlexGetTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-        {
-          PetscInt ncv = 0;
-          for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-            PetscInt coff;
-            if (closure[p] < vStart || closure[p] >= vEnd) continue;
-            PetscCall(PetscSectionGetOffset(csec, closure[p], &coff));
-            for (PetscInt d = 0; d < 3; d++) cc[d] += PetscRealPart(x[coff + d]);
-            ncv++;
-          }
-          for (PetscInt d = 0; d < 3; d++) cc[d] /= ncv;
-        }
-        PetscCall(DMPlexRestoreTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-        if (nrm[0] * (fc[0] - cc[0]) + nrm[1] * (fc[1] - cc[1]) + nrm[2] * (fc[2] - cc[2]) < 0) { /* reverse to point outward */
-          for (PetscInt i = 1, j = nv - 1; i < j; i++, j--)
-            for (PetscInt q = 0; q < 7; q++) {
-              PetscReal t          = r[4 + 7 * i + q];
-              r[4 + 7 * i + q]     = r[4 + 7 * j + q];
-              r[4 + 7 * j + q]     = t;
-            }
         }
       }
       PetscCall(ISRestoreIndices(faceIS, &faces));

@@ -812,7 +812,7 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
 
   PetscFunctionBegin;
   *schur = PETSC_FALSE;
-  if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE) PetscFunctionReturn(0);
+  if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE || body->desc.rigid) PetscFunctionReturn(0); /* a rigid body has no factor: its projection is cheap */
   if (ifc->droute == MBC_D_ROUTE_SCHUR) {
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);

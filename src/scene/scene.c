@@ -8,7 +8,7 @@ const char *const MBCAnalysisTypes[] = {"static", "dynamic", "modal", "MBCAnalys
 const char *const MBCMassTypes[]     = {"consistent", "lumped", "MBCMassType", "MBC_MASS_", NULL};
 const char *const MBCTimeKinds[]     = {"constant", "sudden", "table", "MBCTimeKind", "MBC_TIME_", NULL};
 const char *const MBCAbsorbingInputs[] = {"none", "outcrop", "incident", "MBCAbsorbingInput", "MBC_INPUT_", NULL};
-const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration", "MBCLoadKind", "MBC_LOAD_", NULL};
+const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration", "nodal_force", "line_force", "MBCLoadKind", "MBC_LOAD_", NULL};
 
 typedef struct {
   const char *file;
@@ -232,9 +232,9 @@ static PetscErrorCode ReadTimeTable(H5Node *entry, MBCTimeTable *table)
   PetscFunctionReturn(0);
 }
 
-/* The optional dataset `exclude` of a couple: (n, 2) integers, body and vertex (scene order) of
-   each node taken out of contact (docs/scene-h5.md). */
-static PetscErrorCode ReadCoupleExclude(H5Node *entry, MBCScene scene, MBCCoupleDesc *c)
+/* The optional dataset `name` of rows (body, node in scene order), (n, 2) integers: *n rows in *rows
+   (left as they are when absent). Every row must name a body and one of its nodes. */
+static PetscErrorCode ReadNodePairs(H5Node *entry, MBCScene scene, const char *name, PetscInt *n, PetscInt **rows)
 {
   hid_t      dset, space, type;
   hsize_t    dims[2] = {0, 0};
@@ -242,28 +242,62 @@ static PetscErrorCode ReadCoupleExclude(H5Node *entry, MBCScene scene, MBCCouple
   PetscBool  isint;
 
   PetscFunctionBegin;
-  if (H5Lexists(entry->obj, "exclude", H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
-  dset = H5Dopen2(entry->obj, "exclude", H5P_DEFAULT);
-  PetscCheck(dset >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot open dataset %s/exclude", entry->file, entry->path);
+  if (H5Lexists(entry->obj, name, H5P_DEFAULT) <= 0) PetscFunctionReturn(0);
+  dset = H5Dopen2(entry->obj, name, H5P_DEFAULT);
+  PetscCheck(dset >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot open dataset %s/%s", entry->file, entry->path, name);
   space = H5Dget_space(dset);
   type  = H5Dget_type(dset);
   isint = (PetscBool)(H5Tget_class(type) == H5T_INTEGER);
   H5Tclose(type);
-  PetscCheck(isint && H5Sget_simple_extent_ndims(space) == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/exclude must be integers of shape (n, 2)", entry->file, entry->path);
+  PetscCheck(isint && H5Sget_simple_extent_ndims(space) == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s must be integers of shape (n, 2)", entry->file, entry->path, name);
   H5Sget_simple_extent_dims(space, dims, NULL);
-  PetscCheck(dims[1] == 2 && dims[0] >= 1 && dims[0] <= (hsize_t)PETSC_MAX_INT / 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/exclude must have shape (n, 2), n >= 1", entry->file, entry->path);
+  PetscCheck(dims[1] == 2 && dims[0] >= 1 && dims[0] <= (hsize_t)PETSC_MAX_INT / 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s must have shape (n, 2), n >= 1", entry->file, entry->path, name);
   PetscCall(PetscMalloc1(2 * dims[0], &buf));
-  PetscCheck(H5Dread(dset, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/exclude", entry->file, entry->path);
+  PetscCheck(H5Dread(dset, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/%s", entry->file, entry->path, name);
   H5Sclose(space);
   H5Dclose(dset);
-  c->nexclude = (PetscInt)dims[0];
-  PetscCall(PetscMalloc1(2 * c->nexclude, &c->exclude));
-  for (PetscInt i = 0; i < c->nexclude; i++) {
+  *n = (PetscInt)dims[0];
+  PetscCall(PetscMalloc1(2 * *n, rows));
+  for (PetscInt i = 0; i < *n; i++) {
     const long long b = buf[2 * i], v = buf[2 * i + 1];
-    PetscCheck(b >= 0 && b < scene->nbodies && v >= 0 && v < scene->bodies[b].num_vertices, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/exclude row %" PetscInt_FMT " names body %lld, vertex %lld, which do not exist", entry->file, entry->path, i, b, v);
-    c->exclude[2 * i] = (PetscInt)b, c->exclude[2 * i + 1] = (PetscInt)v;
+    PetscCheck(b >= 0 && b < scene->nbodies && v >= 0 && v < scene->bodies[b].num_nodes, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s row %" PetscInt_FMT " names body %lld, node %lld, which do not exist", entry->file, entry->path, name, i, b, v);
+    (*rows)[2 * i] = (PetscInt)b, (*rows)[2 * i + 1] = (PetscInt)v;
   }
   PetscCall(PetscFree(buf));
+  PetscFunctionReturn(0);
+}
+
+/* The dataset `name` of exactly rows x cols finite reals (cols 1: shape (rows,) or (rows, 1)). */
+static PetscErrorCode ReadRealDataset(H5Node *entry, const char *name, PetscInt rows, PetscInt cols, PetscReal **values)
+{
+  hid_t    dset, space, type;
+  hssize_t npts;
+  PetscBool isfloat;
+
+  PetscFunctionBegin;
+  PetscCheck(H5Lexists(entry->obj, name, H5P_DEFAULT) > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: dataset %s/%s is missing", entry->file, entry->path, name);
+  dset = H5Dopen2(entry->obj, name, H5P_DEFAULT);
+  PetscCheck(dset >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot open dataset %s/%s", entry->file, entry->path, name);
+  space   = H5Dget_space(dset);
+  type    = H5Dget_type(dset);
+  isfloat = (PetscBool)(H5Tget_class(type) == H5T_FLOAT);
+  npts    = H5Sget_simple_extent_npoints(space);
+  H5Tclose(type);
+  H5Sclose(space);
+  PetscCheck(isfloat && npts == (hssize_t)rows * cols, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s must hold %" PetscInt_FMT " x %" PetscInt_FMT " reals", entry->file, entry->path, name, rows, cols);
+  PetscCall(PetscMalloc1(rows * cols + 1, values));
+  PetscCheck(rows * cols == 0 || H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, *values) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/%s", entry->file, entry->path, name);
+  H5Dclose(dset);
+  for (PetscInt i = 0; i < rows * cols; i++) PetscCheck(!PetscIsInfOrNanReal((*values)[i]) && PetscAbsReal((*values)[i]) <= 1e100, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s[%" PetscInt_FMT "] is %g (not finite, or beyond 1e100)", entry->file, entry->path, name, i, (double)(*values)[i]);
+  PetscFunctionReturn(0);
+}
+
+/* The optional dataset `exclude` of a couple: (n, 2) integers, body and vertex (scene order) of
+   each node taken out of contact (docs/scene-h5.md). */
+static PetscErrorCode ReadCoupleExclude(H5Node *entry, MBCScene scene, MBCCoupleDesc *c)
+{
+  PetscFunctionBegin;
+  PetscCall(ReadNodePairs(entry, scene, "exclude", &c->nexclude, &c->exclude));
   PetscFunctionReturn(0);
 }
 
@@ -288,6 +322,47 @@ static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
   PetscCall(H5ReadString(e, "element", b->element, sizeof(b->element), NULL, PETSC_TRUE));
   PetscCall(H5ReadInt(e, "num_cells", &b->num_cells, PETSC_FALSE));
   PetscCall(H5ReadInt(e, "num_vertices", &b->num_vertices, PETSC_FALSE));
+  b->num_nodes = b->num_vertices;
+  PetscCall(H5ReadInt(e, "num_nodes", &b->num_nodes, PETSC_TRUE));
+  PetscCheck(b->num_vertices >= 3 && b->num_nodes >= b->num_vertices && b->num_nodes < PETSC_MAX_INT / 8, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " vertices and %" PetscInt_FMT " nodes", e->file, b->name, b->num_vertices, b->num_nodes);
+  if (b->num_nodes > b->num_vertices) { /* tet10: each midside node's edge and position */
+    const PetscInt nm = b->num_nodes - b->num_vertices;
+    PetscInt      *rows = NULL;
+    PetscCheck(H5Lexists(e->obj, "midside", H5P_DEFAULT) > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " midside nodes but no dataset %s/midside", e->file, b->name, nm, e->path);
+    {
+      hid_t      dset = H5Dopen2(e->obj, "midside", H5P_DEFAULT), space = H5Dget_space(dset);
+      hsize_t    dims[2] = {0, 0};
+      long long *buf;
+      PetscCheck(H5Sget_simple_extent_ndims(space) == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/midside must have shape (%" PetscInt_FMT ", 2)", e->file, e->path, nm);
+      H5Sget_simple_extent_dims(space, dims, NULL);
+      H5Sclose(space);
+      PetscCheck(dims[0] == (hsize_t)nm && dims[1] == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/midside must have shape (%" PetscInt_FMT ", 2)", e->file, e->path, nm);
+      PetscCall(PetscMalloc1(2 * nm, &buf));
+      PetscCheck(H5Dread(dset, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/midside", e->file, e->path);
+      H5Dclose(dset);
+      PetscCall(PetscMalloc1(2 * nm, &rows));
+      for (PetscInt i = 0; i < 2 * nm; i++) {
+        PetscCheck(buf[i] >= 0 && buf[i] < b->num_vertices, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/midside[%" PetscInt_FMT "] = %lld is not a vertex of the body", e->file, e->path, i / 2, buf[i]);
+        rows[i] = (PetscInt)buf[i];
+      }
+      PetscCall(PetscFree(buf));
+    }
+    b->midside = rows;
+    PetscCall(ReadRealDataset(e, "midside_coords", nm, 3, &b->midside_x));
+  }
+  {
+    PetscInt rigid = 0;
+    PetscCall(H5ReadInt(e, "rigid", &rigid, PETSC_TRUE));
+    b->rigid = rigid ? PETSC_TRUE : PETSC_FALSE;
+    if (b->rigid) {
+      PetscCall(H5ReadReals(e, "reference", 3, b->reference, PETSC_FALSE));
+      PetscCall(H5ReadReal(e, "rigid_mass", &b->rigid_mass, PETSC_TRUE));
+      PetscCall(H5ReadReals(e, "rigid_inertia", 9, b->rigid_inertia, PETSC_TRUE));
+      PetscCheck(b->rigid_mass >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: rigid body '%s' has mass %g < 0", e->file, b->name, (double)b->rigid_mass);
+    }
+  }
+  if (H5Lexists(e->obj, "initial_displacement", H5P_DEFAULT) > 0) PetscCall(ReadRealDataset(e, "initial_displacement", b->num_nodes, 3, &b->initial_u));
+  if (H5Lexists(e->obj, "initial_velocity", H5P_DEFAULT) > 0) PetscCall(ReadRealDataset(e, "initial_velocity", b->num_nodes, 3, &b->initial_v));
   PetscCall(H5ReadReal(e, "E", &b->E, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "nu", &b->nu, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "density", &b->density, PETSC_FALSE));
@@ -312,6 +387,22 @@ static PetscErrorCode ReadBody(H5Node *e, MBCBodyDesc *b)
   PetscFunctionReturn(0);
 }
 
+/* A dynamic analysis' integrator: Newmark (absent), or generalized-alpha's weights alpha_m, alpha_f
+   (HHT: alpha_m = 0), checked for unconditional stability and second order (Chung and Hulbert:
+   alpha_m <= alpha_f <= 1/2; the prep derives beta and gamma from them). */
+static PetscErrorCode ReadScheme(H5Node *e, char scheme[32], PetscReal *am, PetscReal *af)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscStrncpy(scheme, "newmark", 32));
+  *am = *af = 0;
+  if (H5Aexists(e->obj, "scheme") <= 0) PetscFunctionReturn(0);
+  PetscCall(H5ReadString(e, "scheme", scheme, 32, NULL, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "alpha_m", am, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "alpha_f", af, PETSC_FALSE));
+  PetscCheck(*am <= *af + 1e-12 && *af <= 0.5 + 1e-12 && *am >= -1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s: generalized-alpha weights alpha_m %g, alpha_f %g are not unconditionally stable (need -1 <= alpha_m <= alpha_f <= 1/2)", e->file, e->path, (double)*am, (double)*af);
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode ReadAnalysis(H5Node *root, MBCScene s)
 {
   H5Node   e;
@@ -333,6 +424,7 @@ static PetscErrorCode ReadAnalysis(H5Node *root, MBCScene s)
   PetscCall(H5ReadReal(&e, "final_time", &s->final_time, PETSC_TRUE));
   PetscCall(H5ReadReal(&e, "newmark_beta", &s->newmark_beta, PETSC_TRUE));
   PetscCall(H5ReadReal(&e, "newmark_gamma", &s->newmark_gamma, PETSC_TRUE));
+  PetscCall(ReadScheme(&e, s->scheme, &s->alpha_m, &s->alpha_f));
   s->modal_modes = 6;
   s->modal_tie   = PETSC_TRUE;
   if (s->analysis == MBC_ANALYSIS_MODAL) {
@@ -377,6 +469,7 @@ static PetscErrorCode ReadStages(H5Node *root, MBCScene s)
     PetscCall(H5ReadReal(&e, "final_time", &st->final_time, PETSC_FALSE));
     PetscCall(H5ReadReal(&e, "newmark_beta", &st->newmark_beta, PETSC_TRUE));
     PetscCall(H5ReadReal(&e, "newmark_gamma", &st->newmark_gamma, PETSC_TRUE));
+    PetscCall(ReadScheme(&e, st->scheme, &st->alpha_m, &st->alpha_f));
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -388,6 +481,9 @@ static PetscErrorCode ReadStages(H5Node *root, MBCScene s)
     s->final_time    = s->stages[s->nstages - 1].final_time;
     s->newmark_beta  = s->stages[0].newmark_beta;
     s->newmark_gamma = s->stages[0].newmark_gamma;
+    s->alpha_m       = s->stages[0].alpha_m;
+    s->alpha_f       = s->stages[0].alpha_f;
+    PetscCall(PetscStrncpy(s->scheme, s->stages[0].scheme, sizeof(s->scheme)));
   }
   PetscFunctionReturn(0);
 }
@@ -493,17 +589,29 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
     PetscCheck(b->name[0] && !strchr(b->name, ',') && !strchr(b->name, '/'), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: bodies/%" PetscInt_FMT " has the name '%s' (empty, or with ',' or '/')", s->filename, i, b->name);
     PetscCall(FindName(b->name, i, BodyName, s, &j));
     PetscCheck(j < 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: bodies/%" PetscInt_FMT " and bodies/%" PetscInt_FMT " are both called '%s'", s->filename, j, i, b->name);
+    {
+      const char *types[] = {"tet4", "hex8", "wedge6", "pyr5", "mixed", "tet10", "surface"};
+      PetscBool   known   = PETSC_FALSE, same;
+      for (PetscInt t = 0; t < 7; t++) {
+        PetscCall(PetscStrcmp(b->cell_type, types[t], &same));
+        known = (PetscBool)(known || same);
+      }
+      PetscCheck(known, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has cell_type '%s', not tet4, hex8, wedge6, pyr5, mixed, tet10 or surface", s->filename, b->name, b->cell_type);
+    }
     PetscCall(PetscStrcmp(b->cell_type, "tet4", &tet));
-    PetscCall(PetscStrcmp(b->cell_type, "hex8", &hex));
-    PetscCheck(tet || hex, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has cell_type '%s', not tet4 or hex8", s->filename, b->name, b->cell_type);
+    PetscCall(PetscStrcmp(b->cell_type, "surface", &hex));
+    PetscCheck(!hex || b->rigid, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' is a surface but not rigid", s->filename, b->name);
+    PetscCheck((b->num_nodes > b->num_vertices) == (PetscBool)!strcmp(b->cell_type, "tet10"), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' of %s cells has %" PetscInt_FMT " nodes beyond its vertices (only tet10 bodies have midside nodes)", s->filename, b->name, b->cell_type, b->num_nodes - b->num_vertices);
+    hex = (PetscBool)(!strcmp(b->cell_type, "hex8") || !strcmp(b->cell_type, "mixed"));
     if (b->element[0]) {
       PetscBool h8, h8i, h8b;
       PetscCall(PetscStrcmp(b->element, "hex8", &h8));
       PetscCall(PetscStrcmp(b->element, "hex8i", &h8i));
       PetscCall(PetscStrcmp(b->element, "hex8b", &h8b));
-      PetscCheck(hex && (h8 || h8i || h8b), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' of %s cells has element '%s' (hex bodies: hex8, hex8i or hex8b; tet4 bodies: none)", s->filename, b->name, b->cell_type, b->element);
+      PetscCheck(hex && (h8 || h8i || h8b), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' of %s cells has element '%s' (bodies with hex cells: hex8, hex8i or hex8b; others: none)", s->filename, b->name, b->cell_type, b->element);
     }
-    PetscCheck(b->num_cells >= 1 && b->num_vertices >= 4, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " cells and %" PetscInt_FMT " vertices", s->filename, b->name, b->num_cells, b->num_vertices);
+    (void)tet;
+    PetscCheck(b->num_cells >= 1 && b->num_vertices >= 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has %" PetscInt_FMT " cells and %" PetscInt_FMT " vertices", s->filename, b->name, b->num_cells, b->num_vertices);
   }
   for (PetscInt i = 0; i < s->nsurfaces; i++) {
     PetscInt j;
@@ -526,6 +634,7 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
   for (PetscInt i = 0; i < s->ndirichlet; i++) {
     MBCDirichletDesc *d = &s->dirichlet[i];
     PetscBool         same;
+    if (d->surface_id < 1) continue; /* on nodes or a rigid body (checked as read) */
     PetscCheck(d->surface_id >= 1 && d->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: dirichlet/%" PetscInt_FMT " has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, i, d->surface_id, s->nsurfaces);
     PetscCall(PetscStrcmp(d->surface, s->surfaces[d->surface_id - 1].name, &same));
     PetscCheck(same, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: dirichlet/%" PetscInt_FMT " names surface '%s' but its surface_id %" PetscInt_FMT " is '%s'", s->filename, i, d->surface, d->surface_id, s->surfaces[d->surface_id - 1].name);
@@ -542,7 +651,7 @@ static PetscErrorCode SceneCheckReferences(MBCScene s)
         PetscCheck(!applies || !PetscIsInfOrNanReal(s->bodies[b].density * g), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s': density %g times the gravity of loads/%" PetscInt_FMT " (%g) overflows", s->filename, s->bodies[b].name, (double)s->bodies[b].density, i, (double)g);
       }
     }
-    if (l->kind == MBC_LOAD_GRAVITY || l->kind == MBC_LOAD_BODY_FORCE || l->kind == MBC_LOAD_GROUND_ACCELERATION) continue;
+    if (l->kind == MBC_LOAD_GRAVITY || l->kind == MBC_LOAD_BODY_FORCE || l->kind == MBC_LOAD_GROUND_ACCELERATION || l->kind == MBC_LOAD_NODAL_FORCE || l->kind == MBC_LOAD_LINE_FORCE) continue;
     PetscBool same;
     PetscCheck(l->surface_id >= 1 && l->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: loads/%" PetscInt_FMT " has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, i, l->surface_id, s->nsurfaces);
     PetscCall(PetscStrcmp(l->surface, s->surfaces[l->surface_id - 1].name, &same));
@@ -583,7 +692,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
   for (PetscInt i = 0; i < s->nbodies; i++) {
     PetscCall(H5EntryOpen(&list, i, &e));
     PetscCall(ReadBody(&e, &s->bodies[i]));
-    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0 || s->bodies[i].massless, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a %s analysis (or massless)", s->filename, s->bodies[i].name, MBCAnalysisTypes[s->analysis]);
+    if (s->has_dynamic) PetscCheck(s->bodies[i].density > 0 || s->bodies[i].massless || s->bodies[i].rigid, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a %s analysis (or massless)", s->filename, s->bodies[i].name, MBCAnalysisTypes[s->analysis]);
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -637,7 +746,13 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCall(H5ReadInt(&e, "component", &d->component, PETSC_FALSE));
     PetscCall(H5ReadReal(&e, "value", &d->value, PETSC_FALSE));
     PetscCall(ReadTimeKind(&e, s, &d->time, &d->time_function));
-    PetscCheck(d->component >= 0 && d->component < 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s has component %" PetscInt_FMT ", not 0, 1 or 2", s->filename, e.path, d->component);
+    d->body = -1;
+    PetscCall(H5ReadInt(&e, "body", &d->body, PETSC_TRUE));
+    PetscCall(ReadNodePairs(&e, s, "nodes", &d->nnodes, &d->nodes));
+    PetscCheck(d->body < s->nbodies && (d->body < 0 || s->bodies[d->body].rigid), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s names body %" PetscInt_FMT ", which is no rigid body of the scene", s->filename, e.path, d->body);
+    PetscCheck((d->surface_id >= 1) + (d->body >= 0) + (d->nnodes > 0) == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s needs one of a surface_id, a rigid body or nodes", s->filename, e.path);
+    PetscCheck(d->component >= 0 && d->component < (d->body >= 0 ? 6 : 3), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s has component %" PetscInt_FMT ", not 0, 1 or 2 (3, 4, 5: a rigid body's rotations)", s->filename, e.path, d->component);
+    for (PetscInt k = 0; k < d->nnodes; k++) PetscCheck(!s->bodies[d->nodes[2 * k]].rigid, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s prescribes nodes of rigid body '%s' (a rigid body's motion is prescribed by its body index)", s->filename, e.path, s->bodies[d->nodes[2 * k]].name);
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -666,6 +781,11 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
       PetscCall(H5ReadInt(&e, "axis", &l->axis, PETSC_FALSE));
       PetscCheck(l->axis >= 0 && l->axis < 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: hydrostatic load %s has axis %" PetscInt_FMT ", not 0, 1 or 2", s->filename, e.path, l->axis);
       PetscCheck(l->unit_weight >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: hydrostatic load %s has unit weight %g < 0", s->filename, e.path, (double)l->unit_weight);
+    }
+    if (l->kind == MBC_LOAD_NODAL_FORCE || l->kind == MBC_LOAD_LINE_FORCE) {
+      PetscCall(ReadNodePairs(&e, s, "nodes", &l->nnodes, &l->nodes));
+      PetscCheck(l->nnodes > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s load %s needs its dataset nodes", s->filename, MBCLoadKinds[l->kind], e.path);
+      PetscCall(ReadRealDataset(&e, "weights", l->nnodes, 1, &l->weights));
     }
     l->velocity_function = l->displacement_function = -1;
     if (l->kind == MBC_LOAD_GROUND_ACCELERATION) {
@@ -713,6 +833,26 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     a->input = (MBCAbsorbingInput)v;
     if (a->input != MBC_INPUT_NONE) s->absolute = PETSC_TRUE;
     PetscCheck(a->surface_id >= 1 && a->surface_id <= s->nsurfaces, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: absorbing boundary %s has surface_id %" PetscInt_FMT ", but the scene has surfaces 1 to %" PetscInt_FMT, s->filename, e.path, a->surface_id, s->nsurfaces);
+    PetscCall(H5NodeClose(&e));
+  }
+  if (list.obj >= 0) PetscCall(H5NodeClose(&list));
+
+  PetscCall(ReadList(&root, "springs", &list, &s->nsprings));
+  PetscCall(PetscCalloc1(s->nsprings, &s->springs));
+  for (PetscInt i = 0; i < s->nsprings; i++) {
+    MBCSpringDesc *sp = &s->springs[i];
+    PetscInt       nto = 0;
+    PetscCall(H5EntryOpen(&list, i, &e));
+    PetscCall(H5ReadReals(&e, "stiffness", 3, sp->k, PETSC_FALSE));
+    PetscCall(H5ReadReals(&e, "damping", 3, sp->c, PETSC_FALSE));
+    PetscCall(ReadNodePairs(&e, s, "nodes", &sp->n, &sp->nodes));
+    PetscCall(ReadNodePairs(&e, s, "to", &nto, &sp->to));
+    PetscCheck(sp->n > 0 && (!sp->to || nto == sp->n), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: spring %s needs nodes (and as many partners `to`, if any)", s->filename, e.path);
+    for (PetscInt d = 0; d < 3; d++) PetscCheck(sp->k[d] >= 0 && sp->c[d] >= 0 && sp->k[d] <= MBC_MATERIAL_MAX && sp->c[d] <= MBC_MATERIAL_MAX, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: spring %s: stiffness and damping must lie in [0, %g]", s->filename, e.path, (double)MBC_MATERIAL_MAX);
+    for (PetscInt k = 0; k < sp->n; k++) {
+      PetscCheck(!s->bodies[sp->nodes[2 * k]].rigid, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: spring %s acts on rigid body '%s'", s->filename, e.path, s->bodies[sp->nodes[2 * k]].name);
+      PetscCheck(!sp->to || (sp->to[2 * k] == sp->nodes[2 * k] && sp->to[2 * k + 1] != sp->nodes[2 * k + 1]), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: spring %s row %" PetscInt_FMT " joins a node to itself or to another body", s->filename, e.path, k);
+    }
     PetscCall(H5NodeClose(&e));
   }
   if (list.obj >= 0) PetscCall(H5NodeClose(&list));
@@ -771,6 +911,7 @@ PetscErrorCode MBCSceneCreateEmpty(MPI_Comm comm, MBCScene *scene)
   (*scene)->final_time    = 1.0;
   (*scene)->newmark_beta  = 0.25;
   (*scene)->newmark_gamma = 0.5;
+  PetscCall(PetscStrncpy((*scene)->scheme, "newmark", sizeof((*scene)->scheme)));
   (*scene)->output_every  = 1;
   (*scene)->modal_modes   = 6;
   (*scene)->modal_tie     = PETSC_TRUE;
@@ -795,6 +936,18 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].exclude));
   for (PetscInt i = 0; i < s->ntables; i++) PetscCall(PetscFree2(s->tables[i].t, s->tables[i].f));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].bodies));
+  for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].nodes));
+  for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].weights));
+  for (PetscInt i = 0; i < s->ndirichlet; i++) PetscCall(PetscFree(s->dirichlet[i].nodes));
+  for (PetscInt i = 0; i < s->nsprings; i++) PetscCall(PetscFree(s->springs[i].nodes));
+  for (PetscInt i = 0; i < s->nsprings; i++) PetscCall(PetscFree(s->springs[i].to));
+  for (PetscInt i = 0; i < s->nbodies; i++) {
+    PetscCall(PetscFree(s->bodies[i].midside));
+    PetscCall(PetscFree(s->bodies[i].midside_x));
+    PetscCall(PetscFree(s->bodies[i].initial_u));
+    PetscCall(PetscFree(s->bodies[i].initial_v));
+  }
+  PetscCall(PetscFree(s->springs));
   PetscCall(PetscFree(s->bodies));
   PetscCall(PetscFree(s->surfaces));
   PetscCall(PetscFree(s->couples));
@@ -866,7 +1019,7 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
   if (!viewer) PetscCall(PetscViewerASCIIGetStdout(PetscObjectComm((PetscObject)s), &viewer));
   PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
   if (!ascii) PetscFunctionReturn(0);
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Scene %s%s%s: %s analysis, dt %g, final time %g, Newmark beta %g gamma %g, %s mass\n", s->filename, s->title[0] ? " - " : "", s->title, MBCAnalysisTypes[s->analysis], (double)s->dt, (double)s->final_time, (double)s->newmark_beta, (double)s->newmark_gamma, MBCMassTypes[s->mass]));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Scene %s%s%s: %s analysis, dt %g, final time %g, %s beta %g gamma %g alpha_m %g alpha_f %g, %s mass\n", s->filename, s->title[0] ? " - " : "", s->title, MBCAnalysisTypes[s->analysis], (double)s->dt, (double)s->final_time, s->scheme, (double)s->newmark_beta, (double)s->newmark_gamma, (double)s->alpha_m, (double)s->alpha_f, MBCMassTypes[s->mass]));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   for (PetscInt i = 0; i < s->nstages; i++) {
     MBCStageDesc *st = &s->stages[i];
@@ -877,7 +1030,14 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "body %s: %" PetscInt_FMT " %s cells, %" PetscInt_FMT " vertices, E %g nu %g density %g damping %g rayleigh %g %g\n", b->name, b->num_cells, b->cell_type, b->num_vertices, (double)b->E, (double)b->nu, (double)b->density, (double)b->damping, (double)b->rayleigh_alpha, (double)b->rayleigh_beta));
   }
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "couple %" PetscInt_FMT ": master %s (+k), slave %s (-k), mu %g, %" PetscInt_FMT " master nodes taken out of contact\n", s->couples[i].k, s->couples[i].master, s->couples[i].slave, (double)s->couples[i].mu, s->couples[i].nexclude));
-  for (PetscInt i = 0; i < s->ndirichlet; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed u%c = %g on %s (%s)\n", "xyz"[s->dirichlet[i].component], (double)s->dirichlet[i].value, s->dirichlet[i].surface, MBCTimeKinds[s->dirichlet[i].time]));
+  for (PetscInt i = 0; i < s->ndirichlet; i++) {
+    const MBCDirichletDesc *d = &s->dirichlet[i];
+    const char *const       comp[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+    if (d->body >= 0) PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed %s = %g of rigid body %s (%s)\n", comp[d->component], (double)d->value, s->bodies[d->body].name, MBCTimeKinds[d->time]));
+    else if (d->nnodes) PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed %s = %g on %" PetscInt_FMT " nodes (%s)\n", comp[d->component], (double)d->value, d->nnodes, MBCTimeKinds[d->time]));
+    else PetscCall(PetscViewerASCIIPrintf(viewer, "prescribed %s = %g on %s (%s)\n", comp[d->component], (double)d->value, d->surface, MBCTimeKinds[d->time]));
+  }
+  for (PetscInt i = 0; i < s->nsprings; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "springs %" PetscInt_FMT ": %" PetscInt_FMT " %s, stiffness (%g, %g, %g), damping (%g, %g, %g)\n", i, s->springs[i].n, s->springs[i].to ? "node to node" : "node to ground", (double)s->springs[i].k[0], (double)s->springs[i].k[1], (double)s->springs[i].k[2], (double)s->springs[i].c[0], (double)s->springs[i].c[1], (double)s->springs[i].c[2]));
   for (PetscInt i = 0; i < s->nloads; i++) {
     MBCLoadDesc *l = &s->loads[i];
     if (l->kind == MBC_LOAD_HYDROSTATIC) PetscCall(PetscViewerASCIIPrintf(viewer, "load hydrostatic on %s: unit weight %g, level %c = %g (%s)\n", l->surface, (double)l->unit_weight, "xyz"[l->axis], (double)l->level, MBCTimeKinds[l->time]));

@@ -120,29 +120,46 @@ static PetscErrorCode CheckStringAttr(const char *file, hid_t obj, const char *o
 
 typedef struct {
   PetscInt    N, nc, nv;
+  PetscInt    dim;     /* 3, or 2: a rigid surface (cells of edges, no faces) */
   PetscInt64 *cones, *cells, *orient, *off; /* off[p]: start of p's cone in cells */
   char       *cls;
   PetscInt   *support; /* faces: number of cells around */
+  PetscInt   *nverts;  /* cells: their vertices */
 } Topo;
 
-/* The DAG: cells 0..nc-1 (cone of faces), vertices nc..nc+nv-1 (empty cone), then faces (cone of
-   edges) and edges (cone of two vertices); every cone entry one depth down and distinct, every
-   orientation in the range of its polytope, faces closed cycles of edges, cells closed surfaces
-   of faces with the vertex count of their type, every vertex in a cell. */
-static PetscErrorCode CheckTopology(MeshCtx *m, PetscBool hex, Topo *t)
+/* Cone sizes (faces) and vertex counts a cell of the body's type may have: tet4 and tet10 (4, 4),
+   hex8 (6, 8), wedge6 (5, 6), pyr5 (5, 5), mixed any of these; a surface's cells (3, 3) or (4, 4). */
+static PetscBool CellShapeAllowed(const char *type, PetscInt64 cone, PetscInt nv)
 {
-  const PetscInt ccone = hex ? 6 : 4, fcone = hex ? 4 : 3, cverts = hex ? 8 : 4;
-  PetscInt       n = -1, ncells = -1, no, *seen, *used, nlocal, vlist[128];
-  PetscInt64    *order, total = 0;
+  const PetscBool tet = (PetscBool)(cone == 4 && nv == 4), hex = (PetscBool)(cone == 6 && nv == 8), wedge = (PetscBool)(cone == 5 && nv == 6), pyr = (PetscBool)(cone == 5 && nv == 5);
+  if (!strcmp(type, "tet4") || !strcmp(type, "tet10")) return tet;
+  if (!strcmp(type, "hex8")) return hex;
+  if (!strcmp(type, "wedge6")) return wedge;
+  if (!strcmp(type, "pyr5")) return pyr;
+  if (!strcmp(type, "mixed")) return (PetscBool)(tet || hex || wedge || pyr);
+  if (!strcmp(type, "surface")) return (PetscBool)((cone == 3 && nv == 3) || (cone == 4 && nv == 4));
+  return PETSC_FALSE;
+}
+
+/* The DAG: cells 0..nc-1 (cone of faces, or of edges for a surface), vertices nc..nc+nv-1 (empty
+   cone), then faces (cone of edges) and edges (cone of two vertices); every cone entry one depth
+   down and distinct, every orientation in the range of its polytope, faces (and a surface's cells)
+   closed cycles of edges, cells closed surfaces of faces with the vertex count of their type, every
+   vertex in a cell. */
+static PetscErrorCode CheckTopology(MeshCtx *m, const char *type, Topo *t)
+{
+  PetscInt    n = -1, ncells = -1, no, *seen, *used, nlocal, vlist[128];
+  PetscInt64 *order, total = 0;
 
   PetscFunctionBegin;
+  t->dim = strcmp(type, "surface") ? 3 : 2;
   PetscCall(ReadInts(m, "topology/cones", &n, &t->cones));
   t->N = n;
   PetscCheck(t->N >= t->nc + t->nv, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cones has %" PetscInt_FMT " points, fewer than the body's %" PetscInt_FMT " cells and %" PetscInt_FMT " vertices", m->file, m->where, t->N, t->nc, t->nv);
   PetscCall(ReadInts(m, "topology/order", &n, &order));
   for (PetscInt p = 0; p < t->N; p++) PetscCheck(order[p] == p, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/order[%" PetscInt_FMT "] = %lld: the points must be numbered 0, 1, ... in file order, as mbcontact-prep writes them", m->file, m->where, p, (long long)order[p]);
   PetscCall(PetscFree(order));
-  PetscCall(CheckIntAttr(m, "topology/cells", "cell_dim", 3));
+  PetscCall(CheckIntAttr(m, "topology/cells", "cell_dim", t->dim));
   PetscCall(PetscMalloc2(t->N + 1, &t->off, t->N, &t->cls));
   for (PetscInt p = 0; p < t->N; p++) {
     PetscInt64 c = t->cones[p];
@@ -150,13 +167,13 @@ static PetscErrorCode CheckTopology(MeshCtx *m, PetscBool hex, Topo *t)
     t->off[p] = total;
     total += c;
     if (p < t->nc) {
-      PetscCheck(c == ccone, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cones[%" PetscInt_FMT "] = %lld: cell %" PetscInt_FMT " of a %s body needs %" PetscInt_FMT " faces", m->file, m->where, p, (long long)c, p, hex ? "hex8" : "tet4", ccone);
+      PetscCheck(t->dim == 3 ? (c >= 4 && c <= 6) : (c == 3 || c == 4), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cones[%" PetscInt_FMT "] = %lld: cell %" PetscInt_FMT " of a %s body needs %s", m->file, m->where, p, (long long)c, p, type, t->dim == 3 ? "4 to 6 faces" : "3 or 4 edges");
       t->cls[p] = P_CELL;
     } else if (p < t->nc + t->nv) {
       PetscCheck(c == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cones[%" PetscInt_FMT "] = %lld: point %" PetscInt_FMT " is a vertex (the body has %" PetscInt_FMT " cells, then %" PetscInt_FMT " vertices) and has no cone", m->file, m->where, p, (long long)c, p, t->nc, t->nv);
       t->cls[p] = P_VERTEX;
     } else {
-      PetscCheck(c == fcone || c == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cones[%" PetscInt_FMT "] = %lld: after the cells and vertices come faces (%" PetscInt_FMT " edges) and edges (2 vertices)", m->file, m->where, p, (long long)c, fcone);
+      PetscCheck(c == 2 || (t->dim == 3 && (c == 3 || c == 4)), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cones[%" PetscInt_FMT "] = %lld: after the cells and vertices come %s", m->file, m->where, p, (long long)c, t->dim == 3 ? "faces (3 or 4 edges) and edges (2 vertices)" : "edges (2 vertices)");
       t->cls[p] = c == 2 ? P_EDGE : P_FACE;
     }
   }
@@ -167,39 +184,49 @@ static PetscErrorCode CheckTopology(MeshCtx *m, PetscBool hex, Topo *t)
   PetscCall(ReadInts(m, "topology/orientation", &no, &t->orient));
   for (PetscInt p = 0; p < t->N; p++) {
     const PetscInt64 *cone = &t->cells[t->off[p]], *ori = &t->orient[t->off[p]];
-    const int         want = t->cls[p] == P_CELL ? P_FACE : t->cls[p] == P_FACE ? P_EDGE : P_VERTEX;
+    const int         want = t->cls[p] == P_CELL ? (t->dim == 3 ? P_FACE : P_EDGE) : t->cls[p] == P_FACE ? P_EDGE : P_VERTEX;
     for (PetscInt i = 0; i < t->cones[p]; i++) {
-      const PetscInt64 q = cone[i], o = ori[i], narr = want == P_FACE ? 2 * fcone : want == P_EDGE ? 2 : 1;
+      const PetscInt64 q = cone[i], o = ori[i];
+      PetscInt64       narr;
       PetscCheck(q >= 0 && q < t->N && t->cls[q] == want, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cells[%lld] = %lld: the cone of %s %" PetscInt_FMT " must hold %s (points numbered 0 to %" PetscInt_FMT ")", m->file, m->where, (long long)(t->off[p] + i), (long long)q,
                  t->cls[p] == P_CELL ? "cell" : t->cls[p] == P_FACE ? "face" : "edge", p, want == P_FACE ? "faces" : want == P_EDGE ? "edges" : "vertices", t->N - 1);
+      narr = want == P_FACE ? 2 * t->cones[q] : want == P_EDGE ? 2 : 1;
       for (PetscInt j = 0; j < i; j++) PetscCheck(cone[j] != q, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/cells[%lld] = %lld repeats an entry of the cone of point %" PetscInt_FMT, m->file, m->where, (long long)(t->off[p] + i), (long long)q, p);
       PetscCheck(narr == 1 ? o == 0 : (o >= -narr / 2 && o < narr / 2), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology/orientation[%lld] = %lld is outside [%lld, %lld)", m->file, m->where, (long long)(t->off[p] + i), (long long)o, narr == 1 ? 0LL : (long long)(-narr / 2), narr == 1 ? 1LL : (long long)(narr / 2));
     }
   }
   /* closed cycles and surfaces, vertex counts, supports */
   PetscCall(PetscCalloc2(t->N, &seen, t->N, &used));
-  PetscCall(PetscCalloc1(t->N, &t->support));
+  PetscCall(PetscCalloc2(t->N, &t->support, t->nc + 1, &t->nverts));
   for (PetscInt p = 0; p < t->N; p++) {
     if (t->cls[p] != P_FACE && t->cls[p] != P_CELL) continue;
     nlocal = 0;
-    if (t->cls[p] == P_FACE) { /* every vertex of the face's edges in two of them */
+    if (t->cls[p] == P_FACE || t->dim == 2) { /* every vertex of the polygon's edges in two of them */
       for (PetscInt i = 0; i < t->cones[p]; i++) {
         const PetscInt64 e = t->cells[t->off[p] + i];
+        used[e] = 1;
+        if (t->dim == 2) t->support[e]++;
         for (PetscInt k = 0; k < 2; k++) {
           const PetscInt v = (PetscInt)t->cells[t->off[e] + k];
+          used[v] = 1;
           if (!seen[v]++) vlist[nlocal++] = v;
         }
       }
       for (PetscInt i = 0; i < nlocal; i++) {
-        PetscCheck(seen[vlist[i]] == 2 && nlocal == t->cones[p], PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: the edges of face %" PetscInt_FMT " do not form a closed polygon (topology/cells[%lld...])", m->file, m->where, p, (long long)t->off[p]);
+        PetscCheck(seen[vlist[i]] == 2 && nlocal == t->cones[p], PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: the edges of %s %" PetscInt_FMT " do not form a closed polygon (topology/cells[%lld...])", m->file, m->where, t->cls[p] == P_FACE ? "face" : "cell", p, (long long)t->off[p]);
       }
       for (PetscInt i = 0; i < nlocal; i++) seen[vlist[i]] = 0;
-    } else { /* every edge of the cell's faces in two of them, cverts vertices */
-      PetscInt nv = 0;
+      if (t->cls[p] == P_CELL) {
+        t->nverts[p] = nlocal;
+        PetscCheck(CellShapeAllowed(type, t->cones[p], nlocal), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: cell %" PetscInt_FMT " has %" PetscInt_FMT " edges, no cell of a %s body", m->file, m->where, p, nlocal, type);
+      }
+    } else { /* every edge of the cell's faces in two of them; the vertices its type has */
+      PetscInt nv = 0, ntri = 0;
       for (PetscInt i = 0; i < t->cones[p]; i++) {
         const PetscInt64 f = t->cells[t->off[p] + i];
         t->support[f]++;
         used[f] = 1;
+        if (t->cones[f] == 3) ntri++;
         for (PetscInt k = 0; k < t->cones[f]; k++) {
           const PetscInt e = (PetscInt)t->cells[t->off[f] + k];
           used[e] = 1;
@@ -215,7 +242,10 @@ static PetscErrorCode CheckTopology(MeshCtx *m, PetscBool hex, Topo *t)
         const PetscInt q = vlist[i];
         PetscCheck(t->cls[q] == P_VERTEX || seen[q] == 2, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: the faces of cell %" PetscInt_FMT " do not close (edge %" PetscInt_FMT " is on %" PetscInt_FMT " of them)", m->file, m->where, p, q, seen[q]);
       }
-      PetscCheck(nv == cverts, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: cell %" PetscInt_FMT " has %" PetscInt_FMT " vertices, a %s cell has %" PetscInt_FMT, m->file, m->where, p, nv, hex ? "hex8" : "tet4", cverts);
+      PetscCheck(CellShapeAllowed(type, t->cones[p], nv), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: cell %" PetscInt_FMT " has %" PetscInt_FMT " faces and %" PetscInt_FMT " vertices, no cell of a %s body", m->file, m->where, p, (PetscInt)t->cones[p], nv, type);
+      /* the faces' shapes: a tet's 4 triangles, a hex's 6 quads, a prism's 2 triangles, a pyramid's 4 */
+      PetscCheck(ntri == (nv == 4 ? 4 : nv == 8 ? 0 : nv == 6 ? 2 : 4), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/topology: cell %" PetscInt_FMT " of %" PetscInt_FMT " vertices has %" PetscInt_FMT " triangular faces", m->file, m->where, p, nv, ntri);
+      t->nverts[p] = nv;
       for (PetscInt i = 0; i < nlocal; i++) seen[vlist[i]] = 0;
     }
   }
@@ -323,9 +353,11 @@ static PetscErrorCode CheckStratum(LabelCtx *c, const char *label, const char *v
   for (PetscInt i = 0; i < n; i++) {
     const PetscInt64 p = idx[i];
     PetscCheck(p >= 0 && p < t->N, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s[%" PetscInt_FMT "] = %lld is not a point (0 to %" PetscInt_FMT ")", m->file, m->where, path, i, (long long)p, t->N - 1);
-    if (facesets || master || slave) PetscCheck(t->cls[p] == P_FACE && t->support[p] == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s[%" PetscInt_FMT "] = %lld is not a boundary face", m->file, m->where, path, i, (long long)p);
+    if (facesets || master || slave) PetscCheck(t->dim == 2 ? t->cls[p] == P_CELL : (t->cls[p] == P_FACE && t->support[p] == 1), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s[%" PetscInt_FMT "] = %lld is not a boundary face", m->file, m->where, path, i, (long long)p);
     if (celltype) {
-      const int want = t->cls[p] == P_VERTEX ? 0 : t->cls[p] == P_EDGE ? 1 : t->cls[p] == P_FACE ? (t->cones[p] == 3 ? 3 : 4) : (t->cones[p] == 4 ? 6 : 7);
+      /* DMPolytopeType: segment 1, triangle 3, quadrilateral 4, tetrahedron 6, hexahedron 7, prism 8, pyramid 11 */
+      const PetscInt nvc  = t->cls[p] == P_CELL ? t->nverts[p] : 0;
+      const int      want = t->cls[p] == P_VERTEX ? 0 : t->cls[p] == P_EDGE ? 1 : (t->cls[p] == P_FACE || t->dim == 2) ? (t->cones[p] == 3 ? 3 : 4) : (nvc == 4 ? 6 : nvc == 8 ? 7 : nvc == 6 ? 8 : 11);
       PetscCheck(value == want, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s[%" PetscInt_FMT "] = %lld: point of cell type %d labelled %ld", m->file, m->where, path, i, (long long)p, want, value);
     }
   }
@@ -395,7 +427,7 @@ static PetscErrorCode TopoFree(Topo *t)
   PetscCall(PetscFree(t->cells));
   PetscCall(PetscFree(t->orient));
   PetscCall(PetscFree2(t->off, t->cls));
-  PetscCall(PetscFree(t->support));
+  PetscCall(PetscFree2(t->support, t->nverts));
   PetscFunctionReturn(0);
 }
 
@@ -414,7 +446,6 @@ PetscErrorCode MBCSceneCheckMeshes(MBCScene s, hid_t file)
     MeshCtx        m;
     Topo           t;
     PetscErrorCode ierr;
-    PetscBool      hex;
     htri_t         exists;
 
     PetscCall(PetscMemzero(&t, sizeof(t)));
@@ -425,10 +456,9 @@ PetscErrorCode MBCSceneCheckMeshes(MBCScene s, hid_t file)
     PetscCheck(exists > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: body '%s' has no mesh (group %s is missing)", s->filename, d->name, m.where);
     m.grp = H5Gopen2(file, m.where, H5P_DEFAULT);
     PetscCheck(m.grp >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s is not a group", s->filename, m.where);
-    PetscCall(PetscStrcmp(d->cell_type, "hex8", &hex));
     t.nc = d->num_cells;
     t.nv = d->num_vertices;
-    ierr = CheckTopology(&m, hex, &t);
+    ierr = CheckTopology(&m, d->cell_type, &t);
     if (!ierr) ierr = CheckCoordinates(&m, &t);
     if (!ierr) ierr = CheckLabels(&m, s, &t, faces, cfaces, unknown);
     H5Gclose(m.grp);

@@ -49,6 +49,9 @@ PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
   s->final_time   = scene->final_time;
   s->beta         = scene->newmark_beta;
   s->gamma        = scene->newmark_gamma;
+  s->am           = scene->alpha_m;
+  s->af           = scene->alpha_f;
+  s->scheme       = MBCSchemeFromName(scene->scheme);
   s->output_every = scene->output_every;
   PetscCall(PetscStrncpy(s->output, scene->filename, sizeof(s->output)));
   PetscCall(PetscStrlen(s->output, &len));
@@ -60,7 +63,7 @@ PetscErrorCode MBCSolverSetScene(MBCSolver s, MBCScene scene)
 PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
 {
   PetscEnum analysis = (PetscEnum)s->analysis, mass = (PetscEnum)s->mass;
-  PetscBool set[5] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+  PetscBool set[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
 
   PetscFunctionBegin;
   PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
@@ -72,6 +75,8 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCall(PetscOptionsReal("-mbc_final_time", "Final time", "MBCSolverSetFromOptions", s->final_time, &s->final_time, NULL));
   PetscCall(PetscOptionsReal("-mbc_newmark_beta", "Newmark beta", "MBCSolverSetFromOptions", s->beta, &s->beta, &set[3]));
   PetscCall(PetscOptionsReal("-mbc_newmark_gamma", "Newmark gamma", "MBCSolverSetFromOptions", s->gamma, &s->gamma, &set[4]));
+  PetscCall(MBCSolverSchemeSetFromOptions(s, PetscOptionsObject, &set[5]));
+  PetscCheck(!(set[5] && s->scheme != MBC_SCHEME_NEWMARK && (set[3] || set[4])), s->comm, PETSC_ERR_ARG_INCOMP, "-mbc_newmark_beta and -mbc_newmark_gamma are Newmark's: the %s scheme sets them from its own parameters", MBCSchemeTypes[s->scheme]);
   PetscCall(PetscOptionsInt("-mbc_output_every", "Write fields every this many steps", "MBCSolverSetFromOptions", s->output_every, &s->output_every, NULL));
   PetscCall(PetscOptionsString("-mbc_output", "Prefix of the result files", "MBCSolverSetFromOptions", s->output, s->output, sizeof(s->output), NULL));
   PetscCall(PetscOptionsBool("-mbc_monitor", "Print a line per step", "MBCSolverSetFromOptions", s->monitor, &s->monitor, NULL));
@@ -124,9 +129,9 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   PetscCheck(s->output_every >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_output_every %" PetscInt_FMT " must be at least 1", s->output_every);
   if (s->analysis == MBC_ANALYSIS_DYNAMIC && !s->scene->nstages) { /* the stages are checked as read */
     PetscCheck(s->gamma >= 0.5 && s->beta >= 0.25 * (0.5 + s->gamma) * (0.5 + s->gamma) * (1 - 1e-12), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Newmark beta %g, gamma %g are not unconditionally stable (need gamma >= 1/2, beta >= (1/2 + gamma)^2 / 4)", (double)s->beta, (double)s->gamma);
-    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0 || s->scene->bodies[b].massless, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+    for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(s->scene->bodies[b].density > 0 || s->scene->bodies[b].massless || s->scene->bodies[b].rigid, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: body '%s' needs a positive density for a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
-  PetscCall(MBCSolverStagesSetUp(s, (PetscBool)(set[0] || set[1] || set[2] || set[3] || set[4])));
+  PetscCall(MBCSolverStagesSetUp(s, (PetscBool)(set[0] || set[1] || set[2] || set[3] || set[4] || set[5])));
   if (s->dt_min < 0) s->dt_min = s->dt / 1024;
   PetscCheck(s->dt_min > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_dt_min %g must be positive", (double)s->dt_min);
   if (s->fclib_step < 0) s->fclib_step = s->nsteps;
@@ -651,24 +656,27 @@ static PetscErrorCode BodyAcceleration(MBCBody body, PetscReal t, Vec fc)
   PetscFunctionReturn(0);
 }
 
-/* Initial state of a dynamic analysis: static equilibrium under the constant loads and the
-   prescribed values at t = 0, at rest, and the acceleration the loads at t = 0 give. */
+/* Initial state of a dynamic analysis: the displacement and velocity given (the scene's
+   `initial`, MBCBodySetInitialState), else the static equilibrium under the constant loads and the
+   prescribed values at t = 0, at rest; the acceleration the forces at t = 0 give. */
 static PetscErrorCode BodyDynamicInitialState(MBCBody body)
 {
   PetscReal fnorm, gnorm;
   KSP       ksp;
   Mat       A;
+  PetscBool hasu, hasv;
 
   PetscFunctionBegin;
   PetscCall(VecZeroEntries(body->u));
   PetscCall(VecZeroEntries(body->v));
   PetscCall(VecZeroEntries(body->a));
   PetscCall(MBCBodyAbsorbingHold(body));
+  PetscCall(MBCBodyInitialState(body, &hasu, &hasv));
   PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_TRUE, body->rhs));
   PetscCall(MBCBodyPrescribed(body, 0.0, body->g));
   PetscCall(VecNorm(body->rhs, NORM_INFINITY, &fnorm));
   PetscCall(VecNorm(body->g, NORM_INFINITY, &gnorm));
-  if (fnorm > 0 || gnorm > 0) {
+  if (!hasu && (fnorm > 0 || gnorm > 0)) {
     PetscCall(MBCBodyFactor(body, 1.0, 0.0, &ksp, &A, "initial static stiffness"));
     PetscCall(MBCBodyConstrainedSolve(body, ksp, 1.0, 0.0, body->g, body->rhs, body->u));
     PetscCall(KSPDestroy(&ksp));
@@ -677,29 +685,30 @@ static PetscErrorCode BodyDynamicInitialState(MBCBody body)
   PetscCall(MBCBodyAbsorbingRelease(body, 0.0)); /* the motion from here on through the dashpots */
   PetscCall(BodyAcceleration(body, 0.0, NULL));
   PetscCall(VecDot(body->fold, body->u, &body->wext)); /* so that total = T + U - F.u for constant F */
+  if (hasu || hasv) { /* the energy the initial state holds counts as work done on the body before t = 0: total starts at 0 */
+    PetscScalar uKu, vMv = 0;
+    PetscCall(MatMult(body->K, body->u, body->work));
+    PetscCall(VecDot(body->u, body->work, &uKu));
+    PetscCall(MatMult(body->M, body->v, body->work));
+    PetscCall(VecDot(body->v, body->work, &vMv));
+    body->wext = 0.5 * PetscRealPart(uKu + vMv);
+  }
   body->wdamp = 0;
   PetscFunctionReturn(0);
 }
 
-/* Newmark's coefficients for a step h (incremental form). */
-typedef struct {
-  PetscReal h, a0, a1, a2, a3, a4, a5, a6, a7;
-} NewmarkCoefficients;
-
-static NewmarkCoefficients Newmark(PetscReal h, PetscReal beta, PetscReal gamma)
+/* The integrator's coefficients for a step h of the current stage (solvergenalpha.c). */
+static MBCTimeCoefficients Newmark(MBCSolver s, PetscReal h)
 {
-  NewmarkCoefficients c;
-  c.h = h, c.a0 = 1 / (beta * h * h), c.a1 = gamma / (beta * h), c.a2 = 1 / (beta * h), c.a3 = 1 / (2 * beta) - 1;
-  c.a4 = gamma / beta - 1, c.a5 = h / 2 * (gamma / beta - 2), c.a6 = h * (1 - gamma), c.a7 = gamma * h;
-  return c;
+  return MBCTimeScheme(h, s->beta, s->gamma, s->am, s->af);
 }
 
 /* body->ksp, body->A: the factor of step level `level` (h = dt / 2^level), factored once and kept. */
-static PetscErrorCode BodyUseLevel(MBCBody body, PetscInt level, NewmarkCoefficients c)
+static PetscErrorCode BodyUseLevel(MBCBody body, PetscInt level, MBCTimeCoefficients c)
 {
   PetscFunctionBegin;
   body->aK = 1 + c.a1 * body->cK;
-  body->aM = c.a0 + c.a1 * body->cM;
+  body->aM = c.aM + c.a1 * body->cM;
   body->aC = c.a1; /* the dashpots, if any */
   if (!body->kspcut[level]) PetscCall(MBCBodyFactor(body, body->aK, body->aM, &body->kspcut[level], &body->Acut[level], level ? "Newmark effective stiffness (cut step)" : "Newmark effective stiffness"));
   body->aC = 0;
@@ -715,7 +724,7 @@ static PetscErrorCode BodyUseLevel(MBCBody body, PetscInt level, NewmarkCoeffici
 /* Every body's factor for h = dt / 2^level, and D rebuilt for it (the pairs unchanged). */
 static PetscErrorCode SolverDynamicUseLevel(MBCSolver s, PetscInt level)
 {
-  const NewmarkCoefficients c = Newmark(s->dt / PetscPowInt(2, level), s->beta, s->gamma);
+  const MBCTimeCoefficients c = Newmark(s, s->dt / PetscPowInt(2, level));
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++)
@@ -731,16 +740,16 @@ static PetscErrorCode SolverDynamicUseLevel(MBCSolver s, PetscInt level)
    Here: the initial state, K~ factored, step 0 (its monitor line and output). */
 static PetscErrorCode SolverDynamicBegin(MBCSolver s)
 {
-  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
+  const PetscReal dt = s->dt;
 
   PetscFunctionBegin;
-  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, gamma)); /* contact impulse of a step: dt ((1 - gamma) lambda_n + gamma lambda_n+1) */
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af))); /* contact impulse of a step: dt ((1 - theta) lambda_n + theta lambda_n+1) */
   s->wfriction = s->wcontact = 0;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
     PetscCall(BodyDynamicInitialState(body));
-    PetscCall(BodyUseLevel(body, 0, Newmark(dt, beta, gamma)));
+    PetscCall(BodyUseLevel(body, 0, Newmark(s, dt)));
   }
   s->level = 0;
   s->step  = 0;
@@ -759,11 +768,11 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
    sizes go, D is rebuilt for this stage's K~ with H as it is. */
 static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
 {
-  const PetscReal dt = s->dt, beta = s->beta, gamma = s->gamma;
+  const PetscReal dt = s->dt;
   const PetscBool after_static = (PetscBool)(s->stages[s->istage - 1].analysis == MBC_ANALYSIS_STATIC);
 
   PetscFunctionBegin;
-  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, gamma));
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af)));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
@@ -777,7 +786,7 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
     PetscCall(MatDestroy(&body->A));
     if (after_static) PetscCall(VecZeroEntries(body->v));
     PetscCall(MBCBodyAbsorbingRelease(body, s->time));
-    PetscCall(BodyUseLevel(body, 0, Newmark(dt, beta, gamma)));
+    PetscCall(BodyUseLevel(body, 0, Newmark(s, dt)));
   }
   s->level = s->start_level = s->good_steps = 0;
   if (s->iface) {
@@ -810,6 +819,9 @@ static PetscErrorCode SolverStageSet(MBCSolver s, PetscInt i)
   s->dt       = st->dt;
   s->beta     = st->beta;
   s->gamma    = st->gamma;
+  s->am       = st->am;
+  s->af       = st->af;
+  s->scheme   = st->scheme;
   PetscCall(MBCSolverStageLog(s, i));
   for (PetscInt b = 0; b < s->nbodies; b++)
     if (s->bodies[b]) s->bodies[b]->stage = i;
@@ -825,9 +837,9 @@ PetscErrorCode MBCSolverStageResume(MBCSolver s, PetscInt i)
   s->restarting = PETSC_TRUE;
   if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
   else {
-    if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, s->gamma));
+    if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af)));
     for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], s->level, Newmark(s->dt / PetscPowInt(2, s->level), s->beta, s->gamma)));
+      if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], s->level, Newmark(s, s->dt / PetscPowInt(2, s->level))));
   }
   s->restarting = PETSC_FALSE;
   PetscFunctionReturn(0);
@@ -846,29 +858,25 @@ static PetscErrorCode SolverStageBegin(MBCSolver s, PetscInt i)
   PetscFunctionReturn(0);
 }
 
-/* One Newmark step of c.h ending at s->time; returns with s->contact_failed set and the state
-   untouched when the contact solve did not converge. */
-static PetscErrorCode SolverDynamicIncrement(MBCSolver s, NewmarkCoefficients c)
+/* One step of c.h ending at s->time (Newmark, HHT or generalized-alpha: solvergenalpha.c); returns
+   with s->contact_failed set and the state untouched when the contact solve did not converge. */
+static PetscErrorCode SolverDynamicIncrement(MBCSolver s, MBCTimeCoefficients c)
 {
-  const PetscReal h = c.h, a0 = c.a0, a2 = c.a2, a3 = c.a3, a4 = c.a4, a5 = c.a5, a6 = c.a6, a7 = c.a7;
+  const PetscReal h = c.h, a0 = c.a0, a2 = c.a2, a3 = c.a3, a6 = c.a6, a7 = c.a7;
 
   PetscFunctionBegin;
+  if (s->iface && c.cf != 0) PetscCall(MBCInterfaceMultipliersToBodies(s->iface)); /* lambda_n: generalized-alpha's force average */
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
+    Vec     fc   = NULL;
     if (!body) continue;
     PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->f));
-    PetscCall(VecCopy(body->f, body->rhs));
-    PetscCall(MatMult(body->K, body->u, body->work));
-    PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-    PetscCall(VecAXPBY(body->work2, a2, 0.0, body->v)); /* work2 = a2 v + a3 a */
-    PetscCall(VecAXPY(body->work2, a3, body->a));
-    PetscCall(MatMult(body->M, body->work2, body->work));
-    PetscCall(VecAXPY(body->rhs, 1.0, body->work));
-    if (MBCBodyDamped(body)) {
-      PetscCall(VecAXPBY(body->work2, a4, 0.0, body->v));
-      PetscCall(VecAXPY(body->work2, a5, body->a));
-      PetscCall(MBCBodyAddDamping(body, 1.0, body->work2, body->rhs));
+    if (s->iface && c.cf != 0) {
+      PetscCall(VecDuplicate(body->u, &fc));
+      PetscCall(MBCInterfaceBodyForce(s->iface, b, fc));
     }
+    PetscCall(MBCSolverStepRHS(body, c, fc));
+    PetscCall(VecDestroy(&fc));
     PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
     PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
   }
@@ -919,7 +927,7 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
   s->time             = t0 + h;
   s->contact_failed   = PETSC_FALSE;
   s->contact_may_fail = (PetscBool)(s->dt_cut && level + 1 < MBC_MAX_CUTS && h / 2 >= s->dt_min * (1 - 1e-12));
-  PetscCall(SolverDynamicIncrement(s, Newmark(h, s->beta, s->gamma)));
+  PetscCall(SolverDynamicIncrement(s, Newmark(s, h)));
   s->contact_may_fail = PETSC_FALSE;
   if (!s->contact_failed) {
     if (level) PetscCall(SolverContact(s)); /* the search between the sub-steps */
@@ -935,6 +943,23 @@ static PetscErrorCode SolverDynamicAdvance(MBCSolver s, PetscInt level)
   s->time = t0;
   PetscCall(SolverDynamicAdvance(s, level + 1));
   PetscCall(SolverDynamicAdvance(s, level + 1));
+  PetscFunctionReturn(0);
+}
+
+
+/* A static start would ignore an initial state (the scene's `initial`, MBCBodySetInitialState):
+   refused rather than dropped (-mbc_analysis static on a dynamic scene with one, say). */
+static PetscErrorCode SolverCheckNoInitialState(MBCSolver s)
+{
+  PetscInt given = 0;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nbodies; b++) {
+    const MBCBody body = s->bodies[b];
+    if (body && (body->u0 || body->v0 || body->desc.initial_u || body->desc.initial_v)) given = PetscMax(given, b + 1);
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &given, 1, MPIU_INT, MPI_MAX, s->comm));
+  PetscCheck(!given, s->comm, PETSC_ERR_ARG_INCOMP, "Body '%s' has an initial displacement or velocity (scene file %s's `initial`, or MBCBodySetInitialState) but the analysis starts static: initial conditions start a dynamic analysis", s->scene->bodies[given - 1].name, s->scene->filename);
   PetscFunctionReturn(0);
 }
 
@@ -1001,6 +1026,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       }
     } else {
       PetscCall(MBCSolverStageLog(s, 0));
+      if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverCheckNoInitialState(s));
       if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
       else PetscCall(SolverDynamicBegin(s));
     }

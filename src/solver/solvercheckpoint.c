@@ -53,7 +53,7 @@ static PetscErrorCode CheckpointMaps(MBCSolver s)
   if (s->ckpt) PetscFunctionReturn(0);
   PetscCall(PetscCalloc1(s->nbodies, &s->ckpt));
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    s->ckpt[b].nv = s->scene->bodies[b].num_vertices;
+    s->ckpt[b].nv = s->scene->bodies[b].num_nodes;
     if (s->bodies[b]) PetscCall(MBCBodyVertexMapCreate(s->bodies[b], &s->ckpt[b], NULL, NULL));
   }
   PetscFunctionReturn(0);

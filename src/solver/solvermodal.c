@@ -302,6 +302,7 @@ PetscErrorCode MBCSolverModalSolve(MBCSolver s)
   char        prefix[256];
 
   PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->scene->nbodies; b++) PetscCheck(!s->scene->bodies[b].rigid, s->comm, PETSC_ERR_SUP, "Scene file %s: body '%s' is rigid: the modal analysis takes deformable bodies only (model it as an elastic body, or leave it out)", s->scene->filename, s->scene->bodies[b].name);
   /* SLEPc on the PETSc already running (mbcontact's or petsc4py's); its classes are finalised with PETSc */
   PetscCall(SlepcInitialize(NULL, NULL, NULL, NULL));
   if (contact && s->modal_tie)

@@ -9,12 +9,19 @@
 #include <mbc/private/h5util.h>
 #include <petscsf.h>
 
-/* Vertex permutation between PETSc's order and XDMF's (VTK's, Gmsh's); its own inverse
-   (python/mbcontact/cells.py, TO_PETSC). */
-static const PetscInt ToXdmf[2][8] = {
-  {1, 0, 2, 3, 0, 0, 0, 0}, /* tet4 */
-  {0, 3, 2, 1, 4, 5, 6, 7}  /* hex8 */
+/* Node permutation from a cell's kernel order (MBCBodyCellVertices: PETSc's closure, then tet10's
+   midside nodes) to XDMF's (VTK's, Gmsh's, the scene's), per MBCCellType (python/mbcontact/cells.py,
+   TO_PETSC), and XDMF's name of each. */
+static const PetscInt ToXdmf[7][10] = {
+  {1, 0, 2, 3},                   /* tet4 */
+  {0, 3, 2, 1, 4, 5, 6, 7},       /* hex8 */
+  {0, 2, 1, 3, 4, 5},             /* wedge6 */
+  {0, 3, 2, 1, 4},                /* pyr5 */
+  {1, 0, 2, 3, 4, 6, 5, 8, 7, 9}, /* tet10 */
+  {0, 1, 2},                      /* tri3 */
+  {0, 1, 2, 3}                    /* quad4 */
 };
+static const char *const XdmfName[7] = {"Tetrahedron", "Hexahedron", "Wedge", "Pyramid", "Tetrahedron_10", "Triangle", "Quadrilateral"};
 
 /* Component c of XDMF's Tensor6 (xx xy xz yy yz zz, what ParaView shows) is Voigt component
    VoigtOfTensor6[c] of the stress field (xx yy zz xy yz xz, bodypointwise.c): the file stores the
@@ -80,8 +87,11 @@ static PetscErrorCode OwnedPoints(DM dm, PetscInt pStart, PetscInt pEnd, const P
   PetscCall(PetscMalloc1(pEnd - pStart, scene));
   *n = 0;
   for (PetscInt p = pStart; p < pEnd; p++) {
+    PetscInt dof;
+    if (num[p - pStart] < 0) continue; /* no node, no DOFs */
+    PetscCall(PetscSectionGetDof(gsec, p, &dof));
     PetscCall(PetscSectionGetOffset(gsec, p, &off));
-    if (off < 0) continue;
+    if (off < 0 || dof <= 0) continue;
     (*point)[*n] = p;
     (*row)[*n]   = off;
     (*scene)[*n] = num[p - pStart];
@@ -102,39 +112,31 @@ static PetscErrorCode OwnedPoints(DM dm, PetscInt pStart, PetscInt pEnd, const P
    brought to their rows. Collective on the body's communicator. */
 static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscInt vpoint[], const PetscInt vscene[], const PetscInt cpoint[], const PetscInt cscene[], PetscReal *x, int *cells)
 {
-  PetscSection       csec;
   Vec                coords;
   const PetscScalar *xa;
   PetscReal         *xl;
-  PetscInt          *cl, *cr, vStart, vEnd, *closure = NULL, ncl, hex = o->nvpc == 8;
+  PetscInt          *cl, *cr, cStart;
   PetscSF            sf;
 
   PetscFunctionBegin;
-  PetscCall(DMGetCoordinateSection(body->dm, &csec));
+  (void)vscene;
   PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
   PetscCall(VecGetArrayRead(coords, &xa));
   PetscCall(PetscMalloc1(3 * o->nvown, &xl));
-  for (PetscInt i = 0; i < o->nvown; i++) {
-    PetscInt off;
-    PetscCall(PetscSectionGetOffset(csec, vpoint[i], &off));
-    for (PetscInt c = 0; c < 3; c++) xl[3 * i + c] = PetscRealPart(xa[off + c]);
-  }
+  for (PetscInt i = 0; i < o->nvown; i++) PetscCall(MBCBodyPointCoordinates(body, vpoint[i], xa, &xl[3 * i]));
   PetscCall(VecRestoreArrayRead(coords, &xa));
   PetscCall(PetscSFReduceBegin(o->vsf, MPIU_REAL, xl, x, MPI_REPLACE));
   PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, xl, x, MPI_REPLACE));
   PetscCall(PetscFree(xl));
 
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, NULL));
   PetscCall(PetscMalloc2(o->nvpc * o->ncown, &cl, o->nvpc * o->ncrows, &cr));
   for (PetscInt i = 0; i < o->ncown; i++) {
-    PetscInt v[8], nv = 0;
-    PetscCall(DMPlexGetTransitiveClosure(body->dm, cpoint[i], PETSC_TRUE, &ncl, &closure));
-    for (PetscInt j = 0; j < 2 * ncl; j += 2)
-      if (closure[j] >= vStart && closure[j] < vEnd && nv < 8) v[nv++] = body->vnum[closure[j] - vStart];
-    PetscCheck(nv == o->nvpc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': cell %" PetscInt_FMT " has %" PetscInt_FMT " vertices, not %" PetscInt_FMT, body->name, cscene[i], nv, o->nvpc);
-    for (PetscInt j = 0; j < o->nvpc; j++) cl[o->nvpc * i + j] = v[ToXdmf[hex][j]];
+    const PetscInt  c = cpoint[i], *v = &body->cellv[body->cellvoff[c - cStart]], nv = body->cellvoff[c - cStart + 1] - body->cellvoff[c - cStart];
+    const PetscInt  t = body->celltype[c - cStart];
+    PetscCheck(nv <= o->nvpc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': cell %" PetscInt_FMT " has %" PetscInt_FMT " nodes, more than %" PetscInt_FMT, body->name, cscene[i], nv, o->nvpc);
+    for (PetscInt j = 0; j < o->nvpc; j++) cl[o->nvpc * i + j] = j < nv ? MBCBodyPointNode(body, v[ToXdmf[t][j]]) : -1;
   }
-  if (closure) PetscCall(DMPlexRestoreTransitiveClosure(body->dm, cpoint[0], PETSC_TRUE, &ncl, &closure));
   PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, o->nvpc, body->name, "cell", &sf));
   PetscCall(PetscSFReduceBegin(sf, MPIU_INT, cl, cr, MPI_REPLACE));
   PetscCall(PetscSFReduceEnd(sf, MPIU_INT, cl, cr, MPI_REPLACE));
@@ -149,12 +151,15 @@ static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscIn
    (solvercheckpoint.c), which stores the state in the scene's order. */
 PetscErrorCode MBCBodyVertexMapCreate(MBCBody body, MBCBodyOutput *o, PetscInt **vpoint, PetscInt **vscene)
 {
-  PetscInt vStart, vEnd, *vp, *vs;
+  PetscInt pStart, pEnd, *vp, *vs, *num;
 
   PetscFunctionBegin;
   PetscCall(SplitRows(body->comm, o->nv, &o->vstart, &o->nvrows));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
-  PetscCall(OwnedPoints(body->dm, vStart, vEnd, body->vnum, &o->nvown, &vp, &o->vrow, &vs));
+  PetscCall(DMPlexGetChart(body->dm, &pStart, &pEnd));
+  PetscCall(PetscMalloc1(pEnd - pStart + 1, &num));
+  for (PetscInt p = pStart; p < pEnd; p++) num[p - pStart] = MBCBodyPointNode(body, p); /* the nodes: vertices, tet10's edges */
+  PetscCall(OwnedPoints(body->dm, pStart, pEnd, num, &o->nvown, &vp, &o->vrow, &vs));
+  PetscCall(PetscFree(num));
   PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vs, 3, body->name, "vertex", &o->vsf));
   if (vpoint) *vpoint = vp;
   else PetscCall(PetscFree(vp));
@@ -185,6 +190,40 @@ static PetscErrorCode BodyOutputSetUp(MBCBody body, MBCBodyOutput *o, PetscReal 
   PetscFunctionReturn(0);
 }
 
+/* A body of several cell types (mixed, a surface of triangles and quads): /bodies/<name>/topology,
+   XDMF's Mixed topology (per cell its type code and its nodes), this rank's rows at their offset.
+   Collective on the solver's communicator. */
+static PetscErrorCode BodyMixedTopology(MBCSolver s, PetscInt b, hid_t g, const int cells[])
+{
+  MBCBodyOutput *o = &s->bout[b];
+  const char    *t = s->scene->bodies[b].cell_type;
+  int           *flat = NULL;
+  PetscInt       n = 0, off = 0, total = 0;
+
+  PetscFunctionBegin;
+  if (strcmp(t, "mixed") && strcmp(t, "surface")) PetscFunctionReturn(0);
+  if (s->bodies[b]) {
+    PetscCall(PetscMalloc1((o->nvpc + 1) * o->ncrows + 1, &flat));
+    for (PetscInt i = 0; i < o->ncrows; i++) {
+      PetscInt nv = 0;
+      while (nv < o->nvpc && cells[o->nvpc * i + nv] >= 0) nv++;
+      flat[n++] = !strcmp(t, "surface") ? (nv == 3 ? 4 : 5) : (nv == 4 ? 6 : nv == 5 ? 7 : nv == 6 ? 8 : 9);
+      for (PetscInt j = 0; j < nv; j++) flat[n++] = cells[o->nvpc * i + j];
+    }
+  }
+  PetscCallMPI(MPI_Exscan(&n, &off, 1, MPIU_INT, MPI_SUM, s->comm));
+  PetscCallMPI(MPI_Allreduce(&n, &total, 1, MPIU_INT, MPI_SUM, s->comm));
+  {
+    PetscMPIInt rank;
+    PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+    if (!rank) off = 0;
+  }
+  o->ntopo = total;
+  PetscCall(MBCH5WriteRows(g, "topology", H5T_NATIVE_INT, total, 1, off, n, flat));
+  PetscCall(PetscFree(flat));
+  PetscFunctionReturn(0);
+}
+
 /* The maps of every body, then /bodies/<name>/vertices and cells: first every rank sets up its
    bodies (in parallel), then all write body after body. Collective on the solver's communicator. */
 PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
@@ -199,9 +238,10 @@ PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
   PetscCall(PetscCalloc2(s->nbodies, &x, s->nbodies, &cells));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBodyOutput *o = &s->bout[b];
-    o->nv   = scene->bodies[b].num_vertices;
+    const char *t = scene->bodies[b].cell_type;
+    o->nv   = scene->bodies[b].num_nodes;
     o->nc   = scene->bodies[b].num_cells;
-    o->nvpc = strcmp(scene->bodies[b].cell_type, "hex8") ? 4 : 8;
+    o->nvpc = !strcmp(t, "tet4") ? 4 : !strcmp(t, "pyr5") ? 5 : !strcmp(t, "wedge6") ? 6 : !strcmp(t, "tet10") ? 10 : !strcmp(t, "surface") ? 4 : 8;
     PetscCheck(o->nv < PETSC_MAX_INT / 8 && o->nc < PETSC_MAX_INT / 8, s->comm, PETSC_ERR_SUP, "Body '%s': too large for the 32-bit cell indices of the result file", scene->bodies[b].name);
     if (s->bodies[b]) PetscCall(BodyOutputSetUp(s->bodies[b], o, &x[b], &cells[b]));
   }
@@ -216,6 +256,7 @@ PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
     PetscCall(MBCH5WriteAttribute(g, "index", H5T_NATIVE_INT, 1, &index));
     PetscCall(MBCH5WriteRows(g, "vertices", H5T_NATIVE_DOUBLE, o->nv, 3, o->vstart, o->nvrows, x[b]));
     PetscCall(MBCH5WriteRows(g, "cells", H5T_NATIVE_INT, o->nc, o->nvpc, o->cstart, o->ncrows, cells[b]));
+    PetscCall(BodyMixedTopology(s, b, g, cells[b]));
     PetscCall(MBCH5GroupClose(&g));
     PetscCall(PetscFree(x[b]));
     PetscCall(PetscFree(cells[b]));
@@ -343,8 +384,15 @@ PetscErrorCode MBCSolverOutputBodiesXdmf(MBCSolver s, FILE *fp, PetscInt k)
     const MBCBodyOutput *o    = &s->bout[b];
     const char          *name = scene->bodies[b].name;
     fprintf(fp, "      <Grid Name=\"%s\" GridType=\"Uniform\">\n", name);
-    fprintf(fp, "        <Topology TopologyType=\"%s\" NumberOfElements=\"%" PetscInt_FMT "\">\n", o->nvpc == 8 ? "Hexahedron" : "Tetrahedron", o->nc);
-    fprintf(fp, "          <DataItem Dimensions=\"%" PetscInt_FMT " %" PetscInt_FMT "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">%s:/bodies/%s/cells</DataItem>\n        </Topology>\n", o->nc, o->nvpc, h5, name);
+    if (o->ntopo) {
+      fprintf(fp, "        <Topology TopologyType=\"Mixed\" NumberOfElements=\"%" PetscInt_FMT "\">\n", o->nc);
+      fprintf(fp, "          <DataItem Dimensions=\"%" PetscInt_FMT "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">%s:/bodies/%s/topology</DataItem>\n        </Topology>\n", o->ntopo, h5, name);
+    } else {
+      const char *t = scene->bodies[b].cell_type;
+      const PetscInt type = !strcmp(t, "tet4") ? MBC_CELL_TET4 : !strcmp(t, "pyr5") ? MBC_CELL_PYR5 : !strcmp(t, "wedge6") ? MBC_CELL_WEDGE6 : !strcmp(t, "tet10") ? MBC_CELL_TET10 : MBC_CELL_HEX8;
+      fprintf(fp, "        <Topology TopologyType=\"%s\" NumberOfElements=\"%" PetscInt_FMT "\">\n", XdmfName[type], o->nc);
+      fprintf(fp, "          <DataItem Dimensions=\"%" PetscInt_FMT " %" PetscInt_FMT "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">%s:/bodies/%s/cells</DataItem>\n        </Topology>\n", o->nc, o->nvpc, h5, name);
+    }
     fprintf(fp, "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/vertices</DataItem>\n        </Geometry>\n", o->nv, h5, name);
     if (scene->output_displacement) fprintf(fp, "        <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n          <DataItem Dimensions=\"%" PetscInt_FMT " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">%s:/bodies/%s/step_%" PetscInt_FMT "/displacement</DataItem>\n        </Attribute>\n", o->nv, h5, name, k);
     if (scene->output_envelope)

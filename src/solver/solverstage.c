@@ -22,9 +22,12 @@ PetscErrorCode MBCSolverStagesSetUp(MBCSolver s, PetscBool overridden)
     s->stages[0].dt       = s->dt;
     s->stages[0].beta     = s->beta;
     s->stages[0].gamma    = s->gamma;
+    s->stages[0].am       = s->am;
+    s->stages[0].af       = s->af;
+    s->stages[0].scheme   = s->scheme;
     s->stages[0].nsteps   = s->analysis == MBC_ANALYSIS_MODAL ? s->modal_nev : (PetscInt)PetscCeilReal(s->final_time / s->dt - 1e-9); /* modal: an output per mode */
   } else {
-    PetscCheck(!overridden, s->comm, PETSC_ERR_ARG_INCOMP, "Scene file %s has %" PetscInt_FMT " analysis stages, each with its analysis settings: -mbc_analysis, -mbc_dt and -mbc_newmark_* do not apply (change the stages in the scene; -mbc_final_time ends the run early)", scene->filename, scene->nstages);
+    PetscCheck(!overridden, s->comm, PETSC_ERR_ARG_INCOMP, "Scene file %s has %" PetscInt_FMT " analysis stages, each with its analysis settings: -mbc_analysis, -mbc_dt, -mbc_newmark_* and -mbc_scheme do not apply (change the stages in the scene; -mbc_final_time ends the run early)", scene->filename, scene->nstages);
     PetscCall(PetscCalloc1(scene->nstages, &s->stages));
     s->nstages = 0;
     for (PetscInt i = 0; i < scene->nstages; i++) {
@@ -37,6 +40,9 @@ PetscErrorCode MBCSolverStagesSetUp(MBCSolver s, PetscBool overridden)
       st->dt       = d->dt;
       st->beta     = d->newmark_beta;
       st->gamma    = d->newmark_gamma;
+      st->am       = d->alpha_m;
+      st->af       = d->alpha_f;
+      st->scheme   = MBCSchemeFromName(d->scheme);
       st->nsteps   = PetscMax(1, (PetscInt)PetscCeilReal((st->t1 - st->t0) / st->dt - 1e-9));
       s->nstages++;
     }
@@ -50,6 +56,9 @@ PetscErrorCode MBCSolverStagesSetUp(MBCSolver s, PetscBool overridden)
   s->dt     = s->stages[0].dt; /* the step control's and the monitor's, of the current stage */
   s->beta   = s->stages[0].beta;
   s->gamma  = s->stages[0].gamma;
+  s->am     = s->stages[0].am;
+  s->af     = s->stages[0].af;
+  s->scheme = s->stages[0].scheme;
   PetscFunctionReturn(0);
 }
 

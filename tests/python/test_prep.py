@@ -459,10 +459,10 @@ def test_overlapping_surface_regions(case):
 
 
 def test_unsupported_cell_type(case):
-    add_region(case.dir / "blocks.msh", "prism", 3, "wedge", [[0, 1, 4, 16, 17, 20]])
+    add_region(case.dir / "blocks.msh", "brick20", 3, "hexahedron20", [list(range(20))])
     scene = base_scene()
-    scene["bodies"]["block1"]["regions"] = ["b1", "prism"]
-    assert_error(case(scene), ["'prism'", "'wedge'", "tet4", "hex8"])
+    scene["bodies"]["block1"]["regions"] = ["b1", "brick20"]
+    assert_error(case(scene), ["'brick20'", "'hexahedron20'", "tet4", "hex8", "wedge6", "tet10"])
 
 
 def test_inverted_element(case):

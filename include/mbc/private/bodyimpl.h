@@ -15,9 +15,24 @@ typedef enum {
   MBC_ELEMENT_TET4,
   MBC_ELEMENT_HEX8,
   MBC_ELEMENT_HEX8I,
-  MBC_ELEMENT_HEX8B
+  MBC_ELEMENT_HEX8B,
+  MBC_ELEMENT_TET10, /* a body of tet10 cells */
+  MBC_ELEMENT_MIXED, /* tets, prisms and pyramids (with hexes: the hex variant's name) */
+  MBC_ELEMENT_RIGID  /* a rigid body: no element */
 } MBCElementType;
 PETSC_EXTERN const char *const MBCElementTypes[];
+
+/* The type of a cell (bodylayout.c), which the count of its nodes also tells (element.h). */
+typedef enum {
+  MBC_CELL_TET4,
+  MBC_CELL_HEX8,
+  MBC_CELL_WEDGE6,
+  MBC_CELL_PYR5,
+  MBC_CELL_TET10,
+  MBC_CELL_TRI3, /* a rigid surface's */
+  MBC_CELL_QUAD4
+} MBCCellType;
+PETSC_EXTERN const char *const MBCCellTypes[];
 
 #define MBC_MAX_CUTS 11 /* dt / 1024 */
 
@@ -28,15 +43,20 @@ struct _n_MBCBody {
   MPI_Comm    comm;       /* the body's sub-communicator of the job's */
   MBCScene    scene;      /* a reference */
   MBCBodyDesc desc;
-  PetscBool   simplex;
   MBCElementType element;
 
   DM      dm;             /* displacement field, Lagrange P1/Q1 */
   DM      dmStress;       /* cellwise stress, 6 components (xx yy zz xy yz xz) */
   PetscInt *vnum, *cnum;  /* scene index (the order mbcontact-prep wrote) of each local vertex and cell */
-  PetscInt *cellvoff, *cellv; /* each local cell's vertices in closure order, cellv[cellvoff[c]..]: kept
+  PetscInt *cellvoff, *cellv; /* each local cell's nodes (points) in its kernel's order, cellv[cellvoff[c]..]: kept
                                  because a closure looks up every point's cell type (MBCBodyCellVertices) */
-  PetscFE fe;
+  PetscInt *celltype;     /* each local cell's MBCCellType */
+  PetscInt *enode;        /* tet10: per local edge the scene index of its midside node (NULL otherwise) */
+  PetscReal *ecoord;      /* and its position, 3 each */
+  PetscBool surface;      /* a rigid surface: a 2D mesh, its cells are its faces */
+  void     *nodemap;      /* scene node -> local point (MBCBodyNodePoint), built on first use */
+  Vec       Trig[6];      /* a rigid body (bodyrigidbody.c): u = T q, T's six columns */
+  PetscReal TtTinv[36], Mr[36]; /* (T^T T)^-1 and its mass about the reference point */
   PetscReal lambda, mu;   /* Lamé constants */
 
   Mat K, M;               /* unconstrained stiffness and mass (lumped: diagonal), M with the reservoir's added mass */
@@ -78,6 +98,7 @@ struct _n_MBCBody {
   PetscReal  fres[6];     /* the resultant of the load F and its moment about the origin (static, this step) */
 
   Vec u, v, a;            /* displacement, velocity, acceleration */
+  Vec u0, v0;             /* the initial state set from the API (MBCBodySetInitialState; NULL: the scene's) */
   Vec du, rhs, f, fold, g, work, work2;
   Vec ustart;             /* static: u where a load step that may be cut began */
 };
@@ -91,7 +112,20 @@ PETSC_INTERN PetscErrorCode MBCBodyLoadResultant(MBCBody, Vec, PetscReal[6]);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleElasticity(MBCBody, Mat, Mat);
 PETSC_INTERN PetscErrorCode MBCBodyAssembleVolumeLoad(MBCBody, const PetscReal[3], Vec);
 PETSC_INTERN PetscErrorCode MBCBodyCreateOperator(MBCBody, Mat *);
-PETSC_INTERN PetscErrorCode MBCBodyCellVertices(MBCBody, PetscInt, const PetscScalar[], PetscReal[24], PetscInt[24], PetscInt *);
+PETSC_INTERN PetscErrorCode MBCBodyCellVertices(MBCBody, PetscInt, const PetscScalar[], PetscReal[], PetscInt[], PetscInt *);
+/* bodylayout.c: the DOF layout, the cells' and faces' nodes */
+PETSC_INTERN PetscErrorCode MBCBodyLayoutSetUp(MBCBody);
+PETSC_INTERN PetscInt       MBCBodyPointNode(MBCBody, PetscInt);
+PETSC_INTERN PetscErrorCode MBCBodyPointCoordinates(MBCBody, PetscInt, const PetscScalar[], PetscReal[3]);
+PETSC_INTERN MBCCellType    MBCBodyCellType(MBCBody, PetscInt);
+PETSC_INTERN PetscErrorCode MBCBodyFaceNodes(MBCBody, PetscInt, const PetscScalar[], PetscInt[6], PetscReal[6][3], PetscInt *, PetscInt *);
+PETSC_INTERN PetscErrorCode MBCBodyNodePoint(MBCBody, PetscInt, PetscInt *);
+PETSC_INTERN PetscErrorCode MBCBodyLayoutDestroy(MBCBody);
+/* bodyfaceload.c: pressure and traction on a surface; a face's shape functions and quadrature */
+PETSC_INTERN PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody, MBCLoadDesc *, Vec);
+PETSC_INTERN void           MBCFaceShape(PetscInt, PetscReal, PetscReal, PetscReal[6], PetscReal[6][2]);
+PETSC_INTERN PetscInt       MBCFaceQuadrature(PetscInt, PetscInt, PetscReal *, PetscReal *, PetscReal *);
+PETSC_INTERN void           MBCFaceIntegrate(PetscInt, const PetscReal[6][3], PetscReal (*)(const PetscReal[3], void *), void *, const PetscReal[3], PetscReal[6][3]);
 PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);
 PETSC_INTERN PetscErrorCode MBCBodyExternalForce(MBCBody, PetscReal, PetscBool, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyPrescribed(MBCBody, PetscReal, Vec);
@@ -114,4 +148,20 @@ PETSC_INTERN PetscErrorCode MBCBodyAbsorbingRelease(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyGroundLoad(MBCBody, MBCLoadDesc *, Vec, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyAddDamping(MBCBody, PetscReal, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyNodalBlockMatrix(MBCBody, Mat *);
+PETSC_INTERN PetscErrorCode MBCBodyInitialState(MBCBody, PetscBool *, PetscBool *);
+/* bodyrigidbody.c: a rigid body's six DOFs */
+PETSC_INTERN PetscErrorCode MBCBodyRigidSetUp(MBCBody, PetscBool);
+PETSC_INTERN PetscErrorCode MBCBodyRigidFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *);
+PETSC_INTERN PetscErrorCode MBCBodyRigidMotion(MBCBody, Vec, PetscReal[6]);
+PETSC_INTERN PetscErrorCode MBCBodyRigidPrescribed(MBCBody, PetscReal, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyRigidSolve(MBCBody, KSP, PetscReal, Vec, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyRigidFreeModes(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyRigidGravity(MBCBody, const PetscReal[3], Vec);
+PETSC_INTERN PetscErrorCode MBCBodyRigidDestroy(MBCBody);
+/* bodyspring.c: discrete springs and dashpots */
+PETSC_INTERN PetscBool      MBCBodyHasSprings(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodySpringPattern(MBCBody, Mat);
+PETSC_INTERN PetscErrorCode MBCBodySpringsSetUp(MBCBody, PetscBool);
+PETSC_INTERN void           MBCBodySpringHeld(MBCBody, PetscBool[3]);
 PETSC_INTERN PetscBool      MBCBodyDamped(MBCBody);

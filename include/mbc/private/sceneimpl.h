@@ -30,9 +30,11 @@ typedef enum {
   MBC_LOAD_PRESSURE,
   MBC_LOAD_TRACTION,
   MBC_LOAD_HYDROSTATIC, /* p = unit_weight (level - x_axis) below the level, against the outward normal */
-  MBC_LOAD_GROUND_ACCELERATION /* the base's acceleration a_g(t) = vector f(t): -(M + M_added) a_g on a body
+  MBC_LOAD_GROUND_ACCELERATION, /* the base's acceleration a_g(t) = vector f(t): -(M + M_added) a_g on a body
                                   in relative motion; 2 rho c v_incident(t) on the absorbing input surfaces
                                   of a scene in absolute motion (bodyabsorbing.c) */
+  MBC_LOAD_NODAL_FORCE, /* vector times a weight at each of its nodes (1: a force per node) */
+  MBC_LOAD_LINE_FORCE   /* vector times int N_i ds at each node of its lines (a force per length) */
 } MBCLoadKind;
 PETSC_INTERN const char *const MBCLoadKinds[];
 
@@ -42,11 +44,17 @@ typedef struct {
 } MBCTimeTable;
 
 typedef struct {
-  char      name[MBC_NAME_LEN], cell_type[16];
-  char      element[16]; /* hex bodies: "hex8" | "hex8i" | "hex8b" | "" (the solver's default) */
+  char      name[MBC_NAME_LEN], cell_type[16]; /* tet4 hex8 wedge6 pyr5 mixed (of the four) tet10 surface (a rigid surface) */
+  char      element[16]; /* bodies with hex cells: "hex8" | "hex8i" | "hex8b" | "" (the solver's default) */
   PetscInt  num_cells, num_vertices;
+  PetscInt  num_nodes; /* the vertices and tet10's midside nodes (numbered after the vertices) */
   PetscReal E, nu, density, damping, rayleigh_alpha, rayleigh_beta;
   PetscBool massless; /* no inertia in a dynamic analysis (a massless foundation) */
+  PetscInt *midside;  /* tet10: per midside node the two vertices of its edge (scene order), 2 each */
+  PetscReal *midside_x; /* and its position, 3 each */
+  PetscBool rigid;    /* six DOFs: the reference point's translation and the rotation about it (bodyrigidbody.c) */
+  PetscReal reference[3], rigid_mass, rigid_inertia[9]; /* mass and inertia about the reference: 0 = from the mesh */
+  PetscReal *initial_u, *initial_v; /* initial displacement and velocity per node, scene order (NULL: none) */
 } MBCBodyDesc;
 
 typedef struct {
@@ -64,9 +72,11 @@ typedef struct {
 
 typedef struct {
   char        surface[MBC_NAME_LEN];
-  PetscInt    surface_id, component, time_function;
+  PetscInt    surface_id, component, time_function; /* surface_id -1: on nodes or a rigid body; component 3..5: a rotation */
   PetscReal   value;
   MBCTimeKind time;
+  PetscInt    body;           /* a rigid body whose motion it prescribes, else -1 */
+  PetscInt    nnodes, *nodes; /* on nodes: (body, node in scene order) each */
 } MBCDirichletDesc;
 
 typedef struct {
@@ -80,7 +90,16 @@ typedef struct {
   MBCTimeKind time;
   PetscInt    stage;  /* acts from this analysis stage on (0: from the start) */
   PetscInt    velocity_function, displacement_function; /* ground acceleration: the record's v and d tables */
+  PetscInt    nnodes, *nodes; /* nodal and line forces: (body, node) each */
+  PetscReal  *weights;        /* and the node's weight */
 } MBCLoadDesc;
+
+/* Discrete springs and dashpots (bodyspring.c): at each node, to the ground or to its partner node of
+   the same body, a stiffness and a damping along x, y, z. */
+typedef struct {
+  PetscReal k[3], c[3];
+  PetscInt  n, *nodes, *to; /* (body, node) each; to: NULL (the ground) or the partners */
+} MBCSpringDesc;
 
 /* Westergaard's added mass of a reservoir on a wetted surface (bodyaddedmass.c). */
 typedef struct {
@@ -110,6 +129,8 @@ typedef struct {
   MBCAnalysisType analysis;
   MBCMassType     mass;
   PetscReal       start_time, dt, final_time, newmark_beta, newmark_gamma;
+  PetscReal       alpha_m, alpha_f; /* generalized-alpha's weights (0, 0: Newmark; 0, -alpha: HHT) */
+  char            scheme[32];       /* newmark | hht | generalized_alpha */
 } MBCStageDesc;
 
 typedef struct {
@@ -128,6 +149,8 @@ struct _n_MBCScene {
   MBCAnalysisType analysis;
   MBCMassType     mass;
   PetscReal       dt, final_time, newmark_beta, newmark_gamma;
+  PetscReal       alpha_m, alpha_f; /* generalized-alpha (solvergenalpha.c); 0, 0: Newmark */
+  char            scheme[32];
 
   PetscInt          nbodies, nsurfaces, ncouples, ntables, ndirichlet, nloads, npoints;
   PetscInt          nstages;   /* 0: one analysis, the settings above */
@@ -143,6 +166,8 @@ struct _n_MBCScene {
   PetscInt          naddedmass, nabsorbing;
   MBCAddedMassDesc *addedmass;
   MBCAbsorbingDesc *absorbing;
+  PetscInt          nsprings;
+  MBCSpringDesc    *springs;
   PetscBool         absolute;  /* some absorbing surface takes the ground motion in: every body moves in absolute motion */
   PetscInt          modal_modes; /* modal analysis: how many modes */
   PetscBool         modal_tie;   /* and whether the couples are tied */

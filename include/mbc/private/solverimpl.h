@@ -14,7 +14,8 @@ typedef struct {
 /* One body in the result file (solveroutputbody.c): the rows of its scene-ordered datasets this
    rank writes, and the star forests that bring them there from the distributed mesh. */
 typedef struct {
-  PetscInt   nv, nc, nvpc;   /* the scene's vertices, cells, vertices per cell */
+  PetscInt   nv, nc, nvpc;   /* the scene's nodes (vertices and tet10's midside nodes), cells, nodes per cell (the most: -1 pads) */
+  PetscInt   ntopo, topostart, ntoporows; /* a body of several cell types: XDMF's Mixed topology, its length and this rank's part */
   PetscInt   vstart, nvrows; /* this rank writes vertex rows [vstart, vstart + nvrows) */
   PetscInt   cstart, ncrows; /* and cell rows [cstart, cstart + ncrows) (0 rows off the body) */
   PetscSF    vsf, csf;       /* values of owned vertices (3 each) and cells (6 each) -> their rows; NULL off the body */
@@ -23,13 +24,28 @@ typedef struct {
   PetscReal *leaf, *root;    /* work: values of the owned points; this rank's rows (displacement, then stress) */
 } MBCBodyOutput;
 
+/* The dynamic step's integrator (solvergenalpha.c): Newmark, HHT-alpha or generalized-alpha. */
+typedef enum {
+  MBC_SCHEME_NEWMARK,
+  MBC_SCHEME_HHT,
+  MBC_SCHEME_GALPHA
+} MBCSchemeType;
+PETSC_INTERN const char *const MBCSchemeTypes[];
+
+/* The coefficients of one step of h: Newmark's a0..a7, generalized-alpha's am, af, cf = af / (1 - af)
+   and the mass's coefficient aM = a0 (1 - am) / (1 - af) in the step's operator K + aM M + a1 C. */
+typedef struct {
+  PetscReal h, a0, a1, a2, a3, a4, a5, a6, a7, am, af, cf, aM;
+} MBCTimeCoefficients;
+
 #define MBC_NENERGY 6 /* kinetic, strain, external work, damping, friction, normal contact */
 
 /* One analysis stage of the run (the scene's stages, or the one analysis): its steps are
    step0 + 1 .. step0 + nsteps of the run, from t0 to t1 (solverstage.c). */
 typedef struct {
   MBCAnalysisType analysis;
-  PetscReal       t0, t1, dt, beta, gamma;
+  PetscReal       t0, t1, dt, beta, gamma, am, af;
+  MBCSchemeType   scheme;
   PetscInt        step0, nsteps;
   PetscLogStage   log; /* -log_view */
 } MBCSolverStage;
@@ -53,6 +69,8 @@ struct _n_MBCSolver {
   MBCMassType     mass;
   PetscBool       has_dynamic; /* some stage of this run is dynamic: the bodies need M */
   PetscReal       dt, final_time, beta, gamma;
+  MBCSchemeType   scheme;       /* of the current stage, with its generalized-alpha weights */
+  PetscReal       am, af;
   PetscInt        nsteps, step; /* of the whole run, over its stages */
   PetscReal       time;
   PetscInt        nstages, istage; /* the analysis stages, the current one */
@@ -173,3 +191,8 @@ PETSC_INTERN PetscErrorCode MBCSolverStageLog(MBCSolver, PetscInt);
 PETSC_INTERN PetscReal      MBCSolverStageTime(MBCSolver, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverModalSetFromOptions(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverModalSolve(MBCSolver);
+PETSC_INTERN MBCTimeCoefficients MBCTimeScheme(PetscReal, PetscReal, PetscReal, PetscReal, PetscReal);
+PETSC_INTERN PetscReal      MBCTimeContactWeight(PetscReal, PetscReal, PetscReal);
+PETSC_INTERN PetscErrorCode MBCSolverStepRHS(MBCBody, MBCTimeCoefficients, Vec);
+PETSC_INTERN PetscErrorCode MBCSolverSchemeSetFromOptions(MBCSolver, PetscOptionItems *, PetscBool *);
+PETSC_INTERN MBCSchemeType  MBCSchemeFromName(const char *);
