@@ -51,6 +51,7 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   PetscCall(MBCMultiplierSetFromOptions(ifc->mult));
   PetscCall(PetscCalloc6(nbodies, &ifc->H, nbodies, &ifc->Hu, nbodies, &ifc->lam, nbodies, &ifc->Hl, nbodies, &ifc->Xl, nbodies, &ifc->nbcols));
   PetscCall(PetscCalloc1(nbodies, &ifc->bcols));
+  PetscCall(PetscCalloc1(nbodies, &ifc->released));
   PetscCall(PetscCalloc4(nbodies, &ifc->sinv, nbodies, &ifc->sinv_is, nbodies, &ifc->sinv_id, nbodies, &ifc->sinv_state));
   PetscCall(PetscMalloc1(nbodies, &ifc->schur_fits));
   for (PetscInt b = 0; b < nbodies; b++) ifc->schur_fits[b] = -1;
@@ -59,14 +60,19 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
 }
 
 /* Complementarity on theta lambda_n+1 + (1 - theta) lambda_n (see above): theta = gamma
-   (dynamic) or 1 (static, whose free bodies' rigid modes also enter the problem). Before the
-   first MBCInterfaceSetUp. */
-PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface ifc, MBCAnalysisType analysis, PetscReal theta)
+   (dynamic) or 1 (static, whose free bodies' rigid modes also enter the problem). release: a
+   dynamic step's lambda_n enters through the acceleration only (Newmark), and the points that
+   leave the contact set go on as open points (interfacerelease.c). Before the first
+   MBCInterfaceSetUp, and at each analysis stage (its acceleration from the forces that act: no
+   released force). */
+PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface ifc, MBCAnalysisType analysis, PetscReal theta, PetscBool release)
 {
   PetscFunctionBegin;
   ifc->analysis = analysis;
   ifc->theta    = theta;
   ifc->carry    = (1 - theta) / theta;
+  ifc->release  = (PetscBool)(release && analysis == MBC_ANALYSIS_DYNAMIC);
+  PetscCall(MBCInterfaceReleasedClear(ifc));
   PetscFunctionReturn(0);
 }
 
@@ -1248,6 +1254,7 @@ PetscErrorCode MBCInterfaceSetUp(MBCInterface ifc, PetscInt n, PetscInt pairs[])
     PetscCall(PetscArraycpy(oldoff, ifc->coff, nold + 1));
     PetscCall(MBCInterfaceGather(ifc, ifc->lamprev, oldlam));
     for (PetscInt i = 0; i < mold; i++) oldr[i] = ifc->rall[i] / ifc->dscale;
+    PetscCall(MBCInterfaceRelease(ifc, n, pairs, oldlam)); /* with the old H */
   }
   ifc->frames = NULL;
   ifc->slip     = NULL;
@@ -1374,6 +1381,8 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(InterfaceReset(ifc));
   PetscCall(PetscFree6(ifc->H, ifc->Hu, ifc->lam, ifc->Hl, ifc->Xl, ifc->nbcols));
   PetscCall(PetscFree(ifc->bcols));
+  PetscCall(MBCInterfaceReleasedClear(ifc));
+  PetscCall(PetscFree(ifc->released));
   PetscCall(PetscFree(ifc->frames));
   PetscCall(PetscFree(ifc->held));
   PetscCall(PetscFree(ifc->slip));

@@ -450,7 +450,7 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   PetscBool stabilized = PETSC_FALSE, floating = PETSC_FALSE;
 
   PetscFunctionBegin;
-  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, 1.0)); /* no inertia: the contact force of the step is lambda_n+1 */
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, 1.0, PETSC_FALSE)); /* no inertia: the contact force of the step is lambda_n+1 */
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
@@ -743,7 +743,7 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
   const PetscReal dt = s->dt;
 
   PetscFunctionBegin;
-  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af))); /* contact impulse of a step: dt ((1 - theta) lambda_n + theta lambda_n+1) */
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af), MBCTimeContactThroughAcceleration(s->af))); /* contact impulse of a step: dt ((1 - theta) lambda_n + theta lambda_n+1) */
   s->wfriction = s->wcontact = 0;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
@@ -772,7 +772,7 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
   const PetscBool after_static = (PetscBool)(s->stages[s->istage - 1].analysis == MBC_ANALYSIS_STATIC);
 
   PetscFunctionBegin;
-  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af)));
+  if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af), MBCTimeContactThroughAcceleration(s->af)));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
@@ -837,7 +837,7 @@ PetscErrorCode MBCSolverStageResume(MBCSolver s, PetscInt i)
   s->restarting = PETSC_TRUE;
   if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
   else {
-    if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af)));
+    if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af), MBCTimeContactThroughAcceleration(s->af)));
     for (PetscInt b = 0; b < s->nbodies; b++)
       if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], s->level, Newmark(s, s->dt / PetscPowInt(2, s->level))));
   }
@@ -877,12 +877,14 @@ static PetscErrorCode SolverDynamicIncrement(MBCSolver s, MBCTimeCoefficients c)
     }
     PetscCall(MBCSolverStepRHS(body, c, fc));
     PetscCall(VecDestroy(&fc));
+    if (s->iface) PetscCall(MBCInterfaceAddReleasedForce(s->iface, b, body->rhs)); /* the points that left the contact set: an open point's force */
     PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
     PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
   }
   if (s->contact) { /* du += A^-1 H lambda */
     PetscCall(SolverContactForces(s));
     if (s->contact_failed) PetscFunctionReturn(0); /* nothing changed: the caller cuts the step */
+    PetscCall(MBCInterfaceReleasedStep(s->iface));
   }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody     body = s->bodies[b];

@@ -37,6 +37,15 @@ PetscReal MBCTimeContactWeight(PetscReal gamma, PetscReal am, PetscReal af)
   return gamma * (1 - af) / (1 - am);
 }
 
+/* Whether lambda_n enters a step only through the acceleration a_n (alpha_f = 0: Newmark, HHT
+   with alpha 0), not explicitly on its right side: then the points that leave the contact set go
+   on with an open point's force (src/interface/interfacerelease.c), else a_n would hold their
+   last force without its partner and give the parted bodies a kick. */
+PetscBool MBCTimeContactThroughAcceleration(PetscReal af)
+{
+  return (PetscBool)(af == 0);
+}
+
 /* body->rhs: the right side of the step's increment (above) without the prescribed values' and the
    new multipliers' parts; body->f holds F_n+1, body->fold F_n. fc: H lambda_n (NULL: none). */
 PetscErrorCode MBCSolverStepRHS(MBCBody body, MBCTimeCoefficients c, Vec fc)

@@ -69,6 +69,8 @@ struct _n_MBCInterface {
   Vec        lamprev;     /* lambda_n+1 after the step (physical): carried in the acceleration */
   Vec        lamsave;     /* the warm start, restored when a solve that may fail does */
   PetscReal  theta, carry; /* complementarity on z = theta lambda_n+1 + (1 - theta) lambda_n; carry = (1 - theta) / theta */
+  PetscBool  release;     /* dynamic, lambda_n through a_n: the points that leave the set, or were separated, at a rebuild go on as separated points (interfacerelease.c) */
+  Vec       *released;    /* per body (its layout, NULL where none): their force in the acceleration, H_old lambda times (-carry)^k */
   PetscInt   npairs_built, *pairs_built; /* MBC_PAIR_SIZE per point when D was built: couple, master, face, hash of the slave nodes */
   PetscInt  *bsoff, *bsnode; /* per point (couple order) at the build: the slave nodes of its constraint, bsnode[bsoff[k]..bsoff[k + 1]) */
   PetscReal *bsw;            /* and their weights */
@@ -93,7 +95,7 @@ PETSC_EXTERN PetscLogEvent MBC_FlexibilityAssemble, MBC_FlexibilityMult, MBC_Fle
 
 /* interface.c: the object, the rank order, H and D */
 PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, PetscInt, MBCBody[], const PetscMPIInt[], const PetscMPIInt[], const char[], MBCInterface *);
-PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal, PetscBool);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal, PetscReal, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
@@ -113,6 +115,12 @@ PETSC_INTERN PetscErrorCode MBCInterfaceToBodies(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceScatterToBodies(MBCInterface, Vec, Vec[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceGatherFromBodies(MBCInterface, Vec[], Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface, PetscInt, PetscInt, const PetscInt[], Mat *, Mat *);
+/* interfacerelease.c: the points that leave the contact set in a dynamic step */
+PETSC_INTERN PetscErrorCode MBCInterfaceRelease(MBCInterface, PetscInt, const PetscInt[], PetscReal[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceAddReleasedForce(MBCInterface, PetscInt, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceReleasedStep(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetReleasedForce(MBCInterface, PetscInt, Vec *);
+PETSC_INTERN PetscErrorCode MBCInterfaceReleasedClear(MBCInterface);
 /* interfacematfree.c: the matrix-free D */
 PETSC_INTERN PetscErrorCode MBCInterfaceBuildDShell(MBCInterface, PetscInt, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface, PetscInt);

@@ -193,6 +193,7 @@ PETSC_INTERN PetscErrorCode MBCSolverModalSetFromOptions(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverModalSolve(MBCSolver);
 PETSC_INTERN MBCTimeCoefficients MBCTimeScheme(PetscReal, PetscReal, PetscReal, PetscReal, PetscReal);
 PETSC_INTERN PetscReal      MBCTimeContactWeight(PetscReal, PetscReal, PetscReal);
+PETSC_INTERN PetscBool      MBCTimeContactThroughAcceleration(PetscReal);
 PETSC_INTERN PetscErrorCode MBCSolverStepRHS(MBCBody, MBCTimeCoefficients, Vec);
 PETSC_INTERN PetscErrorCode MBCSolverSchemeSetFromOptions(MBCSolver, PetscOptionItems *, PetscBool *);
 PETSC_INTERN MBCSchemeType  MBCSchemeFromName(const char *);
