@@ -197,6 +197,11 @@ PetscErrorCode MBCSolverCheckpointWrite(MBCSolver s)
     if (s->has_dynamic) {
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->v : NULL, "v", PETSC_FALSE));
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->a : NULL, "a", PETSC_FALSE));
+      if (s->iface) {
+        Vec f = NULL;
+        if (body) PetscCall(MBCInterfaceGetReleasedForce(s->iface, b, &f));
+        PetscCall(CheckpointBodyVec(s, v, b, f, "contact_force_released", PETSC_FALSE));
+      }
     }
     if (s->ubuild) {
       PetscCall(CheckpointBodyVec(s, v, b, body ? s->ubuild[b] : NULL, "u_build", PETSC_FALSE));
@@ -290,6 +295,15 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
     if (s->has_dynamic) {
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->v : NULL, "v", PETSC_TRUE));
       PetscCall(CheckpointBodyVec(s, v, b, body ? body->a : NULL, "a", PETSC_TRUE));
+      if (s->iface) { /* the released contact points' force in a (a checkpoint written before it was kept has none) */
+        char      path[MBC_NAME_LEN + 48];
+        PetscBool has;
+        Vec       f = NULL;
+        PetscCall(PetscSNPrintf(path, sizeof(path), "%s/contact_force_released", group));
+        PetscCall(PetscViewerHDF5HasDataset(v, path, &has));
+        if (body) PetscCall(MBCInterfaceGetReleasedForce(s->iface, b, &f));
+        if (has) PetscCall(CheckpointBodyVec(s, v, b, f, "contact_force_released", PETSC_TRUE));
+      }
       if (body) PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->fold)); /* the energies' trapezoidal work */
     }
     PetscCall(PetscViewerHDF5PopGroup(v));

@@ -359,3 +359,38 @@ def test_failed_contact_solve_cuts_the_step(tmp_path):
     assert abs(p["bottom_ux"][-1] / (0.5 * exact * 0.2**2) - 1) < 1e-2
     r = solve(h5, *limited, "-mbc_dt_cut", "0", check=False)
     assert r.returncode != 0 and "Contact multipliers at step" in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.3])
+def test_block_bounces_off_with_a_tangential_velocity(tmp_path, mu):
+    """A 0.4 m block thrown at (0.3, 0.2, -1) m/s onto a fixed 1 x 1 x 0.5 m one (E 100 Pa,
+    rho 1: c ~ 10 m/s), Newmark's default trapezoidal rule, 100 steps: it strikes, slides and
+    bounces off; its points are separated and re-paired (their slave faces change) as it leaves.
+    Kinetic plus strain energy never above the start's (the contact and friction only take
+    energy; measured 0 above it). Before the released points went on as separated ones
+    (src/interface/interfacerelease.c) the bodies left with 7 % (mu 0) and 64 % (mu 0.3) more
+    than they had. With friction the energy balance closes to 1e-10 of the start's (measured
+    4e-16); frictionless, the points that press while their pairs change keep H_old lambda_n in the
+    acceleration (docs/design.md) and the balance is off by 6 % of it, not checked here."""
+    d = 0.01
+    meshgen.boxes(str(tmp_path / "b.msh"), [dict(lo=(0, 0, 0), hi=(1, 1, 0.5), n=(3, 3, 2), name="lower"),
+                                            dict(lo=(0.3, 0.3, 0.5 + d), hi=(0.7, 0.7, 0.9 + d), n=(2, 2, 2), name="upper")])
+    material = {"E": 100.0, "nu": 0.25, "density": 1.0}
+    h5 = prep(tmp_path, {
+        "meshes": {"m": "b.msh"},
+        "bodies": {b: {"mesh": "m", "regions": b, "material": material} for b in ("lower", "upper")},
+        "couples": [{"master": "upper_zmin", "slave": "lower_zmax", "mu": mu}],
+        "dirichlet": [{"surface": "lower_zmin", "components": "all"}],
+        "initial": [{"body": "upper", "velocity": [0.3, 0.2, -1.0]}],
+        "analysis": {"type": "dynamic", "dt": 0.005, "final_time": 0.5},
+        "output": {"every": 1000000, "fields": ["displacement"], "energy": True}})
+    r = solve(h5, "-mbc_monitor")
+    assert r.stdout.count("flexibility matrix rebuilt") > 1  # re-paired on the way
+    assert re.findall(r"contact: .*separated (\d+), stick", r.stdout)[-1] == "9"  # it left
+    e = read_csv(result(h5, "_energy.csv"))
+    e0 = 0.5 * 0.4 ** 3 * (0.3 ** 2 + 0.2 ** 2 + 1.0)
+    mech = e["kinetic"] + e["strain"]
+    assert abs(mech[0] / e0 - 1) < 1e-12
+    assert mech.max() <= e0 * (1 + 1e-12), mech.max() / e0
+    if mu > 0:
+        assert np.abs(e["total"]).max() < 1e-10 * e0
