@@ -45,6 +45,8 @@ PETSC_EXTERN PetscErrorCode MBCMultiplierGetIterationNumber(MBCMultiplier, Petsc
 PETSC_EXTERN PetscErrorCode MBCMultiplierGetMerit(MBCMultiplier, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierGetSolveTime(MBCMultiplier, PetscLogDouble *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierView(MBCMultiplier, PetscViewer);
+PETSC_EXTERN PetscErrorCode MBCMultiplierGetRestartState(MBCMultiplier, Vec, PetscInt *, PetscBool *);
+PETSC_EXTERN PetscErrorCode MBCMultiplierSetRestartState(MBCMultiplier, Vec, PetscInt);
 PETSC_EXTERN PetscErrorCode MBCMultiplierReset(MBCMultiplier);
 PETSC_EXTERN PetscErrorCode MBCMultiplierDestroy(MBCMultiplier *);
 PETSC_EXTERN const char *const MBCMultiplierConvergedReasons[];

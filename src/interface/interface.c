@@ -681,6 +681,39 @@ PetscErrorCode MBCInterfaceSetState(MBCInterface ifc, const PetscReal lamprev[],
   PetscFunctionReturn(0);
 }
 
+/* The multiplier solve's restart state (MBCMultiplierGetRestartState) in couple order, m values
+   on every rank, then its count (m + 1 in all); *has false where the solve keeps none. Collective. */
+PetscErrorCode MBCInterfaceGetSolveState(MBCInterface ifc, PetscReal state[], PetscBool *has)
+{
+  Vec      v;
+  PetscInt count;
+
+  PetscFunctionBegin;
+  *has = PETSC_FALSE;
+  if (!ifc->ncontact || !ifc->lambda) PetscFunctionReturn(0);
+  PetscCall(VecDuplicate(ifc->lambda, &v));
+  PetscCall(MBCMultiplierGetRestartState(ifc->mult, v, &count, has));
+  if (*has) PetscCall(MBCInterfaceGather(ifc, v, state));
+  state[ifc->coff[ifc->ncontact]] = (PetscReal)count;
+  PetscCall(VecDestroy(&v));
+  PetscFunctionReturn(0);
+}
+
+/* ... given back after MBCInterfaceSetUp with the same pairs */
+PetscErrorCode MBCInterfaceSetSolveState(MBCInterface ifc, const PetscReal state[])
+{
+  Vec v;
+
+  PetscFunctionBegin;
+  if (!ifc->ncontact || !ifc->lambda) PetscFunctionReturn(0);
+  PetscCall(VecDuplicate(ifc->lambda, &v));
+  PetscCall(InterfaceScatterLocal(ifc, state, v));
+  PetscCall(MBCMultiplierSetProblem(ifc->mult, &ifc->fp)); /* the state belongs to this W */
+  PetscCall(MBCMultiplierSetRestartState(ifc->mult, v, (PetscInt)state[ifc->coff[ifc->ncontact]]));
+  PetscCall(VecDestroy(&v));
+  PetscFunctionReturn(0);
+}
+
 /* W's preallocation: a point's row couples to the multipliers of the bodies its constraint
    touches (the master body, the slave body). */
 static PetscErrorCode InterfacePreallocation(MBCInterface ifc, PetscInt rstart, PetscInt rend, PetscInt dnz[], PetscInt onz[])

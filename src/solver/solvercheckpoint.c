@@ -223,6 +223,14 @@ PetscErrorCode MBCSolverCheckpointWrite(MBCSolver s)
     PetscCall(CheckpointArray(s, v, m, (PetscReal *)r, "warm_start", PETSC_FALSE));
     PetscCall(CheckpointArray(s, v, 3 * nc, (PetscReal *)slip, "slip", PETSC_FALSE));
     PetscCall(CheckpointArray(s, v, MBC_PAIR_SIZE * nc, pr, "pairs", PETSC_FALSE));
+    { /* the multiplier solve's own (the Newton type's kept inverse's reference, its count) */
+      PetscBool  has;
+      PetscReal *st;
+      PetscCall(PetscMalloc1(m + 1, &st));
+      PetscCall(MBCInterfaceGetSolveState(s->iface, st, &has));
+      if (has) PetscCall(CheckpointArray(s, v, m + 1, st, "solve_state", PETSC_FALSE));
+      PetscCall(PetscFree(st));
+    }
     PetscCall(PetscViewerHDF5PopGroup(v));
     PetscCall(PetscFree2(lam, pr));
   }
@@ -353,6 +361,19 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
         PetscCall(MBCInterfaceSetUp(s->iface, n, pairs)); /* takes pairs */
         PetscCall(MBCSolverCheckpointTrack(s));
         PetscCall(MBCInterfaceSetState(s->iface, lam, r, slip));
+        { /* absent: written before it was kept, or the solve kept none */
+          PetscBool has;
+          PetscCall(PetscViewerHDF5HasDataset(v, "/contact/solve_state", &has));
+          if (has) {
+            PetscReal *st;
+            PetscCall(PetscMalloc1(m + 1, &st));
+            PetscCall(PetscViewerHDF5PushGroup(v, "/contact"));
+            PetscCall(CheckpointArray(s, v, m + 1, st, "solve_state", PETSC_TRUE));
+            PetscCall(PetscViewerHDF5PopGroup(v));
+            PetscCall(MBCInterfaceSetSolveState(s->iface, st));
+            PetscCall(PetscFree(st));
+          }
+        }
         PetscCall(PetscFree4(lam, r, slip, pr));
       }
     }

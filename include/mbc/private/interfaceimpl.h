@@ -104,6 +104,8 @@ PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]
 PETSC_INTERN PetscErrorCode MBCInterfaceRebuildD(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetState(MBCInterface, PetscInt *, PetscInt *, PetscReal[], const PetscReal **, const PetscReal **, const PetscInt **);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetState(MBCInterface, const PetscReal[], const PetscReal[], const PetscReal[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetSolveState(MBCInterface, PetscReal[], PetscBool *);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetSolveState(MBCInterface, const PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetSize(MBCInterface, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultiplier(MBCInterface, MBCMultiplier *);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetMultipliers(MBCInterface, Vec *);

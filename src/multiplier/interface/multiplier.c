@@ -6,7 +6,7 @@
 
 PetscClassId      MBC_MULTIPLIER_CLASSID;
 PetscFunctionList MBCMultiplierList;
-PetscLogEvent     MBC_MultiplierSolve, MBC_MultiplierSetUp;
+PetscLogEvent     MBC_MultiplierSolve, MBC_MultiplierSetUp, MBC_NewtonInverse, MBC_NewtonLowRank;
 static PetscBool  MBCMultiplierPackageInitialized = PETSC_FALSE;
 
 const char *const MBCMultiplierConvergedReasons[] = {"DIVERGED_INFEASIBLE", "DIVERGED_LINE_SEARCH", "", "DIVERGED_NANORINF", "DIVERGED_ITS", "", "", "ITERATING", "", "CONVERGED_RTOL", "MBCMultiplierConvergedReason", "MBC_MULTIPLIER_", NULL};
@@ -32,6 +32,8 @@ PetscErrorCode MBCMultiplierInitializePackage(void)
   PetscCall(PetscClassIdRegister("MBCMultiplier", &MBC_MULTIPLIER_CLASSID));
   PetscCall(PetscLogEventRegister("MBCMultiplierSetUp", MBC_MULTIPLIER_CLASSID, &MBC_MultiplierSetUp));
   PetscCall(PetscLogEventRegister("MBCMultiplierSolve", MBC_MULTIPLIER_CLASSID, &MBC_MultiplierSolve));
+  PetscCall(PetscLogEventRegister("MBCNewtonInverse", MBC_MULTIPLIER_CLASSID, &MBC_NewtonInverse));
+  PetscCall(PetscLogEventRegister("MBCNewtonLowRank", MBC_MULTIPLIER_CLASSID, &MBC_NewtonLowRank));
   PetscCall(MBCMultiplierRegister(MBCMULTIPLIERPGS, MBCMultiplierCreate_PGS));
   PetscCall(MBCMultiplierRegister(MBCMULTIPLIERNEWTON, MBCMultiplierCreate_Newton));
   PetscCall(PetscRegisterFinalize(MBCMultiplierFinalizePackage));
@@ -149,6 +151,28 @@ PetscErrorCode MBCMultiplierSetProblem(MBCMultiplier m, MBCFrictionProblem *fp)
 {
   PetscFunctionBegin;
   m->fp = fp;
+  PetscFunctionReturn(0);
+}
+
+/* The state of the type's solve that a restart needs to repeat the run bit for bit: one value per
+   row of W in r's layout and a count (the Newton type: the reference of its kept inverse, the
+   direct steps since); *has false where the type keeps none. Collective. */
+PetscErrorCode MBCMultiplierGetRestartState(MBCMultiplier m, Vec s, PetscInt *count, PetscBool *has)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, MBC_MULTIPLIER_CLASSID, 1);
+  *has   = PETSC_FALSE;
+  *count = 0;
+  PetscTryMethod(m, "MBCMultiplierGetRestartState_C", (MBCMultiplier, Vec, PetscInt *, PetscBool *), (m, s, count, has));
+  PetscFunctionReturn(0);
+}
+
+/* ... given back after the restart's MBCMultiplierSetProblem, before its first solve */
+PetscErrorCode MBCMultiplierSetRestartState(MBCMultiplier m, Vec s, PetscInt count)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, MBC_MULTIPLIER_CLASSID, 1);
+  PetscTryMethod(m, "MBCMultiplierSetRestartState_C", (MBCMultiplier, Vec, PetscInt), (m, s, count));
   PetscFunctionReturn(0);
 }
 

@@ -38,11 +38,13 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
     PetscReal       R[3] = {0, 0, 0}, U[3] = {0, 0, 0}, P[3], A[9] = {0}, B[9] = {0}, xn;
     for (PetscInt d = 0; d < dim; d++) R[d] = PetscRealPart(rv[o + d]), U[d] = PetscRealPart(uv[o + d]);
     xn = R[0] - rn * U[0];
+    if (jac) nt->sticks[i] = PETSC_FALSE;
     if (nt->frozen[o] || xn <= 0) { /* separated (or no flexibility along the normal): r = 0 */
       for (PetscInt d = 0; d < dim; d++) P[d] = R[d], A[4 * d] = 1;
       if (jac) nt->active[i] = PETSC_FALSE;
     } else {
       P[0] = rn * U[0], B[0] = rn;
+      if (jac && dim == 1) nt->sticks[i] = PETSC_TRUE;
       if (dim == 3) {
         const PetscReal g = mu * xn;
         PetscReal       xt[2], nrm;
@@ -50,6 +52,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
         nrm = PetscSqrtReal(xt[0] * xt[0] + xt[1] * xt[1]);
         if ((nrm <= g || stick) && g > 0) { /* stick */
           for (PetscInt d = 1; d < 3; d++) P[d] = rt * U[d], B[4 * d] = rt;
+          if (jac) nt->sticks[i] = PETSC_TRUE;
         } else if (g == 0 || nrm == 0) { /* no friction force */
           for (PetscInt d = 1; d < 3; d++) P[d] = R[d], A[4 * d] = 1;
         } else { /* slip: r_t = g nu, nu = xi_t / |xi_t| */
@@ -200,6 +203,11 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
   KSPConvergedReason  reason;
 
   PetscFunctionBegin;
+  {
+    PetscBool done;
+    PetscCall(MBCNewtonLowRankStep(m, &done));
+    if (done) PetscFunctionReturn(0);
+  }
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscMalloc1(fp->off[fp->nc] + 1, &rows));
@@ -472,12 +480,15 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
   PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps (without sweeps: other rho)", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
   PetscCall(PetscOptionsReal("-newton_dense_fill", "Fraction of nonzero entries from which the Newton matrix is stored and factored dense (LAPACK); > 1: never", "MBCMultiplierSetFromOptions", nt->dense_fill, &nt->dense_fill, NULL));
+  PetscCall(PetscOptionsBool("-newton_lowrank", "While W holds, take Newton steps through the kept inverse, corrected on the rows that do not stick", "MBCMultiplierSetFromOptions", nt->lowrank, &nt->lowrank, NULL));
+  PetscCall(PetscOptionsReal("-newton_lowrank_max", "... unless those rows exceed this fraction of the active ones", "MBCMultiplierSetFromOptions", nt->lowrank_max, &nt->lowrank_max, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->rho_scale > 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_rho %g must be positive", (double)nt->rho_scale);
   PetscCheck(nt->pgs_warm >= 0 && nt->pgs_fallback >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_pgs_warm and -mbc_newton_pgs_fallback must be >= 0");
   PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
   PetscCheck(nt->dense_fill >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_dense_fill %g must be >= 0", (double)nt->dense_fill);
+  PetscCheck(nt->lowrank_max >= 0 && nt->lowrank_max <= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_lowrank_max %g must lie in [0, 1]", (double)nt->lowrank_max);
   PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
   PetscCall(KSPSetFromOptions(nt->ksp));
   PetscCall(KSPSetFromOptions(nt->kdense));
@@ -551,6 +562,7 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
     PetscCall(MBCMultiplierDiagonalBlocks(fp, Wd, &nt->diag));
   }
   PetscCall(PetscMalloc5(2 * fp->nc + 1, &nt->rho, nrows + 1, &nt->frozen, 9 * fp->nc + 1, &nt->A, 9 * fp->nc + 1, &nt->B, fp->nc + 1, &nt->active));
+  PetscCall(PetscCalloc2(fp->nc + 1, &nt->sticks, fp->nc + 1, &nt->refopen));
   for (PetscInt i = 0; i < fp->nc; i++)
     for (PetscInt d = 0, dim = fp->off[i + 1] - fp->off[i]; d < dim; d++) dmax = PetscMax(dmax, nt->diag[9 * i + (dim + 1) * d]);
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)m)));
@@ -603,7 +615,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
   char                line[128] = "";
 
   PetscFunctionBegin;
-  nt->lsfail = nt->pgssweeps = nt->factors = nt->kits = 0;
+  nt->lsfail = nt->pgssweeps = nt->factors = nt->kits = nt->lowranks = 0;
   if (nt->rho_used != NewtonRhoScale(m)) { /* a restart of the last solve changed them */
     NewtonAugmentations(m, NewtonRhoScale(m));
     PetscCall(ISDestroy(&nt->isbuilt));
@@ -752,6 +764,9 @@ static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
   PetscFunctionBegin;
   PetscCall(PetscFree(nt->diag));
   PetscCall(PetscFree5(nt->rho, nt->frozen, nt->A, nt->B, nt->active));
+  PetscCall(PetscFree2(nt->sticks, nt->refopen));
+  PetscCall(MatDestroy(&nt->Z));
+  nt->zbuilt = PETSC_FALSE;
   PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));
   PetscCall(VecDestroy(&nt->phi));
   PetscCall(VecDestroy(&nt->dr));
@@ -775,6 +790,10 @@ static PetscErrorCode MBCMultiplierDestroy_Newton(MBCMultiplier m)
 
   PetscFunctionBegin;
   PetscCall(MBCMultiplierReset_Newton(m));
+  PetscCall(VecDestroy(&nt->refpending));
+  PetscCall(MatDestroy(&nt->refW));
+  PetscCall(PetscObjectComposeFunction((PetscObject)m, "MBCMultiplierGetRestartState_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)m, "MBCMultiplierSetRestartState_C", NULL));
   PetscCall(KSPDestroy(&nt->ksp));
   PetscCall(KSPDestroy(&nt->kdense));
   PetscCall(KSPDestroy(&nt->kmf));
@@ -789,7 +808,7 @@ static PetscErrorCode MBCMultiplierView_Newton(MBCMultiplier m, PetscViewer view
 
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(viewer, "Alart-Curnier, rho %g / diag(W), non-monotone Armijo (memory %" PetscInt_FMT ", %" PetscInt_FMT " halvings), shift %g; Gauss-Seidel: %" PetscInt_FMT " warm-start sweeps, %" PetscInt_FMT " on a failed line search\n", (double)NewtonRhoScale(m), nt->nonmonotone, nt->ls_max, (double)nt->shift, nt->pgs_warm, nt->pgs_fallback));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "last solve: %" PetscInt_FMT " factorizations, %" PetscInt_FMT " failed line searches, %" PetscInt_FMT " Gauss-Seidel sweeps, %" PetscInt_FMT " Krylov iterations (matrix-free W)\n", nt->factors, nt->lsfail, nt->pgssweeps, nt->kits));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "last solve: %" PetscInt_FMT " factorizations, %" PetscInt_FMT " steps through the kept inverse, %" PetscInt_FMT " failed line searches, %" PetscInt_FMT " Gauss-Seidel sweeps, %" PetscInt_FMT " Krylov iterations (matrix-free W)\n", nt->factors, nt->lowranks, nt->lsfail, nt->pgssweeps, nt->kits));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(KSPView(nt->klu ? nt->klu : nt->ksp, viewer));
   PetscCall(PetscViewerASCIIPopTab(viewer));
@@ -844,6 +863,8 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->predictor    = PETSC_TRUE;
   nt->shift        = 1e-12;
   nt->dense_fill   = 0.5;
+  nt->lowrank      = PETSC_TRUE;
+  nt->lowrank_max  = 0.6;
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));
@@ -880,5 +901,6 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   m->ops->reset          = MBCMultiplierReset_Newton;
   m->ops->destroy        = MBCMultiplierDestroy_Newton;
   m->ops->view           = MBCMultiplierView_Newton;
+  PetscCall(MBCNewtonLowRankCompose(m));
   PetscFunctionReturn(0);
 }

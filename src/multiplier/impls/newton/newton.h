@@ -34,8 +34,26 @@ typedef struct {
   PetscBool  keptslip;   /* the kept factor has slipping contacts: never reused */
   PetscInt   lsfail, pgssweeps, factors, kits; /* kits: Krylov iterations (matrix-free W) */
   KSP        kmf;        /* the Krylov solve of a step when W is a shell (prefix -mbc_newton_mf_) */
+  /* the steps through a kept inverse (newtonlowrank.c) */
+  PetscBool  lowrank;     /* -mbc_newton_lowrank */
+  PetscReal  lowrank_max; /* rows differing from the reference beyond this fraction of the active ones: the direct solve */
+  PetscBool *sticks;      /* per contact: active and sticking at the current iterate */
+  PetscBool *refopen;     /* per contact: separated in Z's reference (identity rows), else sticking */
+  Vec        refpending;  /* a restart's reference (W's layout), for the next Z if built for refW */
+  Mat        refW;
+  PetscBool  zbuilt;      /* Z tried for this W */
+  Mat        Z;           /* the reference Newton matrix's inverse; NULL: none */
+  PetscReal  zsigma, zrho; /* its shift and the augmentations' scale it was built with */
+  PetscInt   lowranks;    /* steps of the last solve taken through Z */
+  PetscInt   zdirect, zdirectpending; /* direct steps since Z was built; a restart's */
 } MBC_Newton;
 
 /* The Newton system on the active rows isA (nA on this rank, then the ng rigid modes on the last
    rank) solved by GMRES with a preconditioner from W^-1's approximation (W a shell). */
 PETSC_INTERN PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier, IS, PetscInt, Vec, Vec, KSPConvergedReason *);
+
+/* The Newton step dr = J^-1 (-phi) through the kept inverse of a reference state's Newton matrix,
+   where it pays (W assembled, no equilibrium constraints, few rows differing from the reference)
+   and meets its residual check: *done. Compose: the restart state (the reference). */
+PETSC_INTERN PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCNewtonLowRankCompose(MBCMultiplier);

@@ -1,0 +1,539 @@
+/* The Newton step as a low-rank correction of a kept inverse (W assembled, no equilibrium
+   constraints: every dynamic step). While W holds (the pairs do not change, dt is fixed: most of
+   an earthquake stage) the Newton matrix of a reference state, J_ref (contacts separated in the
+   reference: identity rows; the others sticking: rho W + sigma I, identity rows without
+   flexibility), is the same at every Newton step of every time step; its inverse Z is computed
+   once, at the first step that needs it, with the contacts separated then as the reference. A
+   step's J differs from J_ref only in the rows C of the contacts whose state differs from the
+   reference (slipping, separated since, closed since): J = J_ref + E_C U^T with
+     (U^T x)_r = alpha_r . x_c + beta_r . (W x)_c      (c: the rows of r's contact)
+   and Sherman-Morrison-Woodbury gives J^-1 b = Z b - Z E_C M^-1 U^T Z b, M = I + U^T Z E_C: two
+   products with Z, one with W and an LU of size k = |C| instead of one of the active rows. The
+   step is checked by its residual against J and refined like the direct solve's; where it fails,
+   or k is a large part of the active rows, the direct solve runs. A restart restores the
+   reference (MBCMultiplierSetRestartState), so that its Z and its steps are the run's own. */
+#include "newton.h"
+#include <petscblaslapack.h>
+
+/* the reference rows of contact i: row d is alpha . x + beta . (W x) over the contact's rows */
+static void NewtonReferenceRow(MBC_Newton *nt, PetscInt i, PetscInt o, PetscInt d, PetscReal sigma, PetscReal a[3], PetscReal b[3])
+{
+  for (PetscInt e = 0; e < 3; e++) a[e] = b[e] = 0;
+  if (nt->refopen[i]) a[d] = 1;
+  else if (nt->frozen[o + d]) a[d] = 1 + sigma;
+  else a[d] = sigma, b[d] = nt->rho[2 * i + (d > 0)];
+}
+
+/* B: A's rows (an MPIDense N x N) in another row layout, nl rows on this rank */
+static PetscErrorCode DenseRelayout(Mat A, PetscInt nl, Mat *B)
+{
+  MPI_Comm           comm = PetscObjectComm((PetscObject)A);
+  PetscInt           N, start = 0;
+  IS                 rows, all;
+  Mat               *sub;
+  const PetscScalar *s;
+  PetscScalar       *d;
+  PetscInt           lds, ldd;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(A, &N, NULL));
+  PetscCallMPI(MPI_Exscan(&nl, &start, 1, MPIU_INT, MPI_SUM, comm));
+  {
+    PetscMPIInt rank;
+    PetscCallMPI(MPI_Comm_rank(comm, &rank));
+    if (!rank) start = 0;
+  }
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, nl, start, 1, &rows));
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &all));
+  PetscCall(MatCreateSubMatrices(A, 1, &rows, &all, MAT_INITIAL_MATRIX, &sub));
+  PetscCall(MatCreateDense(comm, nl, nl, N, N, NULL, B));
+  PetscCall(MatDenseGetArrayRead(sub[0], &s));
+  PetscCall(MatDenseGetLDA(sub[0], &lds));
+  PetscCall(MatDenseGetArrayWrite(*B, &d));
+  PetscCall(MatDenseGetLDA(*B, &ldd));
+  for (PetscInt c = 0; c < N; c++)
+    for (PetscInt r = 0; r < nl; r++) d[c * ldd + r] = s[c * lds + r];
+  PetscCall(MatDenseRestoreArrayWrite(*B, &d));
+  PetscCall(MatDenseRestoreArrayRead(sub[0], &s));
+  PetscCall(MatAssemblyBegin(*B, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*B, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatDestroySubMatrices(1, &sub));
+  PetscCall(ISDestroy(&rows));
+  PetscCall(ISDestroy(&all));
+  PetscFunctionReturn(0);
+}
+
+/* Z = J_ref^-1, dense in W's row layout, by LAPACK (one rank) or ScaLAPACK; NULL where J_ref is
+   singular or too badly conditioned for its inverse to carry the step (cond_1 > 1e10). */
+static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
+{
+  MBC_Newton         *nt   = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp   = m->fp;
+  MPI_Comm            comm = PetscObjectComm((PetscObject)m);
+  Mat                 J0, Id, Zf;
+  Vec                 rho;
+  PetscScalar        *rv;
+  PetscInt            rs, re, nl, N, nopen = 0, nstd;
+  PetscReal           dmax = 0, n1, z1;
+  PetscBool           scal = (PetscBool)strcmp(nt->densetype, MATDENSE);
+  PetscMPIInt         size;
+  PetscErrorCode      ierr;
+  int                 bad;
+
+  PetscFunctionBegin;
+  nt->zbuilt  = PETSC_TRUE;
+  nt->zrho    = nt->rho_used;
+  nt->zdirect = 0;
+  if (nt->refpending && nt->refW == fp->W) { /* a restart's, for this W */
+    const PetscScalar *a;
+    PetscCall(VecGetArrayRead(nt->refpending, &a));
+    for (PetscInt i = 0; i < fp->nc; i++) nt->refopen[i] = (PetscBool)(PetscRealPart(a[fp->off[i]]) > 0.5);
+    PetscCall(VecRestoreArrayRead(nt->refpending, &a));
+    nt->zdirect = nt->zdirectpending;
+  } else
+    for (PetscInt i = 0; i < fp->nc; i++) nt->refopen[i] = (PetscBool)!nt->active[i];
+  PetscCall(VecDestroy(&nt->refpending));
+  PetscCall(MatDestroy(&nt->refW));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  if (size > 1 && !scal) PetscFunctionReturn(0); /* no distributed LU to invert with */
+  PetscCall(PetscLogEventBegin(MBC_NewtonInverse, m, 0, 0, 0));
+  PetscCall(MatGetOwnershipRange(fp->W, &rs, &re));
+  PetscCall(MatGetSize(fp->W, &N, NULL));
+  nl = re - rs;
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt dim = fp->off[i + 1] - fp->off[i];
+    nopen += nt->refopen[i];
+    for (PetscInt d = 0; d < dim; d++)
+      if (!nt->frozen[fp->off[i] + d]) dmax = PetscMax(dmax, PetscAbsReal(nt->rho[2 * i + (d > 0)] * nt->diag[9 * i + (dim + 1) * d]));
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nopen, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
+  nt->zsigma = nt->shift * PetscMax(dmax, 1.0);
+  PetscCall(MatConvert(fp->W, MATDENSE, MAT_INITIAL_MATRIX, &J0));
+  PetscCall(MatCreateVecs(fp->W, &rho, NULL));
+  PetscCall(VecGetArray(rho, &rv));
+  for (PetscInt i = 0; i < fp->nc; i++)
+    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) rv[d] = (nt->frozen[d] || nt->refopen[i]) ? 0 : nt->rho[2 * i + (d > fp->off[i])];
+  PetscCall(VecRestoreArray(rho, &rv));
+  PetscCall(MatDiagonalScale(J0, rho, NULL));
+  PetscCall(VecDestroy(&rho));
+  PetscCall(MatShift(J0, nt->zsigma));
+  for (PetscInt i = 0; i < fp->nc; i++)
+    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++)
+      if (nt->refopen[i] || nt->frozen[d]) PetscCall(MatSetValue(J0, rs + d, rs + d, nt->refopen[i] ? 1.0 : 1.0 + nt->zsigma, INSERT_VALUES));
+  PetscCall(MatAssemblyBegin(J0, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(J0, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatNorm(J0, NORM_1, &n1));
+  nstd = scal ? PETSC_DECIDE : nl; /* ScaLAPACK from PETSc's own layout (W's may leave ranks without rows) */
+  PetscCall(PetscSplitOwnership(comm, &nstd, &N));
+  PetscCall(MatCreateDense(comm, nstd, nstd, N, N, NULL, &Id));
+  PetscCall(MatZeroEntries(Id));
+  PetscCall(MatAssemblyBegin(Id, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(Id, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatShift(Id, 1.0));
+  if (scal) {
+    Mat t;
+    PetscCall(DenseRelayout(J0, nstd, &t));
+    PetscCall(MatDestroy(&J0));
+    PetscCall(MatConvert(t, MATSCALAPACK, MAT_INITIAL_MATRIX, &J0));
+    PetscCall(MatDestroy(&t));
+    PetscCall(MatConvert(Id, MATSCALAPACK, MAT_INITIAL_MATRIX, &t));
+    PetscCall(MatDestroy(&Id));
+    Id = t;
+  }
+  PetscCall(MatDuplicate(Id, MAT_DO_NOT_COPY_VALUES, &Zf));
+  /* LAPACK's and ScaLAPACK's LU raise an error on a singular matrix (NewtonFactor) */
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = MatLUFactor(J0, NULL, NULL, NULL);
+  PetscCall(PetscPopErrorHandler());
+  PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT || ierr == PETSC_ERR_LIB, PETSC_COMM_SELF, ierr, "The reference Newton matrix's factorization failed");
+  bad = ierr ? 1 : 0;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_MAX, comm));
+  if (!bad) {
+    PetscCall(MatMatSolve(J0, Id, Zf));
+    if (scal) { /* back in W's row layout */
+      Mat t;
+      PetscCall(MatConvert(Zf, MATDENSE, MAT_INITIAL_MATRIX, &t));
+      PetscCall(DenseRelayout(t, nl, &nt->Z));
+      PetscCall(MatDestroy(&t));
+    } else {
+      nt->Z = Zf;
+      Zf    = NULL;
+    }
+    PetscCall(MatNorm(nt->Z, NORM_1, &z1));
+    if (!(n1 * z1 <= 1e10)) bad = 1;
+    else {
+      PetscInt zl;
+      PetscCall(MatGetLocalSize(nt->Z, &zl, NULL));
+      PetscCheck(zl == nl, PETSC_COMM_SELF, PETSC_ERR_PLIB, "The kept inverse's rows %" PetscInt_FMT " are not W's %" PetscInt_FMT, zl, nl);
+    }
+    PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT " (%" PetscInt_FMT " contacts separated): inverted, cond_1 %g%s\n", N, nopen, (double)(n1 * z1), bad ? ": too large, the direct solve instead" : ""));
+    if (bad) PetscCall(MatDestroy(&nt->Z));
+  } else PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT ": singular, the direct solve instead\n", N));
+  PetscCall(MatDestroy(&Zf));
+  PetscCall(MatDestroy(&Id));
+  PetscCall(MatDestroy(&J0));
+  PetscCall(PetscLogEventEnd(MBC_NewtonInverse, m, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* res = b - J x, J at the current iterate (nt->A, B, active) with the shift of J_ref */
+static PetscErrorCode NewtonLowRankResidual(MBCMultiplier m, Vec x, Vec b, Vec res)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  const PetscScalar  *xv, *bv, *yv;
+  PetscScalar        *rv;
+
+  PetscFunctionBegin;
+  PetscCall(MatMult(fp->W, x, nt->wdr));
+  PetscCall(VecGetArrayRead(x, &xv));
+  PetscCall(VecGetArrayRead(b, &bv));
+  PetscCall(VecGetArrayRead(nt->wdr, &yv));
+  PetscCall(VecGetArray(res, &rv));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    for (PetscInt d = 0; d < dim; d++) {
+      PetscReal v = PetscRealPart(xv[o + d]);
+      if (nt->active[i]) {
+        v *= nt->zsigma;
+        for (PetscInt e = 0; e < dim; e++) v += nt->A[9 * i + dim * d + e] * PetscRealPart(xv[o + e]) + nt->B[9 * i + dim * d + e] * PetscRealPart(yv[o + e]);
+      }
+      rv[o + d] = bv[o + d] - v;
+    }
+  }
+  PetscCall(VecRestoreArray(res, &rv));
+  PetscCall(VecRestoreArrayRead(nt->wdr, &yv));
+  PetscCall(VecRestoreArrayRead(b, &bv));
+  PetscCall(VecRestoreArrayRead(x, &xv));
+  PetscFunctionReturn(0);
+}
+
+/* the k rows C, the same on every rank */
+#define LR_ROW 10 /* reals a row: dim, its position in its contact, alpha (3), beta (3), reference
+                     open, the reference's rho (0: open or frozen, its W row is zero) */
+typedef struct {
+  PetscInt      k;
+  PetscInt     *row;   /* global rows, in rank order */
+  PetscReal    *pq;    /* LR_ROW a row */
+  PetscScalar  *M;     /* the LU of M = I + U^T Z E_C (column-major) */
+  PetscBLASInt *piv;
+  IS            is;    /* row[] */
+  Vec           seq;   /* k entries */
+  VecScatter    gather;
+} LowRank;
+
+/* t = U^T v on the rows C, from v and w = W v gathered to every rank */
+static PetscErrorCode LowRankApplyU(LowRank *lr, Vec v, Vec w, PetscScalar t[])
+{
+  const PetscScalar *a;
+
+  PetscFunctionBegin;
+  for (PetscInt r = 0; r < lr->k; r++) t[r] = 0;
+  for (PetscInt pass = 0; pass < 2; pass++) {
+    Vec src = pass ? w : v;
+    PetscCall(VecScatterBegin(lr->gather, src, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(lr->gather, src, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecGetArrayRead(lr->seq, &a));
+    for (PetscInt r = 0; r < lr->k; r++) {
+      const PetscReal *q = lr->pq + LR_ROW * r;
+      const PetscInt   first = r - (PetscInt)q[1];
+      for (PetscInt e = 0; e < (PetscInt)q[0]; e++) t[r] += q[2 + 3 * pass + e] * a[first + e];
+    }
+    PetscCall(VecRestoreArrayRead(lr->seq, &a));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* x = J^-1 b = v - Z E_C M^-1 U^T v, v = Z b */
+static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Vec x)
+{
+  MBC_Newton   *nt = (MBC_Newton *)m->data;
+  PetscScalar  *t, *sv;
+  PetscBLASInt  k, one = 1, info;
+  PetscInt      rs, re;
+  Vec           s;
+
+  PetscFunctionBegin;
+  PetscCall(MatMult(nt->Z, b, x));
+  if (lr->k) PetscCall(PetscBLASIntCast(lr->k, &k));
+  else k = 0;
+  if (k) {
+    PetscCall(PetscMalloc1(lr->k, &t));
+    PetscCall(MatMult(m->fp->W, x, nt->wdr));
+    PetscCall(LowRankApplyU(lr, x, nt->wdr, t));
+    PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &k, &one, lr->M, &k, lr->piv, t, &k, &info));
+    PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK getrs: info %d", (int)info);
+    PetscCall(VecDuplicate(x, &s));
+    PetscCall(VecGetOwnershipRange(s, &rs, &re));
+    PetscCall(VecGetArray(s, &sv));
+    for (PetscInt r = 0; r < lr->k; r++)
+      if (lr->row[r] >= rs && lr->row[r] < re) sv[lr->row[r] - rs] = -t[r];
+    PetscCall(VecRestoreArray(s, &sv));
+    PetscCall(MatMultAdd(nt->Z, s, x, x));
+    PetscCall(VecDestroy(&s));
+    PetscCall(PetscFree(t));
+  }
+  { /* the separated rows' x = b exactly, as the direct solve's: their multipliers end at 0, not
+       at rounding (a point with a force of 1e-15 is reported in contact) */
+    MBCFrictionProblem *fp = m->fp;
+    const PetscScalar  *bv;
+    PetscScalar        *xv;
+    PetscCall(VecGetArrayRead(b, &bv));
+    PetscCall(VecGetArray(x, &xv));
+    for (PetscInt i = 0; i < fp->nc; i++)
+      if (!nt->active[i])
+        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) xv[d] = bv[d];
+    PetscCall(VecRestoreArray(x, &xv));
+    PetscCall(VecRestoreArrayRead(b, &bv));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* M = I + U^T Z E_C, factored on every rank: Z_CC gathered; (W Z)_CC from J_ref Z = I on the
+   rows of contacts sticking in the reference, W_C: Z_:C on the others' (closed since) */
+static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLASInt *info)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  const PetscScalar  *z, *wz = NULL;
+  PetscInt            lda, ldw = 0, ko = 0, N, *orow, *opos;
+  Mat                *zcc, *wo = NULL, *zc = NULL, wzo = NULL;
+  IS                  isall = NULL, isopen = NULL;
+  PetscBLASInt        kb;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(fp->W, &N, NULL));
+  PetscCall(PetscMalloc2(lr->k, &orow, lr->k, &opos));
+  for (PetscInt r = 0; r < lr->k; r++) {
+    opos[r] = -1;
+    if (lr->pq[LR_ROW * r + 8] > 0.5) opos[r] = ko, orow[ko++] = lr->row[r];
+  }
+  PetscCall(MatCreateSubMatrices(nt->Z, 1, &lr->is, &lr->is, MAT_INITIAL_MATRIX, &zcc));
+  if (ko) { /* every rank holds Z_:C (N x k) for the product (ko and C are the same on every rank) */
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, ko, orow, PETSC_USE_POINTER, &isopen));
+    PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
+    PetscCall(MatCreateSubMatrices(fp->W, 1, &isopen, &isall, MAT_INITIAL_MATRIX, &wo));
+    PetscCall(MatCreateSubMatrices(nt->Z, 1, &isall, &lr->is, MAT_INITIAL_MATRIX, &zc));
+    PetscCall(MatMatMult(wo[0], zc[0], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &wzo));
+    PetscCall(MatDenseGetArrayRead(wzo, &wz));
+    PetscCall(MatDenseGetLDA(wzo, &ldw));
+  }
+  PetscCall(MatDenseGetArrayRead(zcc[0], &z));
+  PetscCall(MatDenseGetLDA(zcc[0], &lda));
+  PetscCall(PetscMalloc2(lr->k * lr->k, &lr->M, lr->k, &lr->piv));
+  for (PetscInt c = 0; c < lr->k; c++)
+    for (PetscInt r = 0; r < lr->k; r++) {
+      const PetscReal *q     = lr->pq + LR_ROW * r;
+      const PetscInt   first = r - (PetscInt)q[1];
+      PetscScalar      v     = r == c ? 1 : 0;
+      for (PetscInt e = 0; e < (PetscInt)q[0]; e++) {
+        const PetscInt  p    = first + e; /* a row of the same contact */
+        const PetscReal beta = q[5 + e];
+        PetscScalar     wzpc = 0;
+        v += q[2 + e] * z[c * lda + p];
+        if (beta == 0) continue;
+        if (opos[p] >= 0) wzpc = wz[c * ldw + opos[p]];
+        else if (lr->pq[LR_ROW * p + 9] > 0) wzpc = ((p == c ? 1 : 0) - nt->zsigma * z[c * lda + p]) / lr->pq[LR_ROW * p + 9]; /* rho_p (W Z)_p + sigma Z_p = e_p */
+        v += beta * wzpc;
+      }
+      lr->M[c * lr->k + r] = v;
+    }
+  PetscCall(MatDenseRestoreArrayRead(zcc[0], &z));
+  PetscCall(MatDestroySubMatrices(1, &zcc));
+  if (ko) {
+    PetscCall(MatDenseRestoreArrayRead(wzo, &wz));
+    PetscCall(MatDestroy(&wzo));
+    PetscCall(MatDestroySubMatrices(1, &wo));
+    PetscCall(MatDestroySubMatrices(1, &zc));
+    PetscCall(ISDestroy(&isopen));
+    PetscCall(ISDestroy(&isall));
+  }
+  PetscCall(PetscFree2(orow, opos));
+  PetscCall(PetscBLASIntCast(lr->k, &kb));
+  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&kb, &kb, lr->M, &kb, lr->piv, info));
+  PetscFunctionReturn(0);
+}
+
+/* k[0]: the rows that differ from the reference (C), k[1]: the active rows, k[2]: the rows that
+   would differ from a reference taken now (active, not sticking); over all ranks */
+static PetscErrorCode NewtonLowRankCount(MBCMultiplier m, PetscInt k[3])
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+
+  PetscFunctionBegin;
+  k[0] = k[1] = k[2] = 0;
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt dim = fp->off[i + 1] - fp->off[i];
+    if (nt->active[i]) k[1] += dim;
+    if (nt->active[i] && !nt->sticks[i]) k[2] += dim;
+    if (nt->active[i] ? !(nt->sticks[i] && !nt->refopen[i]) : !nt->refopen[i]) k[0] += dim;
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, k, 3, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)m)));
+  PetscFunctionReturn(0);
+}
+
+/* The step dr = J^-1 (-phi) on every row, where it pays and succeeds: *done */
+PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
+{
+  MBC_Newton         *nt   = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp   = m->fp;
+  MPI_Comm            comm = PetscObjectComm((PetscObject)m);
+  PetscMPIInt         size, *cnt, *dsp, kl;
+  PetscInt            nloc = 0, kA[3], rs, *lrow;
+  PetscReal          *lpq, sigma, b0 = 0, r0 = 0, r1;
+  LowRank             lr = {0};
+  Vec                 b, res, dx;
+  PetscBLASInt        info = 0;
+
+  PetscFunctionBegin;
+  *done = PETSC_FALSE;
+  if (!nt->lowrank || fp->G || fp->Winv) PetscFunctionReturn(0);
+  if (!nt->zbuilt) PetscCall(NewtonLowRankSetUp(m));
+  if (!nt->Z || nt->zrho != nt->rho_used) PetscFunctionReturn(0);
+  PetscCall(PetscLogEventBegin(MBC_NewtonLowRank, m, 0, 0, 0));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(MatGetOwnershipRange(fp->W, &rs, NULL));
+  PetscCall(NewtonLowRankCount(m, kA));
+  if (kA[0] > nt->lowrank_max * kA[1] && kA[2] <= 0.5 * nt->lowrank_max * kA[1] && kA[1]) {
+    /* the state has drifted from the reference; a new one serves once the direct steps taken
+       since have cost what inverting does (~ 4 (N/active)^3 LUs) */
+    PetscInt N;
+    PetscCall(MatGetSize(fp->W, &N, NULL));
+    if (nt->zdirect >= 4 * PetscPowReal((PetscReal)N / kA[1], 3)) {
+      PetscCall(PetscInfo(m, "Newton step: %" PetscInt_FMT " rows differ from the kept inverse's after %" PetscInt_FMT " direct steps: a new reference\n", kA[0], nt->zdirect));
+      PetscCall(MatDestroy(&nt->Z));
+      PetscCall(NewtonLowRankSetUp(m));
+      PetscCall(NewtonLowRankCount(m, kA));
+      if (!nt->Z) {
+        PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
+        PetscFunctionReturn(0);
+      }
+    }
+  }
+  if (!kA[1] || kA[0] > nt->lowrank_max * kA[1]) { /* an LU of the active rows is not much dearer */
+    nt->zdirect++;
+    PetscCall(PetscInfo(m, "Newton step: %" PetscInt_FMT " rows differ from the kept inverse's, of %" PetscInt_FMT " active: the direct solve\n", kA[0], kA[1]));
+    PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
+    PetscFunctionReturn(0);
+  }
+  sigma = nt->zsigma;
+  PetscCall(PetscMalloc2(fp->off[fp->nc] + 1, &lrow, LR_ROW * (fp->off[fp->nc] + 1), &lpq));
+  for (PetscInt i = 0; i < fp->nc; i++) {
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+    if (nt->active[i] ? nt->sticks[i] && !nt->refopen[i] : nt->refopen[i]) continue;
+    for (PetscInt d = 0; d < dim; d++, nloc++) {
+      PetscReal *q = lpq + LR_ROW * nloc, a[3], bb[3];
+      NewtonReferenceRow(nt, i, o, d, sigma, a, bb);
+      lrow[nloc] = rs + o + d;
+      q[0]       = dim;
+      q[1]       = d;
+      for (PetscInt e = 0; e < 3; e++) {
+        PetscReal ac = 0, bc = 0; /* the current row */
+        if (e < dim && nt->active[i]) ac = nt->A[9 * i + dim * d + e] + (d == e ? sigma : 0), bc = nt->B[9 * i + dim * d + e];
+        else if (e == d) ac = 1;
+        q[2 + e] = e < dim ? ac - a[e] : 0;
+        q[5 + e] = e < dim ? bc - bb[e] : 0;
+      }
+      q[8] = nt->refopen[i];
+      q[9] = bb[d];
+    }
+  }
+  PetscCall(PetscMPIIntCast(nloc, &kl));
+  PetscCall(PetscMalloc2(size, &cnt, size + 1, &dsp));
+  PetscCallMPI(MPI_Allgather(&kl, 1, MPI_INT, cnt, 1, MPI_INT, comm));
+  dsp[0] = 0;
+  for (PetscMPIInt p = 0; p < size; p++) dsp[p + 1] = dsp[p] + cnt[p];
+  lr.k = dsp[size];
+  PetscCall(PetscMalloc2(lr.k + 1, &lr.row, LR_ROW * (lr.k + 1), &lr.pq));
+  PetscCallMPI(MPI_Allgatherv(lrow, kl, MPIU_INT, lr.row, cnt, dsp, MPIU_INT, comm));
+  for (PetscMPIInt p = 0; p < size; p++) cnt[p] *= LR_ROW, dsp[p] *= LR_ROW;
+  PetscCallMPI(MPI_Allgatherv(lpq, LR_ROW * kl, MPIU_REAL, lr.pq, cnt, dsp, MPIU_REAL, comm));
+  PetscCall(PetscFree2(cnt, dsp));
+  PetscCall(PetscFree2(lrow, lpq));
+  PetscCall(MatCreateVecs(fp->W, &b, NULL));
+  PetscCall(VecDuplicate(b, &res));
+  PetscCall(VecDuplicate(b, &dx));
+  if (lr.k) {
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, lr.k, lr.row, PETSC_USE_POINTER, &lr.is));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, lr.k, &lr.seq));
+    PetscCall(VecScatterCreate(b, lr.is, lr.seq, NULL, &lr.gather));
+    PetscCall(NewtonLowRankFactor(m, &lr, &info)); /* every rank factors the same M: the same info */
+  }
+  if (!info) {
+    PetscCall(VecCopy(nt->phi, b));
+    PetscCall(VecScale(b, -1.0));
+    PetscCall(NewtonLowRankApply(m, &lr, b, nt->dr));
+    PetscCall(VecNorm(b, NORM_2, &b0));
+    PetscCall(NewtonLowRankResidual(m, nt->dr, b, res));
+    PetscCall(VecNorm(res, NORM_2, &r0));
+    for (PetscInt it = 0; it < 2 && r0 > 1e-12 * b0; it++) { /* refinement, as the direct solve's */
+      PetscCall(NewtonLowRankApply(m, &lr, res, dx));
+      PetscCall(VecAXPY(nt->dr, 1.0, dx));
+      PetscCall(NewtonLowRankResidual(m, nt->dr, b, res));
+      PetscCall(VecNorm(res, NORM_2, &r1));
+      if (!(r1 < 0.5 * r0)) {
+        PetscCall(VecAXPY(nt->dr, -1.0, dx));
+        break;
+      }
+      r0 = r1;
+    }
+    *done = (PetscBool)(r0 <= 1e-8 * b0);
+    PetscCall(PetscInfo(m, "Newton step by the kept inverse: %" PetscInt_FMT " rows differ of %" PetscInt_FMT " active, residual %g of the right side%s\n", lr.k, kA[1], (double)(b0 > 0 ? r0 / b0 : 0), *done ? "" : ": the direct solve instead"));
+  } else PetscCall(PetscInfo(m, "Newton step by the kept inverse: its %" PetscInt_FMT " x %" PetscInt_FMT " correction singular, the direct solve instead\n", lr.k, lr.k));
+  if (*done) nt->lowranks++;
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&res));
+  PetscCall(VecDestroy(&dx));
+  PetscCall(VecScatterDestroy(&lr.gather));
+  PetscCall(VecDestroy(&lr.seq));
+  PetscCall(ISDestroy(&lr.is));
+  PetscCall(PetscFree2(lr.M, lr.piv));
+  PetscCall(PetscFree2(lr.row, lr.pq));
+  PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* the reference of Z, one value a row (1: the contact separated in it), and the direct steps
+   since it was built (when a new one pays), for a restart */
+static PetscErrorCode MBCMultiplierGetRestartState_Newton(MBCMultiplier m, Vec s, PetscInt *count, PetscBool *has)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  PetscScalar        *a;
+
+  PetscFunctionBegin;
+  *has   = nt->zbuilt;
+  *count = nt->zdirect;
+  if (!nt->zbuilt) PetscFunctionReturn(0);
+  PetscCall(VecGetArray(s, &a));
+  for (PetscInt i = 0; i < fp->nc; i++)
+    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) a[d] = nt->refopen[i] ? 1 : 0;
+  PetscCall(VecRestoreArray(s, &a));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode MBCMultiplierSetRestartState_Newton(MBCMultiplier m, Vec s, PetscInt count)
+{
+  MBC_Newton *nt = (MBC_Newton *)m->data;
+
+  PetscFunctionBegin;
+  PetscCheck(m->fp && m->fp->W, PetscObjectComm((PetscObject)m), PETSC_ERR_ORDER, "MBCMultiplierSetProblem() first");
+  PetscCall(VecDestroy(&nt->refpending));
+  PetscCall(MatDestroy(&nt->refW));
+  PetscCall(VecDuplicate(s, &nt->refpending));
+  PetscCall(VecCopy(s, nt->refpending));
+  PetscCall(PetscObjectReference((PetscObject)m->fp->W));
+  nt->refW           = m->fp->W;
+  nt->zdirectpending = count;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCNewtonLowRankCompose(MBCMultiplier m)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscObjectComposeFunction((PetscObject)m, "MBCMultiplierGetRestartState_C", MBCMultiplierGetRestartState_Newton));
+  PetscCall(PetscObjectComposeFunction((PetscObject)m, "MBCMultiplierSetRestartState_C", MBCMultiplierSetRestartState_Newton));
+  PetscFunctionReturn(0);
+}
