@@ -63,6 +63,82 @@ static PetscErrorCode DenseRelayout(Mat A, PetscInt nl, Mat *B)
   PetscFunctionReturn(0);
 }
 
+/* *Z = J0^-1 in place on one rank (LAPACK getrf + getri: one N x N array); NULL where singular */
+static PetscErrorCode InverseLAPACK(Mat *J0, Mat *Z)
+{
+  PetscScalar *a, *work, wq;
+  PetscBLASInt n, lda, *piv, info, lw = -1;
+  PetscInt     N, ld;
+
+  PetscFunctionBegin;
+  *Z = NULL;
+  PetscCall(MatGetSize(*J0, &N, NULL));
+  PetscCall(MatDenseGetLDA(*J0, &ld));
+  PetscCall(PetscBLASIntCast(N, &n));
+  PetscCall(PetscBLASIntCast(ld, &lda));
+  PetscCall(MatDenseGetArray(*J0, &a));
+  PetscCall(PetscMalloc1(N + 1, &piv));
+  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&n, &n, a, &lda, piv, &info));
+  if (!info) {
+    PetscCallBLAS("LAPACKgetri", LAPACKgetri_(&n, a, &lda, piv, &wq, &lw, &info));
+    PetscCall(PetscBLASIntCast((PetscInt)PetscRealPart(wq), &lw));
+    PetscCall(PetscMalloc1(lw + 1, &work));
+    PetscCallBLAS("LAPACKgetri", LAPACKgetri_(&n, a, &lda, piv, work, &lw, &info));
+    PetscCall(PetscFree(work));
+  }
+  PetscCall(PetscFree(piv));
+  PetscCall(MatDenseRestoreArray(*J0, &a));
+  if (!info) {
+    *Z  = *J0;
+    *J0 = NULL;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* *Z = J0^-1 over the ranks by ScaLAPACK (its LU, then the solve with the identity), in W's row
+   layout (nl rows here); NULL where singular */
+static PetscErrorCode InverseScaLAPACK(Mat J0, PetscInt nl, Mat *Z)
+{
+  MPI_Comm       comm = PetscObjectComm((PetscObject)J0);
+  Mat            A, Id, X, t;
+  PetscInt       N, nstd = PETSC_DECIDE;
+  PetscErrorCode ierr;
+  int            bad;
+
+  PetscFunctionBegin;
+  *Z = NULL;
+  PetscCall(MatGetSize(J0, &N, NULL));
+  PetscCall(PetscSplitOwnership(comm, &nstd, &N)); /* ScaLAPACK from PETSc's own layout (W's may leave ranks without rows) */
+  PetscCall(DenseRelayout(J0, nstd, &t));
+  PetscCall(MatConvert(t, MATSCALAPACK, MAT_INITIAL_MATRIX, &A));
+  PetscCall(MatDestroy(&t));
+  PetscCall(MatCreateDense(comm, nstd, nstd, N, N, NULL, &t));
+  PetscCall(MatZeroEntries(t));
+  PetscCall(MatAssemblyBegin(t, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(t, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatShift(t, 1.0));
+  PetscCall(MatConvert(t, MATSCALAPACK, MAT_INITIAL_MATRIX, &Id));
+  PetscCall(MatDestroy(&t));
+  /* ScaLAPACK's LU raises an error on a singular matrix (NewtonFactor) */
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = MatLUFactor(A, NULL, NULL, NULL);
+  PetscCall(PetscPopErrorHandler());
+  PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT || ierr == PETSC_ERR_LIB, PETSC_COMM_SELF, ierr, "The reference Newton matrix's factorization failed");
+  bad = ierr ? 1 : 0;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_MAX, comm));
+  if (!bad) {
+    PetscCall(MatDuplicate(Id, MAT_DO_NOT_COPY_VALUES, &X));
+    PetscCall(MatMatSolve(A, Id, X));
+    PetscCall(MatConvert(X, MATDENSE, MAT_INITIAL_MATRIX, &t));
+    PetscCall(MatDestroy(&X));
+    PetscCall(DenseRelayout(t, nl, Z)); /* back in W's row layout */
+    PetscCall(MatDestroy(&t));
+  }
+  PetscCall(MatDestroy(&Id));
+  PetscCall(MatDestroy(&A));
+  PetscFunctionReturn(0);
+}
+
 /* Z = J_ref^-1, dense in W's row layout, by LAPACK (one rank) or ScaLAPACK; NULL where J_ref is
    singular or too badly conditioned for its inverse to carry the step (cond_1 > 1e10). */
 static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
@@ -70,15 +146,14 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
-  Mat                 J0, Id, Zf;
+  Mat                 J0;
   Vec                 rho;
   PetscScalar        *rv;
-  PetscInt            rs, re, nl, N, nopen = 0, nstd;
+  PetscInt            rs, re, nl, N, nopen = 0;
   PetscReal           dmax = 0, n1, z1;
   PetscBool           scal = (PetscBool)strcmp(nt->densetype, MATDENSE);
   PetscMPIInt         size;
-  PetscErrorCode      ierr;
-  int                 bad;
+  int                 bad = 0;
 
   PetscFunctionBegin;
   nt->zbuilt  = PETSC_TRUE;
@@ -124,42 +199,9 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
   PetscCall(MatAssemblyBegin(J0, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(J0, MAT_FINAL_ASSEMBLY));
   PetscCall(MatNorm(J0, NORM_1, &n1));
-  nstd = scal ? PETSC_DECIDE : nl; /* ScaLAPACK from PETSc's own layout (W's may leave ranks without rows) */
-  PetscCall(PetscSplitOwnership(comm, &nstd, &N));
-  PetscCall(MatCreateDense(comm, nstd, nstd, N, N, NULL, &Id));
-  PetscCall(MatZeroEntries(Id));
-  PetscCall(MatAssemblyBegin(Id, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(Id, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatShift(Id, 1.0));
-  if (scal) {
-    Mat t;
-    PetscCall(DenseRelayout(J0, nstd, &t));
-    PetscCall(MatDestroy(&J0));
-    PetscCall(MatConvert(t, MATSCALAPACK, MAT_INITIAL_MATRIX, &J0));
-    PetscCall(MatDestroy(&t));
-    PetscCall(MatConvert(Id, MATSCALAPACK, MAT_INITIAL_MATRIX, &t));
-    PetscCall(MatDestroy(&Id));
-    Id = t;
-  }
-  PetscCall(MatDuplicate(Id, MAT_DO_NOT_COPY_VALUES, &Zf));
-  /* LAPACK's and ScaLAPACK's LU raise an error on a singular matrix (NewtonFactor) */
-  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-  ierr = MatLUFactor(J0, NULL, NULL, NULL);
-  PetscCall(PetscPopErrorHandler());
-  PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT || ierr == PETSC_ERR_LIB, PETSC_COMM_SELF, ierr, "The reference Newton matrix's factorization failed");
-  bad = ierr ? 1 : 0;
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_MAX, comm));
-  if (!bad) {
-    PetscCall(MatMatSolve(J0, Id, Zf));
-    if (scal) { /* back in W's row layout */
-      Mat t;
-      PetscCall(MatConvert(Zf, MATDENSE, MAT_INITIAL_MATRIX, &t));
-      PetscCall(DenseRelayout(t, nl, &nt->Z));
-      PetscCall(MatDestroy(&t));
-    } else {
-      nt->Z = Zf;
-      Zf    = NULL;
-    }
+  if (scal) PetscCall(InverseScaLAPACK(J0, nl, &nt->Z));
+  else PetscCall(InverseLAPACK(&J0, &nt->Z));
+  if (nt->Z) {
     PetscCall(MatNorm(nt->Z, NORM_1, &z1));
     if (!(n1 * z1 <= 1e10)) bad = 1;
     else {
@@ -170,8 +212,6 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
     PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT " (%" PetscInt_FMT " contacts separated): inverted, cond_1 %g%s\n", N, nopen, (double)(n1 * z1), bad ? ": too large, the direct solve instead" : ""));
     if (bad) PetscCall(MatDestroy(&nt->Z));
   } else PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT ": singular, the direct solve instead\n", N));
-  PetscCall(MatDestroy(&Zf));
-  PetscCall(MatDestroy(&Id));
   PetscCall(MatDestroy(&J0));
   PetscCall(PetscLogEventEnd(MBC_NewtonInverse, m, 0, 0, 0));
   PetscFunctionReturn(0);
