@@ -24,8 +24,8 @@ G = 9.81
 def rocking_block(tmp_path, cell):
     """A 1 x 1 x 1.5 m block on a clamped base (mu 0.8, non-matching: 4 x 4 on 5 x 5), its
     weight and a top traction ramped to 8 kPa over 0.03 s, which lifts the heel: the contact goes
-    from all stuck to 15 of 25 points separated, the states the reference (all stuck, the first
-    step's) differs from."""
+    from all stuck to 15 of 25 points separated, the states the reference (all stuck: the inverse
+    is built after three direct steps, N = active rows) differs from."""
     meshgen.boxes(str(tmp_path / "rock.msh"),
                   [dict(lo=(-0.5, -0.5, -1.0), hi=(1.5, 1.5, 0.0), n=(5, 5, 2), name="base", cell=cell),
                    dict(lo=(0, 0, 0), hi=(1, 1, 1.5), n=(4, 4, 3), name="block", cell=cell)])
@@ -72,16 +72,17 @@ def test_same_answer_as_the_direct_solve(tmp_path, cell, nproc):
 
 def shaken_dam(tmp_path):
     """The small staged dam with its joints (3 monoliths, h 15 m, water at 0.95 H, mu 0.8) under
-    0.4 s of the 3-component record's strong phase (dt 0.02): the reference is the static stage's
-    end (30 joint points separated), and points open, close and slip from step to step."""
+    0.4 s of the 3-component record's strong phase (dt 0.02): the inverse is built in the fifth
+    step, after 12 direct Newton steps (29 joint points separated in its reference), and points open, close and slip from step
+    to step."""
     return dam.build(tmp_path, "staged", dt=0.02, eq_duration=0.4, record_from=3.0, joints=True, h=15.0,
                      monoliths=3, components="xyz")
 
 
 @pytest.mark.parametrize("save, load", [(1, 1), (2, 2), (2, 1)])
 def test_restart_restores_the_reference(tmp_path, save, load):
-    """A checkpoint at earthquake step 7 holds the kept inverse's reference (the static stage's
-    separated points, which differ from step 7's) and the direct steps since; the restart builds
+    """A checkpoint at earthquake step 7 holds the kept inverse's reference (the separated points
+    when it was built, which differ from step 7's) and the direct steps since; the restart builds
     the same inverse and ends where the uninterrupted run ends: bit for bit on the same ranks, to
     1e-10 from 2 ranks to 1 (ScaLAPACK's rounding against LAPACK's, test_pair_hysteresis.py)."""
     h5 = shaken_dam(tmp_path)

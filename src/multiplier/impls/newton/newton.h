@@ -45,7 +45,7 @@ typedef struct {
   Mat        Z;           /* the reference Newton matrix's inverse; NULL: none */
   PetscReal  zsigma, zrho; /* its shift and the augmentations' scale it was built with */
   PetscInt   lowranks;    /* steps of the last solve taken through Z */
-  PetscInt   zdirect, zdirectpending; /* direct steps since Z was built; a restart's */
+  PetscInt   zdirect, zdirectpending; /* direct steps since W or Z (Z is built once they cost as much); a restart's */
 } MBC_Newton;
 
 /* The Newton system on the active rows isA (nA on this rank, then the ng rigid modes on the last

@@ -139,9 +139,10 @@ static PetscErrorCode InverseScaLAPACK(Mat J0, PetscInt nl, Mat *Z)
   PetscFunctionReturn(0);
 }
 
-/* Z = J_ref^-1, dense in W's row layout, by LAPACK (one rank) or ScaLAPACK; NULL where J_ref is
+/* Z = J_ref^-1 with the reference ref (one value a row, 1: separated; NULL: the current state's
+   separated contacts), dense in W's row layout, by LAPACK (one rank) or ScaLAPACK; NULL where J_ref is
    singular or too badly conditioned for its inverse to carry the step (cond_1 > 1e10). */
-static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
+static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m, const PetscScalar ref[])
 {
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp   = m->fp;
@@ -159,16 +160,7 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m)
   nt->zbuilt  = PETSC_TRUE;
   nt->zrho    = nt->rho_used;
   nt->zdirect = 0;
-  if (nt->refpending && nt->refW == fp->W) { /* a restart's, for this W */
-    const PetscScalar *a;
-    PetscCall(VecGetArrayRead(nt->refpending, &a));
-    for (PetscInt i = 0; i < fp->nc; i++) nt->refopen[i] = (PetscBool)(PetscRealPart(a[fp->off[i]]) > 0.5);
-    PetscCall(VecRestoreArrayRead(nt->refpending, &a));
-    nt->zdirect = nt->zdirectpending;
-  } else
-    for (PetscInt i = 0; i < fp->nc; i++) nt->refopen[i] = (PetscBool)!nt->active[i];
-  PetscCall(VecDestroy(&nt->refpending));
-  PetscCall(MatDestroy(&nt->refW));
+  for (PetscInt i = 0; i < fp->nc; i++) nt->refopen[i] = (PetscBool)(ref ? PetscRealPart(ref[fp->off[i]]) > 0.5 : !nt->active[i]);
   PetscCallMPI(MPI_Comm_size(comm, &size));
   if (size > 1 && !scal) PetscFunctionReturn(0); /* no distributed LU to invert with */
   PetscCall(PetscLogEventBegin(MBC_NewtonInverse, m, 0, 0, 0));
@@ -414,6 +406,36 @@ static PetscErrorCode NewtonLowRankCount(MBCMultiplier m, PetscInt k[3])
   PetscFunctionReturn(0);
 }
 
+/* Z's cost in LUs of the active rows: getrf + getri, 2 N^3, against 2/3 n^3 */
+static PetscReal NewtonInverseCost(PetscInt N, PetscInt n)
+{
+  return 3 * PetscPowReal((PetscReal)N / (PetscReal)n, 3);
+}
+
+/* A restart's state (MBCMultiplierSetRestartState), at the first step with the W it was given
+   for: the direct steps taken, and Z with the run's reference where the run had built it */
+static PetscErrorCode NewtonLowRankRestore(MBCMultiplier m)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  PetscBool           built;
+
+  PetscFunctionBegin;
+  if (!nt->refW) PetscFunctionReturn(0);
+  if (nt->refW == fp->W) {
+    const PetscScalar *a;
+    PetscCall(VecGetArrayRead(nt->refpending, &a));
+    built = (PetscBool)(fp->nc && PetscRealPart(a[0]) >= 0);
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &built, 1, MPIU_BOOL, MPI_LOR, PetscObjectComm((PetscObject)m)));
+    if (built) PetscCall(NewtonLowRankSetUp(m, a));
+    nt->zdirect = nt->zdirectpending;
+    PetscCall(VecRestoreArrayRead(nt->refpending, &a));
+  }
+  PetscCall(VecDestroy(&nt->refpending));
+  PetscCall(MatDestroy(&nt->refW));
+  PetscFunctionReturn(0);
+}
+
 /* The step dr = J^-1 (-phi) on every row, where it pays and succeeds: *done */
 PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
 {
@@ -421,7 +443,7 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
   PetscMPIInt         size, *cnt, *dsp, kl;
-  PetscInt            nloc = 0, kA[3], rs, *lrow;
+  PetscInt            nloc = 0, kA[3], rs, *lrow, N;
   PetscReal          *lpq, sigma, b0 = 0, r0 = 0, r1;
   LowRank             lr = {0};
   Vec                 b, res, dx;
@@ -430,26 +452,36 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscFunctionBegin;
   *done = PETSC_FALSE;
   if (!nt->lowrank || fp->G || fp->Winv) PetscFunctionReturn(0);
-  if (!nt->zbuilt) PetscCall(NewtonLowRankSetUp(m));
-  if (!nt->Z || nt->zrho != nt->rho_used) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(MBC_NewtonLowRank, m, 0, 0, 0));
+  PetscCall(NewtonLowRankRestore(m));
+  PetscCall(MatGetSize(fp->W, &N, NULL));
+  if (!nt->zbuilt) { /* build Z once the direct steps with this W have cost what it does: a whole
+                        stage then pays it back many times, a W that serves a few steps (a static
+                        load step) costs at most twice its direct steps */
+    PetscCall(NewtonLowRankCount(m, kA));
+    if (kA[1] && nt->zdirect >= NewtonInverseCost(N, kA[1])) PetscCall(NewtonLowRankSetUp(m, NULL));
+    else {
+      if (kA[1]) nt->zdirect++;
+      PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
+      PetscFunctionReturn(0);
+    }
+  }
+  if (!nt->Z || nt->zrho != nt->rho_used) {
+    PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
+    PetscFunctionReturn(0);
+  }
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(MatGetOwnershipRange(fp->W, &rs, NULL));
   PetscCall(NewtonLowRankCount(m, kA));
-  if (kA[0] > nt->lowrank_max * kA[1] && kA[2] <= 0.5 * nt->lowrank_max * kA[1] && kA[1]) {
-    /* the state has drifted from the reference; a new one serves once the direct steps taken
-       since have cost what inverting does (~ 4 (N/active)^3 LUs) */
-    PetscInt N;
-    PetscCall(MatGetSize(fp->W, &N, NULL));
-    if (nt->zdirect >= 4 * PetscPowReal((PetscReal)N / kA[1], 3)) {
-      PetscCall(PetscInfo(m, "Newton step: %" PetscInt_FMT " rows differ from the kept inverse's after %" PetscInt_FMT " direct steps: a new reference\n", kA[0], nt->zdirect));
-      PetscCall(MatDestroy(&nt->Z));
-      PetscCall(NewtonLowRankSetUp(m));
-      PetscCall(NewtonLowRankCount(m, kA));
-      if (!nt->Z) {
-        PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
-        PetscFunctionReturn(0);
-      }
+  if (kA[0] > nt->lowrank_max * kA[1] && kA[2] <= 0.5 * nt->lowrank_max * kA[1] && kA[1] && nt->zdirect >= NewtonInverseCost(N, kA[1])) {
+    /* the state has drifted from the reference, and a new one would serve: by the same rule */
+    PetscCall(PetscInfo(m, "Newton step: %" PetscInt_FMT " rows differ from the kept inverse's after %" PetscInt_FMT " direct steps: a new reference\n", kA[0], nt->zdirect));
+    PetscCall(MatDestroy(&nt->Z));
+    PetscCall(NewtonLowRankSetUp(m, NULL));
+    PetscCall(NewtonLowRankCount(m, kA));
+    if (!nt->Z) {
+      PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
+      PetscFunctionReturn(0);
     }
   }
   if (!kA[1] || kA[0] > nt->lowrank_max * kA[1]) { /* an LU of the active rows is not much dearer */
@@ -535,8 +567,8 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscFunctionReturn(0);
 }
 
-/* the reference of Z, one value a row (1: the contact separated in it), and the direct steps
-   since it was built (when a new one pays), for a restart */
+/* the reference of Z, one value a row (1: the contact separated in it; -1: no Z yet), and the
+   direct steps since W or Z (when one pays), for a restart */
 static PetscErrorCode MBCMultiplierGetRestartState_Newton(MBCMultiplier m, Vec s, PetscInt *count, PetscBool *has)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
@@ -544,12 +576,12 @@ static PetscErrorCode MBCMultiplierGetRestartState_Newton(MBCMultiplier m, Vec s
   PetscScalar        *a;
 
   PetscFunctionBegin;
-  *has   = nt->zbuilt;
+  *has   = (PetscBool)(nt->zbuilt || nt->zdirect);
   *count = nt->zdirect;
-  if (!nt->zbuilt) PetscFunctionReturn(0);
+  if (!*has) PetscFunctionReturn(0);
   PetscCall(VecGetArray(s, &a));
   for (PetscInt i = 0; i < fp->nc; i++)
-    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) a[d] = nt->refopen[i] ? 1 : 0;
+    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) a[d] = !nt->zbuilt ? -1 : nt->refopen[i] ? 1 : 0;
   PetscCall(VecRestoreArray(s, &a));
   PetscFunctionReturn(0);
 }
