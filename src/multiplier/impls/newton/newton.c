@@ -480,8 +480,8 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
   PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps (without sweeps: other rho)", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
   PetscCall(PetscOptionsReal("-newton_dense_fill", "Fraction of nonzero entries from which the Newton matrix is stored and factored dense (LAPACK); > 1: never", "MBCMultiplierSetFromOptions", nt->dense_fill, &nt->dense_fill, NULL));
-  PetscCall(PetscOptionsBool("-newton_lowrank", "While W holds, take Newton steps through the kept inverse, corrected on the rows that do not stick", "MBCMultiplierSetFromOptions", nt->lowrank, &nt->lowrank, NULL));
-  PetscCall(PetscOptionsReal("-newton_lowrank_max", "... unless those rows exceed this fraction of the active ones", "MBCMultiplierSetFromOptions", nt->lowrank_max, &nt->lowrank_max, NULL));
+  PetscCall(PetscOptionsBool("-newton_lowrank", "While W holds, take Newton steps through the kept inverse of a reference state's Newton matrix, corrected on the rows that differ", "MBCMultiplierSetFromOptions", nt->lowrank, &nt->lowrank, NULL));
+  PetscCall(PetscOptionsReal("-newton_lowrank_max", "... unless the rows that differ exceed this fraction of the active ones", "MBCMultiplierSetFromOptions", nt->lowrank_max, &nt->lowrank_max, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->rho_scale > 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_rho %g must be positive", (double)nt->rho_scale);

@@ -3,7 +3,8 @@
    an earthquake stage) the Newton matrix of a reference state, J_ref (contacts separated in the
    reference: identity rows; the others sticking: rho W + sigma I, identity rows without
    flexibility), is the same at every Newton step of every time step; its inverse Z is computed
-   once, at the first step that needs it, with the contacts separated then as the reference. A
+   once the direct steps with this W have cost as much, with the contacts separated then as the
+   reference. A
    step's J differs from J_ref only in the rows C of the contacts whose state differs from the
    reference (slipping, separated since, closed since): J = J_ref + E_C U^T with
      (U^T x)_r = alpha_r . x_c + beta_r . (W x)_c      (c: the rows of r's contact)
@@ -14,6 +15,12 @@
    reference (MBCMultiplierSetRestartState), so that its Z and its steps are the run's own. */
 #include "newton.h"
 #include <petscblaslapack.h>
+
+/* contact i's rows differ from the reference's (its rows are in C) */
+static inline PetscBool NewtonRowsDiffer(const MBC_Newton *nt, PetscInt i)
+{
+  return (PetscBool)(nt->active[i] ? !(nt->sticks[i] && !nt->refopen[i]) : !nt->refopen[i]);
+}
 
 /* the reference rows of contact i: row d is alpha . x + beta . (W x) over the contact's rows */
 static void NewtonReferenceRow(MBC_Newton *nt, PetscInt i, PetscInt o, PetscInt d, PetscReal sigma, PetscReal a[3], PetscReal b[3])
@@ -288,8 +295,7 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
 
   PetscFunctionBegin;
   PetscCall(MatMult(nt->Z, b, x));
-  if (lr->k) PetscCall(PetscBLASIntCast(lr->k, &k));
-  else k = 0;
+  PetscCall(PetscBLASIntCast(lr->k, &k));
   if (k) {
     PetscCall(PetscMalloc1(lr->k, &t));
     PetscCall(MatMult(m->fp->W, x, nt->wdr));
@@ -400,7 +406,7 @@ static PetscErrorCode NewtonLowRankCount(MBCMultiplier m, PetscInt k[3])
     const PetscInt dim = fp->off[i + 1] - fp->off[i];
     if (nt->active[i]) k[1] += dim;
     if (nt->active[i] && !nt->sticks[i]) k[2] += dim;
-    if (nt->active[i] ? !(nt->sticks[i] && !nt->refopen[i]) : !nt->refopen[i]) k[0] += dim;
+    if (NewtonRowsDiffer(nt, i)) k[0] += dim;
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, k, 3, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)m)));
   PetscFunctionReturn(0);
@@ -494,7 +500,7 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscCall(PetscMalloc2(fp->off[fp->nc] + 1, &lrow, LR_ROW * (fp->off[fp->nc] + 1), &lpq));
   for (PetscInt i = 0; i < fp->nc; i++) {
     const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
-    if (nt->active[i] ? nt->sticks[i] && !nt->refopen[i] : nt->refopen[i]) continue;
+    if (!NewtonRowsDiffer(nt, i)) continue;
     for (PetscInt d = 0; d < dim; d++, nloc++) {
       PetscReal *q = lpq + LR_ROW * nloc, a[3], bb[3];
       NewtonReferenceRow(nt, i, o, d, sigma, a, bb);
