@@ -45,7 +45,7 @@ def rocking_block(tmp_path, cell):
 
 
 def kept_steps(stdout):
-    return len(re.findall(r"Newton step by the kept inverse: \d+ rows differ of \d+ active, residual \S+ of the right side\n", stdout))
+    return len(re.findall(r"Newton step by the kept inverse: \d+ rows differ of \d+ active, residual \S+ of the right side after \d+ refinements\n", stdout))
 
 
 def final(h5, body):

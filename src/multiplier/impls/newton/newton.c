@@ -205,6 +205,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
   PetscFunctionBegin;
   {
     PetscBool done;
+    nt->wdr_of_dr = PETSC_FALSE;
     PetscCall(MBCNewtonLowRankStep(m, &done));
     if (done) PetscFunctionReturn(0);
   }
@@ -663,7 +664,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     else if (fails >= 5) m->reason = MBC_MULTIPLIER_DIVERGED_LINE_SEARCH;
     if (m->reason != MBC_MULTIPLIER_ITERATING) break;
     PetscCall(NewtonStep(m, r, slips));
-    PetscCall(MatMult(fp->W, nt->dr, nt->wdr)); /* wdr = W dr (+ G^T dalpha) */
+    if (!nt->wdr_of_dr) PetscCall(MatMult(fp->W, nt->dr, nt->wdr)); /* wdr = W dr (+ G^T dalpha) */
     if (fp->G) PetscCall(MatMultTransposeAdd(fp->G, nt->dalpha, nt->wdr, nt->wdr));
     for (PetscInt k = 1; k < nt->nonmonotone; k++) ref = PetscMax(ref, hist[k]);
     for (ls = 0; ls < nt->ls_max; ls++, t *= 0.5) { /* Armijo on 1/2|phi|^2: its slope along a Newton step is -|phi|^2 */

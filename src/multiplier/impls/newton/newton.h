@@ -27,6 +27,7 @@ typedef struct {
   PetscReal *A, *B;      /* 9 per contact: the Jacobian blocks at the current iterate */
   PetscBool *active;     /* per contact: in the Newton system (not separated) */
   Vec        phi, dr, wdr, rt, ut, dalpha, alphat;
+  PetscBool  wdr_of_dr;  /* wdr = W dr already (the kept inverse's residual computed it) */
   PetscReal *work;       /* 3 x (reduced size): one contact's rows of the Newton matrix */
   PetscInt  *mark, *cols;
   PetscInt   nbuilt;     /* the kept factor's active rows (-1: none kept) */

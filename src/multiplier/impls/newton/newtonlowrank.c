@@ -260,56 +260,63 @@ typedef struct {
   IS            is;    /* row[] */
   Vec           seq;   /* k entries */
   VecScatter    gather;
+  Mat           Wc;    /* W's rows C (dense, k x N, on every rank): (W x)_C without a pass over W */
+  Vec           all, wc; /* x on every rank; (W x)_C */
+  VecScatter    toall;
 } LowRank;
 
-/* t = U^T v on the rows C, from v and w = W v gathered to every rank */
-static PetscErrorCode LowRankApplyU(LowRank *lr, Vec v, Vec w, PetscScalar t[])
+/* t = U^T v on the rows C, from v and (W v)_C, both on every rank */
+static PetscErrorCode LowRankApplyU(LowRank *lr, Vec v, PetscScalar t[])
 {
   const PetscScalar *a;
 
   PetscFunctionBegin;
+  PetscCall(VecScatterBegin(lr->toall, v, lr->all, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(lr->toall, v, lr->all, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(MatMult(lr->Wc, lr->all, lr->wc));
+  PetscCall(VecScatterBegin(lr->gather, v, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(lr->gather, v, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
   for (PetscInt r = 0; r < lr->k; r++) t[r] = 0;
   for (PetscInt pass = 0; pass < 2; pass++) {
-    Vec src = pass ? w : v;
-    PetscCall(VecScatterBegin(lr->gather, src, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(lr->gather, src, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecGetArrayRead(lr->seq, &a));
+    PetscCall(VecGetArrayRead(pass ? lr->wc : lr->seq, &a));
     for (PetscInt r = 0; r < lr->k; r++) {
-      const PetscReal *q = lr->pq + LR_ROW * r;
+      const PetscReal *q     = lr->pq + LR_ROW * r;
       const PetscInt   first = r - (PetscInt)q[1];
       for (PetscInt e = 0; e < (PetscInt)q[0]; e++) t[r] += q[2 + 3 * pass + e] * a[first + e];
     }
-    PetscCall(VecRestoreArrayRead(lr->seq, &a));
+    PetscCall(VecRestoreArrayRead(pass ? lr->wc : lr->seq, &a));
   }
   PetscFunctionReturn(0);
 }
 
-/* x = J^-1 b = v - Z E_C M^-1 U^T v, v = Z b */
+/* x = J^-1 b = v - Z E_C M^-1 U^T v, v = Z b: one pass over Z, and its k columns C (this rank's
+   rows of them: Z is stored by columns) for the correction */
 static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Vec x)
 {
-  MBC_Newton   *nt = (MBC_Newton *)m->data;
-  PetscScalar  *t, *sv;
-  PetscBLASInt  k, one = 1, info;
-  PetscInt      rs, re;
-  Vec           s;
+  MBC_Newton        *nt = (MBC_Newton *)m->data;
+  PetscScalar       *t, *xv;
+  const PetscScalar *z;
+  PetscBLASInt       k, one = 1, info;
+  PetscInt           nl, lda;
 
   PetscFunctionBegin;
   PetscCall(MatMult(nt->Z, b, x));
   PetscCall(PetscBLASIntCast(lr->k, &k));
   if (k) {
     PetscCall(PetscMalloc1(lr->k, &t));
-    PetscCall(MatMult(m->fp->W, x, nt->wdr));
-    PetscCall(LowRankApplyU(lr, x, nt->wdr, t));
+    PetscCall(LowRankApplyU(lr, x, t));
     PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &k, &one, lr->M, &k, lr->piv, t, &k, &info));
     PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK getrs: info %d", (int)info);
-    PetscCall(VecDuplicate(x, &s));
-    PetscCall(VecGetOwnershipRange(s, &rs, &re));
-    PetscCall(VecGetArray(s, &sv));
-    for (PetscInt r = 0; r < lr->k; r++)
-      if (lr->row[r] >= rs && lr->row[r] < re) sv[lr->row[r] - rs] = -t[r];
-    PetscCall(VecRestoreArray(s, &sv));
-    PetscCall(MatMultAdd(nt->Z, s, x, x));
-    PetscCall(VecDestroy(&s));
+    PetscCall(VecGetLocalSize(x, &nl));
+    PetscCall(MatDenseGetLDA(nt->Z, &lda));
+    PetscCall(MatDenseGetArrayRead(nt->Z, &z));
+    PetscCall(VecGetArray(x, &xv));
+    for (PetscInt r = 0; r < lr->k; r++) {
+      const PetscScalar *zc = z + lr->row[r] * lda;
+      for (PetscInt i = 0; i < nl; i++) xv[i] -= zc[i] * t[r];
+    }
+    PetscCall(VecRestoreArray(x, &xv));
+    PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
     PetscCall(PetscFree(t));
   }
   { /* the separated rows' x = b exactly, as the direct solve's: their multipliers end at 0, not
@@ -336,7 +343,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   MBCFrictionProblem *fp = m->fp;
   const PetscScalar  *z, *wz = NULL;
   PetscInt            lda, ldw = 0, ko = 0, N, *orow, *opos;
-  Mat                *zcc, *wo = NULL, *zc = NULL, wzo = NULL;
+  Mat                *zcc, *zc = NULL, wzo = NULL;
   IS                  isall = NULL, isopen = NULL;
   PetscBLASInt        kb;
 
@@ -348,14 +355,25 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
     if (lr->pq[LR_ROW * r + 8] > 0.5) opos[r] = ko, orow[ko++] = lr->row[r];
   }
   PetscCall(MatCreateSubMatrices(nt->Z, 1, &lr->is, &lr->is, MAT_INITIAL_MATRIX, &zcc));
-  if (ko) { /* every rank holds Z_:C (N x k) for the product (ko and C are the same on every rank) */
-    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, ko, orow, PETSC_USE_POINTER, &isopen));
-    PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
-    PetscCall(MatCreateSubMatrices(fp->W, 1, &isopen, &isall, MAT_INITIAL_MATRIX, &wo));
-    PetscCall(MatCreateSubMatrices(nt->Z, 1, &isall, &lr->is, MAT_INITIAL_MATRIX, &zc));
-    PetscCall(MatMatMult(wo[0], zc[0], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &wzo));
-    PetscCall(MatDenseGetArrayRead(wzo, &wz));
-    PetscCall(MatDenseGetLDA(wzo, &ldw));
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
+  { /* W's rows C (every rank the same k rows) and of them the reference-open ones, dense: W is
+       most of the time more than half full, and dense products run at BLAS 3's speed */
+    IS   rows[2] = {lr->is, NULL}, cols[2] = {isall, isall};
+    Mat *wr;
+    if (ko) PetscCall(ISCreateGeneral(PETSC_COMM_SELF, ko, orow, PETSC_USE_POINTER, &isopen));
+    rows[1] = isopen;
+    PetscCall(MatCreateSubMatrices(fp->W, ko ? 2 : 1, rows, cols, MAT_INITIAL_MATRIX, &wr));
+    PetscCall(MatConvert(wr[0], MATSEQDENSE, MAT_INITIAL_MATRIX, &lr->Wc));
+    if (ko) { /* every rank holds Z_:C (N x k) for the product (ko and C are the same on every rank) */
+      Mat wod;
+      PetscCall(MatConvert(wr[1], MATSEQDENSE, MAT_INITIAL_MATRIX, &wod));
+      PetscCall(MatCreateSubMatrices(nt->Z, 1, &isall, &lr->is, MAT_INITIAL_MATRIX, &zc));
+      PetscCall(MatMatMult(wod, zc[0], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &wzo));
+      PetscCall(MatDestroy(&wod));
+      PetscCall(MatDenseGetArrayRead(wzo, &wz));
+      PetscCall(MatDenseGetLDA(wzo, &ldw));
+    }
+    PetscCall(MatDestroySubMatrices(ko ? 2 : 1, &wr));
   }
   PetscCall(MatDenseGetArrayRead(zcc[0], &z));
   PetscCall(MatDenseGetLDA(zcc[0], &lda));
@@ -382,11 +400,10 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   if (ko) {
     PetscCall(MatDenseRestoreArrayRead(wzo, &wz));
     PetscCall(MatDestroy(&wzo));
-    PetscCall(MatDestroySubMatrices(1, &wo));
     PetscCall(MatDestroySubMatrices(1, &zc));
     PetscCall(ISDestroy(&isopen));
-    PetscCall(ISDestroy(&isall));
   }
+  PetscCall(ISDestroy(&isall));
   PetscCall(PetscFree2(orow, opos));
   PetscCall(PetscBLASIntCast(lr->k, &kb));
   PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&kb, &kb, lr->M, &kb, lr->piv, info));
@@ -451,6 +468,8 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscMPIInt         size, *cnt, *dsp, kl;
   PetscInt            nloc = 0, kA[3], rs, *lrow, N;
   PetscReal          *lpq, sigma, b0 = 0, r0 = 0, r1;
+  PetscInt            refined = 0;
+  PetscBool           wdr_valid = PETSC_TRUE;
   LowRank             lr = {0};
   Vec                 b, res, dx;
   PetscBLASInt        info = 0;
@@ -537,6 +556,8 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, lr.k, lr.row, PETSC_USE_POINTER, &lr.is));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, lr.k, &lr.seq));
     PetscCall(VecScatterCreate(b, lr.is, lr.seq, NULL, &lr.gather));
+    PetscCall(VecScatterCreateToAll(b, &lr.toall, &lr.all));
+    PetscCall(VecDuplicate(lr.seq, &lr.wc));
     PetscCall(NewtonLowRankFactor(m, &lr, &info)); /* every rank factors the same M: the same info */
   }
   if (!info) {
@@ -553,19 +574,26 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
       PetscCall(VecNorm(res, NORM_2, &r1));
       if (!(r1 < 0.5 * r0)) {
         PetscCall(VecAXPY(nt->dr, -1.0, dx));
+        wdr_valid = PETSC_FALSE;
         break;
       }
       r0 = r1;
+      refined++;
     }
     *done = (PetscBool)(r0 <= 1e-8 * b0);
-    PetscCall(PetscInfo(m, "Newton step by the kept inverse: %" PetscInt_FMT " rows differ of %" PetscInt_FMT " active, residual %g of the right side%s\n", lr.k, kA[1], (double)(b0 > 0 ? r0 / b0 : 0), *done ? "" : ": the direct solve instead"));
+    PetscCall(PetscInfo(m, "Newton step by the kept inverse: %" PetscInt_FMT " rows differ of %" PetscInt_FMT " active, residual %g of the right side after %" PetscInt_FMT " refinements%s\n", lr.k, kA[1], (double)(b0 > 0 ? r0 / b0 : 0), refined, *done ? "" : ": the direct solve instead"));
   } else PetscCall(PetscInfo(m, "Newton step by the kept inverse: its %" PetscInt_FMT " x %" PetscInt_FMT " correction singular, the direct solve instead\n", lr.k, lr.k));
   if (*done) nt->lowranks++;
+  nt->wdr_of_dr = (PetscBool)(*done && wdr_valid); /* the residual's W dr serves the line search */
   PetscCall(VecDestroy(&b));
   PetscCall(VecDestroy(&res));
   PetscCall(VecDestroy(&dx));
   PetscCall(VecScatterDestroy(&lr.gather));
   PetscCall(VecDestroy(&lr.seq));
+  PetscCall(VecScatterDestroy(&lr.toall));
+  PetscCall(VecDestroy(&lr.all));
+  PetscCall(VecDestroy(&lr.wc));
+  PetscCall(MatDestroy(&lr.Wc));
   PetscCall(ISDestroy(&lr.is));
   PetscCall(PetscFree2(lr.M, lr.piv));
   PetscCall(PetscFree2(lr.row, lr.pq));
