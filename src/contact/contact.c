@@ -23,6 +23,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->penetration_tol   = -0.05;
   c->check_penetration = PETSC_TRUE;
   c->interference_tol  = -1e-4;
+  c->slide_limit       = 0.2;
   PetscCall(PetscCalloc1(c->ncouples, &c->couples));
   for (PetscInt i = 0; i < c->ncouples; i++) {
     c->couples[i].k  = scene->couples[i].k;
@@ -42,6 +43,14 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_hysteresis", "A master node keeps the slave face of the pairs H was built for while its projection lies on that face or within this fraction of an edge beyond it, the two faces on one smooth surface (0: the best face at every search)", "MBCContactSetFromOptions", c->hysteresis, &c->hysteresis, NULL));
+  {
+    const char *const slidings[] = {"finite", "small", "MBCContactSliding", "", NULL};
+    PetscInt          sliding    = c->small_sliding;
+    PetscCall(PetscOptionsEList("-mbc_contact_sliding", "finite: a search at every step; small: the pairs, weights and frames of a search kept, the gaps moved by the motion since (until a new stage, step size or -mbc_contact_slide_repair)", "MBCContactSetFromOptions", slidings, 2, slidings[sliding], &sliding, NULL));
+    c->small_sliding = (PetscBool)(sliding == 1);
+  }
+  PetscCall(PetscOptionsReal("-mbc_contact_slide_limit", "Small sliding: a point that slid more than this fraction of its slave face's shortest edge since its pairs were fixed is reported", "MBCContactSetFromOptions", c->slide_limit, &c->slide_limit, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_slide_repair", "Small sliding: search again when a point slid beyond -mbc_contact_slide_limit, instead of reporting it", "MBCContactSetFromOptions", c->slide_repair, &c->slide_repair, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_check_search", "After every search, pair every master node with every slave face by brute force and stop at a pair the search missed (debug)", "MBCContactSetFromOptions", c->check, &c->check, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_integrate", "Average each point's gap over its master node's share of the surface (else collocate at the node, as the paper)", "MBCContactSetFromOptions", c->integrate, &c->integrate, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_quadrature", "Gauss points per direction on a master face for -mbc_contact_integrate", "MBCContactSetFromOptions", c->nquad, &c->nquad, NULL));
@@ -70,6 +79,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCheck(c->adjust >= 0 && !PetscIsInfOrNanReal(c->adjust), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_adjust %g must be finite and not negative (a distance; 0: off)", (double)c->adjust);
   PetscCheck(!PetscIsInfOrNanReal(c->interference_tol), c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_interference_tol %g must be finite", (double)c->interference_tol);
   PetscCheck(c->hysteresis >= 0 && c->hysteresis <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_hysteresis %g must lie in [0, 0.5] (a fraction of an edge's length)", (double)c->hysteresis);
+  PetscCheck(c->slide_limit > 0 && c->slide_limit < PETSC_MAX_REAL, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_slide_limit %g must be positive and finite (a fraction of an edge's length)", (double)c->slide_limit);
   PetscCheck(c->extension >= 0 && c->extension <= 0.5, c->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_contact_extension %g must lie in [0, 0.5]", (double)c->extension);
   PetscFunctionReturn(0);
 }
@@ -448,11 +458,26 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
 {
   PetscReal *rec = NULL, moved = 0;
   PetscInt   nrec = 0;
-  PetscBool  global = (PetscBool)(force || c->nsearches == 0);
+  PetscBool  global;
 
   PetscFunctionBegin;
   if (!c->reference_done) PetscCall(ContactReference(c, nbodies, bodies));
   PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
+  if (c->small_sliding && c->frozen && !force) {
+    PetscBool repair;
+    for (PetscInt i = 0; i < c->ncouples; i++) {
+      PetscCall(SurfaceFromRecords(&c->couples[i].master, rec, nrec, i, 0));
+      PetscCall(SurfaceFromRecords(&c->couples[i].slave, rec, nrec, i, 1));
+    }
+    PetscCall(MBCContactSlidingUpdate(c, &repair));
+    if (!repair) {
+      PetscCall(PetscFree(rec));
+      if (researched) *researched = PETSC_FALSE;
+      if (c->dump[0]) PetscCall(MBCContactDump(c));
+      PetscFunctionReturn(0);
+    }
+  }
+  global = (PetscBool)(force || c->nsearches == 0 || c->small_sliding); /* small sliding: every search global, so that a restart's replay of the last one restores its reference */
   for (PetscInt b = 0; b < nbodies && !global; b++) { /* largest displacement since the last search */
     PetscReal d = 0;
     if (!bodies[b] || !bodies[b]->u || !c->usearch[b]) continue;
@@ -493,6 +518,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
       PetscCall(VecCopy(bodies[b]->u, c->usearch[b]));
     }
   }
+  if (c->small_sliding) PetscCall(MBCContactSlidingFreeze(c));
   if (researched) *researched = global;
   if (c->dump[0]) PetscCall(MBCContactDump(c));
   PetscFunctionReturn(0);
@@ -525,6 +551,7 @@ PetscErrorCode MBCContactView(MBCContact c, PetscViewer viewer)
 PetscErrorCode MBCContactSetPreferredFaces(MBCContact c, PetscInt n, const PetscInt pairs[], PetscInt size)
 {
   PetscFunctionBegin;
+  PetscCall(MBCContactSlidingReset(c)); /* small sliding: the reference is the search that finds these pairs again */
   for (PetscInt i = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
     if (cp->nprefer < cp->master.nnodes) {
@@ -598,6 +625,7 @@ PetscErrorCode MBCContactDestroy(MBCContact *contact)
     PetscCall(MBCCoupleIntegrateReset(&c->couples[i]));
     PetscCall(PetscFree2(c->couples[i].g0n, c->couples[i].g0i));
     PetscCall(PetscFree(c->couples[i].exclude));
+    PetscCall(MBCCoupleSlidingDestroy(&c->couples[i]));
   }
   for (PetscInt b = 0; b < c->scene->nbodies; b++) PetscCall(VecDestroy(&c->usearch[b]));
   PetscCall(PetscFree(c->usearch));

@@ -491,6 +491,7 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   }
   s->static_stabilized = stabilized;
   s->static_floating   = floating;
+  if (!s->restarting) PetscCall(MBCContactSlidingReset(s->contact)); /* small sliding: pairs fixed per stage */
   if (s->restarting) { } /* H and D come with the checkpoint's state */
   else if (s->istage == 0) PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   else if (s->iface) PetscCall(MBCInterfaceRebuildD(s->iface)); /* D of K, H as the stage before left it */
@@ -731,6 +732,7 @@ static PetscErrorCode SolverDynamicUseLevel(MBCSolver s, PetscInt level)
     if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], level, c));
   s->level       = level;
   s->force_build = PETSC_TRUE;
+  PetscCall(MBCContactSlidingReset(s->contact)); /* another step: pairs fixed for it afresh */
   PetscCall(SolverContact(s));
   PetscFunctionReturn(0);
 }
@@ -789,6 +791,7 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
     PetscCall(BodyUseLevel(body, 0, Newmark(s, dt)));
   }
   s->level = s->start_level = s->good_steps = 0;
+  if (!s->restarting) PetscCall(MBCContactSlidingReset(s->contact)); /* small sliding: pairs fixed per stage */
   if (s->iface) {
     PetscCall(MBCInterfaceRebuildD(s->iface));
     PetscCall(MBCInterfaceMultipliersToBodies(s->iface));

@@ -62,6 +62,10 @@ typedef struct {
      the whole run (a strain-free adjustment of the initial geometry); NULL without the option */
   PetscReal *g0n, *g0i;
   PetscInt   nexclude, *exclude; /* master nodes taken out of contact (the scene's `exclude`): (body, first global row), sorted */
+  /* -mbc_contact_sliding small (contactsliding.c): the nodes' coordinates and the points' gaps at
+     the search the pairs were fixed at, and per point the slide beyond which it is reported */
+  PetscReal *xref_m, *xref_s, *gref, *igref, *slide_max;
+  PetscInt   nref_m, nref_s, nref_p;
 } MBCCouple;
 
 /* Is master node v of c taken out of contact? */
@@ -101,6 +105,10 @@ struct _n_MBCContact {
   PetscBool  reference_done;      /* the reference-geometry pass (interference check, adjustment) is done */
   PetscBool  keep_penetration; /* -mbc_contact_keep_penetration: a dynamic step starts from max(gap, 0) */
   Vec       *usearch;       /* per body: displacement at the last global search (NULL off the body) */
+  PetscBool  small_sliding; /* -mbc_contact_sliding small: pairs, weights and frames fixed at a search, gaps linear in the motion since */
+  PetscReal  slide_limit;   /* -mbc_contact_slide_limit: a point sliding more than this fraction of its slave face's shortest edge is reported */
+  PetscBool  slide_repair;  /* -mbc_contact_slide_repair: and searched again instead */
+  PetscBool  frozen;        /* small sliding: the references hold (else the next update searches) */
 };
 
 PETSC_EXTERN PetscLogEvent MBC_RankWait, MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch, MBC_ContactIntegrate;
@@ -113,6 +121,10 @@ PETSC_INTERN PetscErrorCode MBCContactDump(MBCContact);
 PETSC_INTERN PetscErrorCode MBCContactDestroy(MBCContact *);
 PETSC_INTERN PetscErrorCode MBCContactSetPreferredFaces(MBCContact, PetscInt, const PetscInt[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCContactSetExcluded(MBCContact, PetscInt, PetscInt, const PetscInt[]);
+PETSC_INTERN PetscErrorCode MBCContactSlidingFreeze(MBCContact);
+PETSC_INTERN PetscErrorCode MBCContactSlidingUpdate(MBCContact, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCContactSlidingReset(MBCContact);
+PETSC_INTERN PetscErrorCode MBCCoupleSlidingDestroy(MBCCouple *);
 
 /* the search on gathered surfaces (no MPI): contactsearch.c */
 PETSC_EXTERN PetscErrorCode MBCSurfaceSetUp(MBCSurface *);
