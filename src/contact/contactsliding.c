@@ -76,14 +76,14 @@ PetscErrorCode MBCContactSlidingUpdate(MBCContact c, PetscBool *repair)
         for (PetscInt e = 0; e < 3; e++) d[e] += cp->mw[l] * (m->x[3 * cp->mnode[l] + e] - cp->xref_m[3 * cp->mnode[l] + e]);
       for (PetscInt l = cp->soff[k]; l < cp->soff[k + 1]; l++)
         for (PetscInt e = 0; e < 3; e++) d[e] -= cp->sw[l] * (sl->x[3 * cp->snode[l] + e] - cp->xref_s[3 * cp->snode[l] + e]);
-      cp->igap[k] = cp->igref[k] + MBCDot(d, p->n);
+      dg          = MBCDot(d, p->n);
+      cp->igap[k] = cp->igref[k] + dg;
       for (PetscInt e = 0; e < 3; e++) dn[e] = m->x[3 * p->master + e] - cp->xref_m[3 * p->master + e];
       for (PetscInt j = 0; j < p->nv; j++) {
         const PetscInt v = sl->fnode[MBC_MAX_FACE_NODES * p->face + j];
         for (PetscInt e = 0; e < 3; e++) dn[e] -= p->w[j] * (sl->x[3 * v + e] - cp->xref_s[3 * v + e]);
       }
       p->gap = cp->gref[k] + MBCDot(dn, p->n);
-      dg     = MBCDot(d, p->n);
       slide  = PetscSqrtReal(PetscMax(0, MBCDot(d, d) - dg * dg));
       if (slide > cp->slide_max[k]) {
         nbeyond++;

@@ -491,9 +491,9 @@ static PetscErrorCode SolverStaticBegin(MBCSolver s)
   }
   s->static_stabilized = stabilized;
   s->static_floating   = floating;
-  if (!s->restarting) PetscCall(MBCContactSlidingReset(s->contact)); /* small sliding: pairs fixed per stage */
-  if (s->restarting) { } /* H and D come with the checkpoint's state */
-  else if (s->istage == 0) PetscCall(SolverContact(s)); /* D of the initial contact pairs */
+  if (s->restarting) PetscFunctionReturn(0); /* H and D come with the checkpoint's state */
+  PetscCall(MBCContactSlidingReset(s->contact)); /* small sliding: pairs fixed per stage */
+  if (s->istage == 0) PetscCall(SolverContact(s)); /* D of the initial contact pairs */
   else if (s->iface) PetscCall(MBCInterfaceRebuildD(s->iface)); /* D of K, H as the stage before left it */
   PetscFunctionReturn(0);
 }

@@ -71,6 +71,24 @@ static PetscErrorCode DenseRelayout(Mat A, PetscInt nl, Mat *B)
   PetscFunctionReturn(0);
 }
 
+/* W's rows `rows` (global, the same on every rank), dense on every rank: W is most of the time
+   more than half full, and dense products run at BLAS's speed */
+static PetscErrorCode WRowsDense(Mat W, IS rows, Mat *D)
+{
+  PetscInt N;
+  IS       isall;
+  Mat     *sub;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(W, &N, NULL));
+  PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
+  PetscCall(MatCreateSubMatrices(W, 1, &rows, &isall, MAT_INITIAL_MATRIX, &sub));
+  PetscCall(MatConvert(sub[0], MATSEQDENSE, MAT_INITIAL_MATRIX, D));
+  PetscCall(MatDestroySubMatrices(1, &sub));
+  PetscCall(ISDestroy(&isall));
+  PetscFunctionReturn(0);
+}
+
 /* (W Z)_O, the rows of W Z on the contacts separated in the reference, on every rank: M's rows of
    the contacts closed since need (W Z)_{pC}, and a product W_{p:} Z_{:C} at every step cost more
    than the step (k ~ 1 500 of 3 384 rows in the 49k dam's strong shaking). W_O's columns of this
@@ -82,8 +100,8 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
   PetscInt            N, rs, re, nl, nloc = 0, *orow, lda, ldo;
   PetscMPIInt         size, *cnt, *dsp, kl;
-  IS                  isO, isall;
-  Mat                *wo, wod;
+  IS                  isO;
+  Mat                 wod;
   const PetscScalar  *z, *w;
   PetscBLASInt        bO, bN, bnl, blda, bldo;
   PetscScalar         one = 1, zero = 0;
@@ -118,10 +136,7 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
     PetscCall(ISDestroy(&isO));
     PetscFunctionReturn(0);
   }
-  PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
-  PetscCall(MatCreateSubMatrices(fp->W, 1, &isO, &isall, MAT_INITIAL_MATRIX, &wo));
-  PetscCall(MatConvert(wo[0], MATSEQDENSE, MAT_INITIAL_MATRIX, &wod));
-  PetscCall(MatDestroySubMatrices(1, &wo));
+  PetscCall(WRowsDense(fp->W, isO, &wod));
   PetscCall(MatDenseGetArrayRead(wod, &w));
   PetscCall(MatDenseGetLDA(wod, &ldo));
   PetscCall(MatDenseGetArrayRead(nt->Z, &z));
@@ -143,7 +158,6 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, nt->WZ, n, MPIU_SCALAR, MPIU_SUM, comm));
   }
   PetscCall(ISDestroy(&isO));
-  PetscCall(ISDestroy(&isall));
   PetscFunctionReturn(0);
 }
 
@@ -417,25 +431,19 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
 
 /* M = I + U^T Z E_C, factored on every rank: Z_CC gathered; (W Z)_CC from J_ref Z = I on the
    rows of contacts sticking in the reference, from (W Z)_O (NewtonLowRankWZ) on the others'
-   (closed since). Also W's rows C, dense (W is most of the time more than half full), for U^T. */
+   (closed since). Also W's rows C (WRowsDense), for U^T. */
 static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLASInt *info)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp = m->fp;
   const PetscScalar  *z;
-  PetscInt            lda, N;
-  Mat                *zcc, *wr;
-  IS                  isall;
+  PetscInt            lda;
+  Mat                *zcc;
   PetscBLASInt        kb;
 
   PetscFunctionBegin;
-  PetscCall(MatGetSize(fp->W, &N, NULL));
   PetscCall(MatCreateSubMatrices(nt->Z, 1, &lr->is, &lr->is, MAT_INITIAL_MATRIX, &zcc));
-  PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
-  PetscCall(MatCreateSubMatrices(fp->W, 1, &lr->is, &isall, MAT_INITIAL_MATRIX, &wr));
-  PetscCall(MatConvert(wr[0], MATSEQDENSE, MAT_INITIAL_MATRIX, &lr->Wc));
-  PetscCall(MatDestroySubMatrices(1, &wr));
-  PetscCall(ISDestroy(&isall));
+  PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
   PetscCall(MatDenseGetArrayRead(zcc[0], &z));
   PetscCall(MatDenseGetLDA(zcc[0], &lda));
   PetscCall(PetscMalloc2(lr->k * lr->k, &lr->M, lr->k, &lr->piv));
