@@ -6,7 +6,7 @@ earthquake stage starts in its strong phase; the run stops after --steps steps o
 
 Per size: DOFs, contact points, the earthquake stage's wall time per step, and per step the
 bodies' solves (MBCBodySolve), D (MBCFlexibilityAssemble) with its number of builds in the stage,
-the multiplier solve (MBCMultiplierSolve) with its dense LU factorizations (MatLUFactor; the
+the multiplier solve (MBCMultiplierSolve) with its dense LU factorizations (MatLUFactor, MBCMixedLUFactor; the
 step time and the multiplier solve leave out the Newton type's kept inverse, built once while W
 holds, MBCNewtonInverse, shown apart as "inverse"), the
 mortar integration and the search (MBCContactIntegrate; MBCContactGather + MBCGlobalSearch +
@@ -42,7 +42,7 @@ from mbcontact import results  # noqa: E402
 
 SOLVER = os.path.join(os.environ.get("MBC_BUILD_DIR", os.path.join(ROOT, "build")), "mbcontact")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
-EVENTS = {"solves": "MBCBodySolve", "D": "MBCFlexibilityAssemble", "mult": "MBCMultiplierSolve", "LU": "MatLUFactor", "inv": "MBCNewtonInverse",
+EVENTS = {"solves": "MBCBodySolve", "D": "MBCFlexibilityAssemble", "mult": "MBCMultiplierSolve", "LU": ("MatLUFactor", "MBCMixedLUFactor"), "inv": "MBCNewtonInverse",
           "integ": "MBCContactIntegrate", "search": ("MBCContactGather", "MBCGlobalSearch", "MBCLocalSearch")}
 INTERFACE = ("D", "mult", "integ", "search")
 DT = 0.01  # the builder's staged time step

@@ -5,7 +5,7 @@
    the Newton steps). */
 #pragma once
 
-#include <petscmat.h>
+#include <petscksp.h>
 
 typedef struct _p_MBCMultiplier *MBCMultiplier;
 typedef struct _n_MBCFrictionProblem MBCFrictionProblem;
@@ -28,6 +28,13 @@ PETSC_EXTERN PetscFunctionList MBCMultiplierList;
 PETSC_EXTERN PetscLogEvent MBC_MultiplierSolve, MBC_MultiplierSetUp;
 
 PETSC_EXTERN PetscErrorCode MBCMultiplierInitializePackage(void);
+
+/* The Newton type's dense LU on one rank: single precision refined in double (src/pc/mixedlu.c);
+   -mbc_newton_dense_pc_type lu gives LAPACK's double LU */
+#define PCMBCMIXEDLU "mbcmixedlu"
+PETSC_EXTERN PetscErrorCode PCCreate_MBCMixedLU(PC);
+PETSC_EXTERN PetscLogEvent  MBC_MixedLUFactor;
+PETSC_EXTERN PetscErrorCode PCMBCMixedLUGetCounts(PC, PetscInt *, PetscInt *, PetscInt *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierRegister(const char[], PetscErrorCode (*)(MBCMultiplier));
 PETSC_EXTERN PetscErrorCode MBCMultiplierCreate(MPI_Comm, MBCMultiplier *);
 PETSC_EXTERN PetscErrorCode MBCMultiplierSetType(MBCMultiplier, MBCMultiplierType);

@@ -34,6 +34,8 @@ PetscErrorCode MBCMultiplierInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCMultiplierSolve", MBC_MULTIPLIER_CLASSID, &MBC_MultiplierSolve));
   PetscCall(PetscLogEventRegister("MBCNewtonInverse", MBC_MULTIPLIER_CLASSID, &MBC_NewtonInverse));
   PetscCall(PetscLogEventRegister("MBCNewtonLowRank", MBC_MULTIPLIER_CLASSID, &MBC_NewtonLowRank));
+  PetscCall(PetscLogEventRegister("MBCMixedLUFactor", MBC_MULTIPLIER_CLASSID, &MBC_MixedLUFactor));
+  PetscCall(PCRegister(PCMBCMIXEDLU, PCCreate_MBCMixedLU));
   PetscCall(MBCMultiplierRegister(MBCMULTIPLIERPGS, MBCMultiplierCreate_PGS));
   PetscCall(MBCMultiplierRegister(MBCMULTIPLIERNEWTON, MBCMultiplierCreate_Newton));
   PetscCall(PetscRegisterFinalize(MBCMultiplierFinalizePackage));

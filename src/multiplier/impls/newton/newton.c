@@ -123,9 +123,9 @@ static PetscErrorCode NewtonFactor(MBCMultiplier m, KSP ksp, PetscBool *failed)
   PetscFunctionReturn(0);
 }
 
-/* x = J^-1 b by the kept factor, then up to two steps of iterative refinement against the shift
-   and the factor's rounding: the static saddle-point systems (free bodies) are conditioned enough
-   that a plain solve floored the merit near 1e-8. b and x hold each rank's active rows; ScaLAPACK's
+/* x = J^-1 b by the kept factor, then (unless its PC refines, PCMBCMIXEDLU) up to two steps of
+   iterative refinement against the factor's rounding: the static saddle-point systems (free
+   bodies) are conditioned enough that a plain solve floored the merit near 1e-8. b and x hold each rank's active rows; ScaLAPACK's
    J has equal rows per rank, so there the solve runs in J's layout. */
 static PetscErrorCode NewtonLUSolve(KSP klu, Vec b, Vec x, KSPConvergedReason *reason)
 {
@@ -135,6 +135,7 @@ static PetscErrorCode NewtonLUSolve(KSP klu, Vec b, Vec x, KSPConvergedReason *r
   PetscInt    nj, nb;
   PetscMPIInt differ;
   PetscReal   r0, r1;
+  PetscBool   refined; /* the PC refines its solves itself */
 
   PetscFunctionBegin;
   PetscCall(KSPGetOperators(klu, &J, NULL));
@@ -155,7 +156,12 @@ static PetscErrorCode NewtonLUSolve(KSP klu, Vec b, Vec x, KSPConvergedReason *r
   }
   PetscCall(KSPSolve(klu, bj, xj));
   PetscCall(KSPGetConvergedReason(klu, reason));
-  if (*reason >= 0) {
+  {
+    PC pc;
+    PetscCall(KSPGetPC(klu, &pc));
+    PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCMBCMIXEDLU, &refined));
+  }
+  if (*reason >= 0 && !refined) {
     PetscCall(VecDuplicate(bj, &res));
     PetscCall(VecDuplicate(bj, &dx));
     PetscCall(MatMult(J, xj, res));
@@ -819,7 +825,7 @@ static PetscErrorCode MBCMultiplierView_Newton(MBCMultiplier m, PetscViewer view
 }
 
 /* A direct solve of the Newton matrix, options prefix <m's prefix><name>: PREONLY and an LU by the
-   package solver, under PCREDUNDANT when every rank factors the whole matrix */
+   package solver (NULL: PCMBCMIXEDLU), under PCREDUNDANT when every rank factors the whole matrix */
 static PetscErrorCode NewtonLUCreate(MBCMultiplier m, const char name[], PetscBool redundant, MatSolverType solver, KSP *ksp)
 {
   const char *prefix;
@@ -840,8 +846,10 @@ static PetscErrorCode NewtonLUCreate(MBCMultiplier m, const char name[], PetscBo
     PetscCall(KSPSetType(inner, KSPPREONLY));
     PetscCall(KSPGetPC(inner, &pc));
   }
-  PetscCall(PCSetType(pc, PCLU));
-  PetscCall(PCFactorSetMatSolverType(pc, solver));
+  if (solver) {
+    PetscCall(PCSetType(pc, PCLU));
+    PetscCall(PCFactorSetMatSolverType(pc, solver));
+  } else PetscCall(PCSetType(pc, PCMBCMIXEDLU));
   PetscCall(KSPSetErrorIfNotConverged(*ksp, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
@@ -882,7 +890,9 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   /* the dense LU: on several ranks ScaLAPACK's, 4 x faster at n = 3000 on 2 ranks than every rank
      factoring the whole matrix (PCREDUNDANT), and it holds the matrix once, not per rank */
   nt->densetype = size > 1 && scalapack ? MATSCALAPACK : MATDENSE;
-  PetscCall(NewtonLUCreate(m, "newton_dense_", size > 1 && !scalapack, size > 1 && scalapack ? MATSOLVERSCALAPACK : MATSOLVERPETSC, &nt->kdense));
+  /* on one rank single precision's LU refined in double: half the time of LAPACK's double LU,
+     double's accuracy (src/pc/mixedlu.c) */
+  PetscCall(NewtonLUCreate(m, "newton_dense_", size > 1 && !scalapack, size > 1 ? (scalapack ? MATSOLVERSCALAPACK : MATSOLVERPETSC) : NULL, &nt->kdense));
   { /* the steps with a matrix-free W: right-preconditioned GMRES, so its residual is J's own; 1e-4
        leaves the outer iteration linear convergence at that rate near the solution */
     PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_mf_", prefix ? prefix : ""));

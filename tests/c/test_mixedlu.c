@@ -1,0 +1,161 @@
+/* PCMBCMIXEDLU (single-precision LU refined in double) against LAPACK's double LU (PCLU): the same
+   backward error, LAPACK dsgesv's ||b - J x||_inf <= ||x||_inf ||J||_inf eps sqrt(n), on a
+   well-conditioned matrix through refinement alone; a matrix with cond 1e10 (> 1/eps_single:
+   the refinement cannot converge) and one out of single precision's range are factored in double
+   and solved as accurately as PCLU; a singular matrix is a zero-pivot error, a sparse one refused. */
+#include <mbcmultiplier.h>
+
+#define N 240
+
+/* J = Q1 diag(s) Q2 with Householder reflections Q (orthogonal): cond_2(J) = s_max / s_min */
+static PetscErrorCode Conditioned(PetscRandom rnd, PetscReal cond, PetscReal scale, Mat *J)
+{
+  PetscReal    v[N], w[N], vv = 0, ww = 0, s[N], *a;
+  PetscScalar *x;
+
+  PetscFunctionBegin;
+  for (int i = 0; i < N; i++) {
+    PetscCall(PetscRandomGetValueReal(rnd, &v[i]));
+    PetscCall(PetscRandomGetValueReal(rnd, &w[i]));
+    vv += v[i] * v[i], ww += w[i] * w[i];
+    s[i] = scale * PetscPowReal(cond, -(PetscReal)i / (N - 1));
+  }
+  PetscCall(PetscMalloc1(N * N, &a));
+  for (int i = 0; i < N; i++) /* a = (I - 2 v v^T / vv) diag(s) (I - 2 w w^T / ww) */
+    for (int j = 0; j < N; j++) {
+      PetscReal t = 0;
+      for (int k = 0; k < N; k++) t += ((i == k) - 2 * v[i] * v[k] / vv) * s[k] * ((k == j) - 2 * w[k] * w[j] / ww);
+      a[i + N * j] = t;
+    }
+  PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, N, N, NULL, J));
+  PetscCall(MatDenseGetArrayWrite(*J, &x));
+  for (int k = 0; k < N * N; k++) x[k] = a[k];
+  PetscCall(MatDenseRestoreArrayWrite(*J, &x));
+  PetscCall(MatAssemblyBegin(*J, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*J, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree(a));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode Solve(Mat J, PCType type, Vec b, Vec x, PetscInt counts[3])
+{
+  KSP ksp;
+  PC  pc;
+
+  PetscFunctionBegin;
+  PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
+  PetscCall(KSPSetType(ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCSetType(pc, type));
+  PetscCall(KSPSetOperators(ksp, J, J));
+  PetscCall(KSPSolve(ksp, b, x));
+  if (counts) PetscCall(PCMBCMixedLUGetCounts(pc, &counts[0], &counts[1], &counts[2]));
+  PetscCall(KSPDestroy(&ksp));
+  PetscFunctionReturn(0);
+}
+
+/* ||b - J x||_inf / (||J||_inf ||x||_inf) in units of eps sqrt(n) */
+static PetscErrorCode Backward(Mat J, Vec b, Vec x, PetscReal *e)
+{
+  Vec       r;
+  PetscReal rn, xn, jn;
+
+  PetscFunctionBegin;
+  PetscCall(VecDuplicate(b, &r));
+  PetscCall(MatMult(J, x, r));
+  PetscCall(VecAYPX(r, -1.0, b));
+  PetscCall(VecNorm(r, NORM_INFINITY, &rn));
+  PetscCall(VecNorm(x, NORM_INFINITY, &xn));
+  PetscCall(MatNorm(J, NORM_INFINITY, &jn));
+  *e = rn / (jn * xn) / (PETSC_MACHINE_EPSILON * PetscSqrtReal(N));
+  PetscCall(VecDestroy(&r));
+  PetscFunctionReturn(0);
+}
+
+int main(int argc, char **argv)
+{
+  PetscRandom rnd;
+  Vec         b, x, xlu;
+  const struct {
+    PetscReal cond, scale;
+    PetscInt  doubles;
+    const char *what;
+  } cases[] = {
+    {1e2, 1, 0, "cond 1e2"}, {1e5, 1e-3, 0, "cond 1e5"}, {1e10, 1, 1, "cond 1e10"}, {1e2, 1e40, 1, "entries 1e40"},
+  };
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
+  PetscCall(MBCMultiplierInitializePackage());
+  PetscCall(PetscRandomCreate(PETSC_COMM_SELF, &rnd));
+  PetscCall(PetscRandomSetInterval(rnd, -1, 1));
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, N, &b));
+  PetscCall(VecDuplicate(b, &x));
+  PetscCall(VecDuplicate(b, &xlu));
+  for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
+    Mat       J;
+    PetscInt  counts[3];
+    PetscReal e, elu, dx, nx;
+    PetscCall(Conditioned(rnd, cases[c].cond, cases[c].scale, &J));
+    PetscCall(VecSetRandom(b, rnd));
+    PetscCall(Solve(J, PCMBCMIXEDLU, b, x, counts));
+    PetscCall(Solve(J, PCLU, b, xlu, NULL));
+    PetscCall(Backward(J, b, x, &e));
+    PetscCall(Backward(J, b, xlu, &elu));
+    PetscCall(VecAXPY(xlu, -1.0, x));
+    PetscCall(VecNorm(xlu, NORM_INFINITY, &dx));
+    PetscCall(VecNorm(x, NORM_INFINITY, &nx));
+    PetscCall(PetscPrintf(PETSC_COMM_SELF, "%-13s backward error %.3g (PCLU %.3g) eps sqrt(n), |x - x_LU| / |x| %.3g, %" PetscInt_FMT " refinement steps, %" PetscInt_FMT " factors in double\n", cases[c].what, (double)e, (double)elu, (double)(dx / nx), counts[1], counts[2]));
+    PetscCheck(e <= 1 && e <= PetscMax(10 * elu, 0.1), PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: backward error %g eps sqrt(n) (PCLU's %g)", cases[c].what, (double)e, (double)elu);
+    PetscCheck(counts[2] == cases[c].doubles, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: %" PetscInt_FMT " factors in double, expected %" PetscInt_FMT, cases[c].what, counts[2], cases[c].doubles);
+    /* in single precision the first solve alone is at eps_single: refinement happened */
+    PetscCheck(cases[c].doubles || counts[1] >= 2, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: %" PetscInt_FMT " refinement steps", cases[c].what, counts[1]);
+    /* the forward errors of two backward-stable solves differ by at most ~cond eps */
+    PetscCheck(dx <= 100 * cases[c].cond * PETSC_MACHINE_EPSILON * nx, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: |x - x_LU| / |x| = %g", cases[c].what, (double)(dx / nx));
+    PetscCall(MatDestroy(&J));
+  }
+  { /* singular: a zero column is a zero pivot, reported as such */
+    Mat            J;
+    KSP            ksp;
+    PC             pc;
+    PetscErrorCode ierr;
+    PetscCall(Conditioned(rnd, 10, 1, &J));
+    PetscCall(MatZeroRowsColumns(J, 1, (PetscInt[]){7}, 0.0, NULL, NULL));
+    PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
+    PetscCall(KSPSetType(ksp, KSPPREONLY));
+    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(PCSetType(pc, PCMBCMIXEDLU));
+    PetscCall(KSPSetOperators(ksp, J, J));
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    ierr = KSPSetUp(ksp);
+    PetscCall(PetscPopErrorHandler());
+    PetscCheck(ierr == PETSC_ERR_MAT_LU_ZRPVT, PETSC_COMM_SELF, PETSC_ERR_PLIB, "singular matrix: error %d, expected a zero pivot (%d)", (int)ierr, (int)PETSC_ERR_MAT_LU_ZRPVT);
+    PetscCall(KSPDestroy(&ksp));
+    PetscCall(MatDestroy(&J));
+  }
+  { /* a sparse matrix is refused */
+    Mat            A;
+    KSP            ksp;
+    PC             pc;
+    PetscErrorCode ierr;
+    PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, 4, 4, 1, NULL, &A));
+    for (PetscInt i = 0; i < 4; i++) PetscCall(MatSetValue(A, i, i, 1.0, INSERT_VALUES));
+    PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
+    PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
+    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(PCSetType(pc, PCMBCMIXEDLU));
+    PetscCall(KSPSetOperators(ksp, A, A));
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    ierr = KSPSetUp(ksp);
+    PetscCall(PetscPopErrorHandler());
+    PetscCheck(ierr == PETSC_ERR_SUP, PETSC_COMM_SELF, PETSC_ERR_PLIB, "sparse matrix: error %d, expected PETSC_ERR_SUP", (int)ierr);
+    PetscCall(KSPDestroy(&ksp));
+    PetscCall(MatDestroy(&A));
+  }
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&x));
+  PetscCall(VecDestroy(&xlu));
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(PetscFinalize());
+  return 0;
+}
