@@ -71,6 +71,25 @@ static PetscErrorCode DenseRelayout(Mat A, PetscInt nl, Mat *B)
   PetscFunctionReturn(0);
 }
 
+/* every rank's rows[0..nl) gathered on every rank, in rank order: *all (n of them, PetscFree) and
+   the counts and displacements of the gather (PetscFree2(*cnt, *dsp)) */
+static PetscErrorCode RowsAllGather(MPI_Comm comm, PetscInt nl, const PetscInt rows[], PetscInt *n, PetscInt **all, PetscMPIInt **cnt, PetscMPIInt **dsp)
+{
+  PetscMPIInt size, kl;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscMPIIntCast(nl, &kl));
+  PetscCall(PetscMalloc2(size, cnt, size + 1, dsp));
+  PetscCallMPI(MPI_Allgather(&kl, 1, MPI_INT, *cnt, 1, MPI_INT, comm));
+  (*dsp)[0] = 0;
+  for (PetscMPIInt p = 0; p < size; p++) (*dsp)[p + 1] = (*dsp)[p] + (*cnt)[p];
+  *n = (*dsp)[size];
+  PetscCall(PetscMalloc1(*n + 1, all));
+  PetscCallMPI(MPI_Allgatherv(rows, kl, MPIU_INT, *all, *cnt, *dsp, MPIU_INT, comm));
+  PetscFunctionReturn(0);
+}
+
 /* W's rows `rows` (global, the same on every rank), dense on every rank: W is most of the time
    more than half full, and dense products run at BLAS's speed */
 static PetscErrorCode WRowsDense(Mat W, IS rows, Mat *D)
@@ -99,7 +118,7 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
   PetscInt            N, rs, re, nl, nloc = 0, *orow, lda, ldo;
-  PetscMPIInt         size, *cnt, *dsp, kl;
+  PetscMPIInt         size, *cnt, *dsp;
   IS                  isO;
   Mat                 wod;
   const PetscScalar  *z, *w;
@@ -115,17 +134,10 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   for (PetscInt i = 0; i < fp->nc; i++)
     if (nt->refopen[i])
       for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) orow[nloc++] = rs + d;
-  PetscCall(PetscMalloc2(size, &cnt, size + 1, &dsp));
-  PetscCall(PetscMPIIntCast(nloc, &kl));
-  PetscCallMPI(MPI_Allgather(&kl, 1, MPI_INT, cnt, 1, MPI_INT, comm));
-  dsp[0] = 0;
-  for (PetscMPIInt p = 0; p < size; p++) dsp[p + 1] = dsp[p] + cnt[p];
-  nt->nO = dsp[size];
-  PetscCall(PetscMalloc2((size_t)nt->nO * N + 1, &nt->WZ, N + 1, &nt->oidx));
   {
     PetscInt *all;
-    PetscCall(PetscMalloc1(nt->nO + 1, &all));
-    PetscCallMPI(MPI_Allgatherv(orow, kl, MPIU_INT, all, cnt, dsp, MPIU_INT, comm));
+    PetscCall(RowsAllGather(comm, nloc, orow, &nt->nO, &all, &cnt, &dsp));
+    PetscCall(PetscMalloc2((size_t)nt->nO * N + 1, &nt->WZ, N + 1, &nt->oidx));
     for (PetscInt r = 0; r < N; r++) nt->oidx[r] = -1;
     for (PetscInt o = 0; o < nt->nO; o++) nt->oidx[all[o]] = o;
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nt->nO, all, PETSC_OWN_POINTER, &isO));
@@ -602,13 +614,8 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
     }
   }
   PetscCall(PetscMPIIntCast(nloc, &kl));
-  PetscCall(PetscMalloc2(size, &cnt, size + 1, &dsp));
-  PetscCallMPI(MPI_Allgather(&kl, 1, MPI_INT, cnt, 1, MPI_INT, comm));
-  dsp[0] = 0;
-  for (PetscMPIInt p = 0; p < size; p++) dsp[p + 1] = dsp[p] + cnt[p];
-  lr.k = dsp[size];
-  PetscCall(PetscMalloc2(lr.k + 1, &lr.row, LR_ROW * (lr.k + 1), &lr.pq));
-  PetscCallMPI(MPI_Allgatherv(lrow, kl, MPIU_INT, lr.row, cnt, dsp, MPIU_INT, comm));
+  PetscCall(RowsAllGather(comm, nloc, lrow, &lr.k, &lr.row, &cnt, &dsp));
+  PetscCall(PetscMalloc1(LR_ROW * (lr.k + 1), &lr.pq));
   for (PetscMPIInt p = 0; p < size; p++) cnt[p] *= LR_ROW, dsp[p] *= LR_ROW;
   PetscCallMPI(MPI_Allgatherv(lpq, LR_ROW * kl, MPIU_REAL, lr.pq, cnt, dsp, MPIU_REAL, comm));
   PetscCall(PetscFree2(cnt, dsp));
@@ -662,7 +669,8 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscCall(MatDestroy(&lr.Wc));
   PetscCall(ISDestroy(&lr.is));
   PetscCall(PetscFree2(lr.M, lr.piv));
-  PetscCall(PetscFree2(lr.row, lr.pq));
+  PetscCall(PetscFree(lr.row));
+  PetscCall(PetscFree(lr.pq));
   PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
   PetscFunctionReturn(0);
 }
