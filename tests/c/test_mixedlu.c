@@ -54,6 +54,25 @@ static PetscErrorCode Solve(Mat J, PCType type, Vec b, Vec x, PetscInt counts[3]
   PetscFunctionReturn(0);
 }
 
+/* the error PCMBCMIXEDLU's set-up on J returns */
+static PetscErrorCode SetUpError(Mat J, PetscErrorCode *ierr)
+{
+  KSP ksp;
+  PC  pc;
+
+  PetscFunctionBegin;
+  PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
+  PetscCall(KSPSetType(ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCSetType(pc, PCMBCMIXEDLU));
+  PetscCall(KSPSetOperators(ksp, J, J));
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  *ierr = KSPSetUp(ksp);
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(KSPDestroy(&ksp));
+  PetscFunctionReturn(0);
+}
+
 /* ||b - J x||_inf / (||J||_inf ||x||_inf) in units of eps sqrt(n) */
 static PetscErrorCode Backward(Mat J, Vec b, Vec x, PetscReal *e)
 {
@@ -115,41 +134,22 @@ int main(int argc, char **argv)
   }
   { /* singular: a zero column is a zero pivot, reported as such */
     Mat            J;
-    KSP            ksp;
-    PC             pc;
     PetscErrorCode ierr;
     PetscCall(Conditioned(rnd, 10, 1, &J));
     PetscCall(MatZeroRowsColumns(J, 1, (PetscInt[]){7}, 0.0, NULL, NULL));
-    PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
-    PetscCall(KSPSetType(ksp, KSPPREONLY));
-    PetscCall(KSPGetPC(ksp, &pc));
-    PetscCall(PCSetType(pc, PCMBCMIXEDLU));
-    PetscCall(KSPSetOperators(ksp, J, J));
-    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-    ierr = KSPSetUp(ksp);
-    PetscCall(PetscPopErrorHandler());
+    PetscCall(SetUpError(J, &ierr));
     PetscCheck(ierr == PETSC_ERR_MAT_LU_ZRPVT, PETSC_COMM_SELF, PETSC_ERR_PLIB, "singular matrix: error %d, expected a zero pivot (%d)", (int)ierr, (int)PETSC_ERR_MAT_LU_ZRPVT);
-    PetscCall(KSPDestroy(&ksp));
     PetscCall(MatDestroy(&J));
   }
   { /* a sparse matrix is refused */
     Mat            A;
-    KSP            ksp;
-    PC             pc;
     PetscErrorCode ierr;
     PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, 4, 4, 1, NULL, &A));
     for (PetscInt i = 0; i < 4; i++) PetscCall(MatSetValue(A, i, i, 1.0, INSERT_VALUES));
     PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
     PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
-    PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
-    PetscCall(KSPGetPC(ksp, &pc));
-    PetscCall(PCSetType(pc, PCMBCMIXEDLU));
-    PetscCall(KSPSetOperators(ksp, A, A));
-    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-    ierr = KSPSetUp(ksp);
-    PetscCall(PetscPopErrorHandler());
+    PetscCall(SetUpError(A, &ierr));
     PetscCheck(ierr == PETSC_ERR_SUP, PETSC_COMM_SELF, PETSC_ERR_PLIB, "sparse matrix: error %d, expected PETSC_ERR_SUP", (int)ierr);
-    PetscCall(KSPDestroy(&ksp));
     PetscCall(MatDestroy(&A));
   }
   PetscCall(VecDestroy(&b));
