@@ -37,17 +37,25 @@ static PetscErrorCode Conditioned(PetscRandom rnd, PetscReal cond, PetscReal sca
   PetscFunctionReturn(0);
 }
 
+/* a direct solve of J by the PC type */
+static PetscErrorCode DirectKSP(Mat J, PCType type, KSP *ksp, PC *pc)
+{
+  PetscFunctionBegin;
+  PetscCall(KSPCreate(PETSC_COMM_SELF, ksp));
+  PetscCall(KSPSetType(*ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(*ksp, pc));
+  PetscCall(PCSetType(*pc, type));
+  PetscCall(KSPSetOperators(*ksp, J, J));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode Solve(Mat J, PCType type, Vec b, Vec x, PetscInt counts[3])
 {
   KSP ksp;
   PC  pc;
 
   PetscFunctionBegin;
-  PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
-  PetscCall(KSPSetType(ksp, KSPPREONLY));
-  PetscCall(KSPGetPC(ksp, &pc));
-  PetscCall(PCSetType(pc, type));
-  PetscCall(KSPSetOperators(ksp, J, J));
+  PetscCall(DirectKSP(J, type, &ksp, &pc));
   PetscCall(KSPSolve(ksp, b, x));
   if (counts) PetscCall(PCMBCMixedLUGetCounts(pc, &counts[0], &counts[1], &counts[2]));
   PetscCall(KSPDestroy(&ksp));
@@ -61,11 +69,7 @@ static PetscErrorCode SetUpError(Mat J, PetscErrorCode *ierr)
   PC  pc;
 
   PetscFunctionBegin;
-  PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
-  PetscCall(KSPSetType(ksp, KSPPREONLY));
-  PetscCall(KSPGetPC(ksp, &pc));
-  PetscCall(PCSetType(pc, PCMBCMIXEDLU));
-  PetscCall(KSPSetOperators(ksp, J, J));
+  PetscCall(DirectKSP(J, PCMBCMIXEDLU, &ksp, &pc));
   PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
   *ierr = KSPSetUp(ksp);
   PetscCall(PetscPopErrorHandler());

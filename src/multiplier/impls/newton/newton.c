@@ -125,8 +125,9 @@ static PetscErrorCode NewtonFactor(MBCMultiplier m, KSP ksp, PetscBool *failed)
 
 /* x = J^-1 b by the kept factor, then (unless its PC refines, PCMBCMIXEDLU) up to two steps of
    iterative refinement against the factor's rounding: the static saddle-point systems (free
-   bodies) are conditioned enough that a plain solve floored the merit near 1e-8. b and x hold each rank's active rows; ScaLAPACK's
-   J has equal rows per rank, so there the solve runs in J's layout. */
+   bodies) are conditioned enough that a plain solve floored the merit near 1e-8. b and x hold
+   each rank's active rows; ScaLAPACK's J has equal rows per rank, so there the solve runs in J's
+   layout. */
 static PetscErrorCode NewtonLUSolve(KSP klu, Vec b, Vec x, KSPConvergedReason *reason)
 {
   Mat         J;
