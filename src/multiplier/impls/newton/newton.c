@@ -38,7 +38,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
     PetscReal       R[3] = {0, 0, 0}, U[3] = {0, 0, 0}, P[3], A[9] = {0}, B[9] = {0}, xn;
     for (PetscInt d = 0; d < dim; d++) R[d] = PetscRealPart(rv[o + d]), U[d] = PetscRealPart(uv[o + d]);
     xn = R[0] - rn * U[0];
-    if (jac) nt->sticks[i] = PETSC_FALSE;
+    if (jac) nt->sticks[i] = PETSC_FALSE, nt->nu[2 * i] = nt->nu[2 * i + 1] = 0;
     if (nt->frozen[o] || xn <= 0) { /* separated (or no flexibility along the normal): r = 0 */
       for (PetscInt d = 0; d < dim; d++) P[d] = R[d], A[4 * d] = 1;
       if (jac) nt->active[i] = PETSC_FALSE;
@@ -58,6 +58,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
         } else { /* slip: r_t = g nu, nu = xi_t / |xi_t| */
           const PetscReal nu[2] = {xt[0] / nrm, xt[1] / nrm}, sc = g / nrm;
           slip = PETSC_TRUE;
+          if (jac) nt->nu[2 * i] = nu[0], nt->nu[2 * i + 1] = nu[1];
           for (PetscInt a = 0; a < 2; a++) {
             P[1 + a] = R[1 + a] - g * nu[a];
             for (PetscInt b = 0; b < 2; b++) {
@@ -192,22 +193,63 @@ static PetscErrorCode NewtonLUSolve(KSP klu, Vec b, Vec x, KSPConvergedReason *r
   PetscFunctionReturn(0);
 }
 
+/* A slipping contact's rows of the Newton step: its tangential row along the slip direction nu,
+   less mu times its normal row, reads dr_nu - mu dr_n = c, c = mu phi_n - nu . phi_t, free of W
+   (the normal row is rho_n du_n, the nu row -mu dr_n + dr_nu + mu rho_n du_n). So dr_nu = mu dr_n
+   + c is eliminated: the contact keeps two unknowns y (dr_n, and dr_tau along tau, nu turned by
+   90 degrees), dr = T y + (0, c nu), and two rows L (the normal row, tau . the tangential rows).
+   The step is the same; its LU has two rows, not three, per slipping contact, where in an
+   earthquake's strong phase 40-80 % of the active contacts slip. */
+typedef struct {
+  PetscInt  n;       /* the contact's rows (and unknowns) in the Newton matrix */
+  PetscBool reduced; /* its slip row eliminated: n = 2, L and T hold */
+  PetscReal L[6];    /* 2 x 3, row-major */
+  PetscReal T[6];    /* 3 x 2, row-major */
+} NewtonFrame;
+
+static void NewtonContactFrame(const MBC_Newton *nt, const MBCFrictionProblem *fp, PetscBool eliminate, PetscInt i, NewtonFrame *f)
+{
+  const PetscInt   o = fp->off[i], dim = fp->off[i + 1] - o;
+  const PetscReal *nu = &nt->nu[2 * i];
+
+  f->n       = dim;
+  f->reduced = (PetscBool)(eliminate && dim == 3 && nt->active[i] && (nu[0] != 0 || nu[1] != 0) && !nt->frozen[o] && !nt->frozen[o + 1] && !nt->frozen[o + 2]);
+  if (f->reduced) {
+    const PetscReal mu = fp->mu[i], tau[2] = {-nu[1], nu[0]};
+    const PetscReal L[6] = {1, 0, 0, 0, tau[0], tau[1]}, T[6] = {1, 0, mu * nu[0], tau[0], mu * nu[1], tau[1]};
+    f->n = 2;
+    for (PetscInt k = 0; k < 6; k++) f->L[k] = L[k], f->T[k] = T[k];
+  }
+}
+
+static inline PetscReal FrameL(const NewtonFrame *f, PetscInt d, PetscInt e)
+{
+  return f->reduced ? f->L[3 * d + e] : (PetscReal)(d == e);
+}
+
+static inline PetscReal FrameT(const NewtonFrame *f, PetscInt e, PetscInt d)
+{
+  return f->reduced ? f->T[2 * e + d] : (PetscReal)(e == d);
+}
+
 /* The Newton step at the current iterate (A, B, active from ACResidual): dr on every row,
    dalpha with equilibrium constraints. Rows of separated contacts: dr = -phi = -r. The active
    rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
-   [B G_A^T; G_A 0] with constraints. J's rows: each rank's active rows in rank order, then
-   the rigid modes on the last rank. */
+   [B G_A^T; G_A 0] with constraints, each slipping contact in its frame (NewtonFrame). J's rows:
+   each rank's active contacts' rows in rank order, then the rigid modes on the last rank. */
 static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
 {
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
   PetscMPIInt         rank, size;
-  PetscInt            nA = 0, NA, rstart, ng = 0, nglocal = 0, gstart = 0, *rows, nloc, Nloc;
+  PetscInt            nA = 0, NA, astart = 0, nR = 0, NR, rstart = 0, ng = 0, nglocal = 0, gstart = 0, *rows, nloc, Nloc;
   IS                  isA;
   Vec                 b, x;
-  PetscBool           reuse = PETSC_FALSE, failed = PETSC_FALSE;
+  PetscBool           reuse = PETSC_FALSE, failed = PETSC_FALSE, eliminate;
   KSPConvergedReason  reason;
+  NewtonFrame        *fr;
+  PetscReal          *cnu; /* per contact: c of its eliminated row */
 
   PetscFunctionBegin;
   {
@@ -218,42 +260,60 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
   }
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCallMPI(MPI_Comm_size(comm, &size));
+  eliminate = (PetscBool)(nt->slip_eliminate && slips && !fp->Winv);
   PetscCall(PetscMalloc1(fp->off[fp->nc] + 1, &rows));
+  PetscCall(PetscMalloc2(fp->nc + 1, &fr, fp->nc + 1, &cnu));
   {
-    PetscInt rs;
+    PetscInt           rs;
+    const PetscScalar *pv;
     PetscCall(MatGetOwnershipRange(fp->W, &rs, NULL));
-    for (PetscInt i = 0; i < fp->nc; i++)
-      if (nt->active[i])
-        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) rows[nA++] = rs + d;
+    PetscCall(VecGetArrayRead(nt->phi, &pv));
+    for (PetscInt i = 0; i < fp->nc; i++) {
+      const PetscInt o = fp->off[i];
+      cnu[i]           = 0;
+      if (!nt->active[i]) continue;
+      for (PetscInt d = o; d < fp->off[i + 1]; d++) rows[nA++] = rs + d;
+      NewtonContactFrame(nt, fp, eliminate, i, &fr[i]);
+      nR += fr[i].n;
+      if (fr[i].reduced) cnu[i] = fp->mu[i] * PetscRealPart(pv[o]) - nt->nu[2 * i] * PetscRealPart(pv[o + 1]) - nt->nu[2 * i + 1] * PetscRealPart(pv[o + 2]);
+    }
+    PetscCall(VecRestoreArrayRead(nt->phi, &pv));
   }
   PetscCall(ISCreateGeneral(comm, nA, rows, PETSC_OWN_POINTER, &isA));
   PetscCall(MPIU_Allreduce(&nA, &NA, 1, MPIU_INT, MPI_SUM, comm));
-  PetscCallMPI(MPI_Exscan(&nA, &rstart, 1, MPIU_INT, MPI_SUM, comm));
-  if (!rank) rstart = 0;
+  PetscCall(MPIU_Allreduce(&nR, &NR, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Exscan(&nA, &astart, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Exscan(&nR, &rstart, 1, MPIU_INT, MPI_SUM, comm));
+  if (!rank) astart = rstart = 0;
   if (fp->G) {
     PetscCall(MatGetSize(fp->G, &ng, NULL));
     PetscCall(MatGetOwnershipRange(fp->G, &gstart, NULL));
     PetscCall(MatGetLocalSize(fp->G, &nglocal, NULL));
   }
-  /* dr = -phi on the separated rows (and 0 on the active ones), then t = W dr */
+  /* dr = -phi on the separated rows, 0 on the active ones but a slipping contact's eliminated
+     part (0, c nu), then t = W dr */
   PetscCall(VecCopy(nt->phi, nt->dr));
   PetscCall(VecScale(nt->dr, -1.0));
   {
     PetscScalar *dv;
     PetscCall(VecGetArray(nt->dr, &dv));
     for (PetscInt i = 0; i < fp->nc; i++)
-      if (nt->active[i])
-        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) dv[d] = 0;
+      if (nt->active[i]) {
+        const PetscInt o = fp->off[i];
+        for (PetscInt d = o; d < fp->off[i + 1]; d++) dv[d] = 0;
+        if (fr[i].reduced) dv[o + 1] = cnu[i] * nt->nu[2 * i], dv[o + 2] = cnu[i] * nt->nu[2 * i + 1];
+      }
     PetscCall(VecRestoreArray(nt->dr, &dv));
   }
   PetscCall(MatMult(fp->W, nt->dr, nt->wdr));
-  nloc = nA + (rank == size - 1 ? ng : 0);
-  Nloc = NA + ng;
+  nloc = nR + (rank == size - 1 ? ng : 0);
+  Nloc = NR + ng;
   if (!Nloc) { /* every contact separated */
     PetscCall(ISDestroy(&isA));
+    PetscCall(PetscFree2(fr, cnu));
     PetscFunctionReturn(0);
   }
-  /* right side: -phi_A - B_A (W dr_I)_A; with constraints e - G r - G dr_I */
+  /* right side: L (-phi_A - B_A (W dr)_A); with constraints e - G (r + dr) */
   PetscCall(VecCreateMPI(comm, nloc, Nloc, &b));
   PetscCall(VecDuplicate(b, &x));
   {
@@ -264,27 +324,31 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     PetscCall(VecGetArray(b, &bv));
     for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
       const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+      PetscReal      bf[3];
       if (!nt->active[i]) continue;
-      for (PetscInt d = 0; d < dim; d++, k++) {
-        PetscReal v = -PetscRealPart(pv[o + d]);
-        for (PetscInt e = 0; e < dim; e++) v -= nt->B[9 * i + dim * d + e] * PetscRealPart(tv[o + e]);
-        bv[k] = v;
+      for (PetscInt d = 0; d < dim; d++) {
+        bf[d] = -PetscRealPart(pv[o + d]);
+        for (PetscInt e = 0; e < dim; e++) bf[d] -= nt->B[9 * i + dim * d + e] * PetscRealPart(tv[o + e]);
+      }
+      for (PetscInt d = 0; d < fr[i].n; d++, k++) {
+        bv[k] = 0;
+        for (PetscInt e = 0; e < dim; e++) bv[k] += FrameL(&fr[i], d, e) * bf[e];
       }
     }
     PetscCall(VecRestoreArray(b, &bv));
     PetscCall(VecRestoreArrayRead(nt->wdr, &tv));
     PetscCall(VecRestoreArrayRead(nt->phi, &pv));
   }
-  if (fp->G) { /* e - G (r + dr_I), into the last rank's tail of b */
-    Vec                g, t;
-    VecScatter         sc;
-    IS                 isg;
+  if (fp->G) { /* e - G (r + dr), into the last rank's tail of b */
+    Vec        g, t;
+    VecScatter sc;
+    IS         isg;
     PetscCall(VecDuplicate(fp->e, &g));
     PetscCall(VecDuplicate(r, &t));
     PetscCall(VecWAXPY(t, 1.0, r, nt->dr));
     PetscCall(MatMult(fp->G, t, g));
     PetscCall(VecAYPX(g, -1.0, fp->e));
-    PetscCall(ISCreateStride(comm, nglocal, NA + gstart, 1, &isg));
+    PetscCall(ISCreateStride(comm, nglocal, NR + gstart, 1, &isg));
     PetscCall(VecScatterCreate(g, NULL, b, isg, &sc));
     PetscCall(VecScatterBegin(sc, g, b, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(VecScatterEnd(sc, g, b, INSERT_VALUES, SCATTER_FORWARD));
@@ -304,15 +368,19 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     }
     if (!reuse) {
       Mat          J, GTs = NULL, Gs = NULL;
-      PetscInt    *dnz, *onz, jstart, jend, nmark, *act, wstart;
-      PetscReal    dmax = 0, nnz = 0;
+      PetscInt    *dnz, *onz, jstart, jend, nmark, *act, wstart, *tcol;
+      PetscReal    dmax = 0, nnz = 0, *twt;
       PetscBool    dense = PETSC_FALSE;
       PetscScalar *vals;
-      { /* per column of W, its column in J (-1: not active): J's rows are read from W's own rows
-           (copying W_AA out first, MatCreateSubMatrix, took 4 s of a 90-step dam earthquake) */
+      { /* per column of W, its active row (-1: not active), and per active row the (up to two)
+           columns of J it contributes to with their weights (T's row): J's rows are read from W's
+           own rows (copying W_AA out first, MatCreateSubMatrix, took 4 s of a 90-step dam
+           earthquake) */
         IS              isall;
         const PetscInt *all;
-        PetscInt        NW;
+        PetscInt        NW, *lcol;
+        PetscReal      *lwt;
+        PetscMPIInt     n2, *cnt, *dsp;
         PetscCall(MatGetSize(fp->W, &NW, NULL));
         PetscCall(PetscMalloc1(NW + 1, &act));
         for (PetscInt c = 0; c < NW; c++) act[c] = -1;
@@ -322,6 +390,28 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
         PetscCall(ISRestoreIndices(isall, &all));
         PetscCall(ISDestroy(&isall));
         PetscCall(MatGetOwnershipRange(fp->W, &wstart, NULL));
+        PetscCall(PetscMalloc2(2 * nA + 1, &lcol, 2 * nA + 1, &lwt));
+        PetscCall(PetscMalloc2(2 * NA + 1, &tcol, 2 * NA + 1, &twt));
+        for (PetscInt i = 0, ka = 0, k = rstart; i < fp->nc; i++) {
+          const PetscInt dim = fp->off[i + 1] - fp->off[i];
+          if (!nt->active[i]) continue;
+          for (PetscInt e = 0; e < dim; e++, ka++)
+            for (PetscInt s = 0; s < 2; s++) {
+              const PetscReal w = fr[i].reduced ? FrameT(&fr[i], e, s) : (s ? 0 : 1);
+              lcol[2 * ka + s]  = w != 0 ? k + (fr[i].reduced ? s : e) : -1;
+              lwt[2 * ka + s]   = w;
+            }
+          k += fr[i].n;
+        }
+        PetscCall(PetscMPIIntCast(2 * nA, &n2));
+        PetscCall(PetscMalloc2(size, &cnt, size + 1, &dsp));
+        PetscCallMPI(MPI_Allgather(&n2, 1, MPI_INT, cnt, 1, MPI_INT, comm));
+        dsp[0] = 0;
+        for (PetscMPIInt p = 0; p < size; p++) dsp[p + 1] = dsp[p] + cnt[p];
+        PetscCallMPI(MPI_Allgatherv(lcol, n2, MPIU_INT, tcol, cnt, dsp, MPIU_INT, comm));
+        PetscCallMPI(MPI_Allgatherv(lwt, n2, MPIU_REAL, twt, cnt, dsp, MPIU_REAL, comm));
+        PetscCall(PetscFree2(cnt, dsp));
+        PetscCall(PetscFree2(lcol, lwt));
       }
       if (fp->G) {
         Mat GT;
@@ -354,7 +444,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
           for (PetscInt k = 0; k < nloc; k++) nnz += (PetscReal)(dnz[k] + onz[k]);
           PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nnz, 1, MPIU_REAL, MPIU_SUM, comm));
           dense = (PetscBool)(nnz >= nt->dense_fill * (PetscReal)Nloc * (PetscReal)Nloc);
-          PetscCall(PetscInfo(m, "Newton matrix %" PetscInt_FMT ": %.3g of its entries nonzero, %s\n", Nloc, (double)(nnz / ((PetscReal)Nloc * Nloc)), !dense ? "sparse" : strcmp(nt->densetype, MATDENSE) ? "dense (ScaLAPACK LU)" : "dense (LAPACK LU)"));
+          PetscCall(PetscInfo(m, "Newton matrix %" PetscInt_FMT ": %.3g of its entries nonzero, %s, %" PetscInt_FMT " slip rows eliminated\n", Nloc, (double)(nnz / ((PetscReal)Nloc * Nloc)), !dense ? "sparse" : strcmp(nt->densetype, MATDENSE) ? "dense (ScaLAPACK LU)" : "dense (LAPACK LU)", NA + ng - Nloc));
           if (dense && strcmp(nt->densetype, MATDENSE)) { /* ScaLAPACK's own row layout (NewtonLUSolve) */
             PetscCall(MatCreateScaLAPACK(comm, PETSC_DECIDE, PETSC_DECIDE, Nloc, Nloc, 0, 0, &J));
           } else if (dense) {
@@ -364,33 +454,50 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             PetscCall(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
           }
         }
-        for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
-          const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+        for (PetscInt i = 0, k = 0, ka = 0; i < fp->nc; i++) {
+          const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o, nd = fr[i].n;
+          PetscReal      Br[9], Ar[9]; /* L B (nd x dim) and L A T (nd x nd) */
           if (!nt->active[i]) continue;
+          for (PetscInt d = 0; d < nd; d++) {
+            for (PetscInt e = 0; e < dim; e++) {
+              Br[3 * d + e] = 0;
+              for (PetscInt g = 0; g < dim; g++) Br[3 * d + e] += FrameL(&fr[i], d, g) * nt->B[9 * i + dim * g + e];
+            }
+            for (PetscInt e = 0; e < nd; e++) {
+              Ar[3 * d + e] = 0;
+              for (PetscInt g = 0; g < dim; g++)
+                for (PetscInt h = 0; h < dim; h++) Ar[3 * d + e] += FrameL(&fr[i], d, g) * nt->A[9 * i + dim * g + h] * FrameT(&fr[i], h, e);
+            }
+          }
           nmark = 0;
           for (PetscInt e = 0; e < dim; e++) { /* the union of the contact's rows of W_AA and G_A^T */
             for (PetscInt part = 0; part < (GTs ? 2 : 1); part++) {
               Mat                src = part ? GTs : fp->W;
-              const PetscInt     grow = part ? rstart + k + e : wstart + o + e;
+              const PetscInt     grow = part ? astart + ka + e : wstart + o + e;
               PetscInt           ncols;
               const PetscInt    *cc;
               const PetscScalar *vv;
               PetscCall(MatGetRow(src, grow, &ncols, &cc, &vv));
               for (PetscInt j = 0; j < ncols; j++) {
-                const PetscInt c = part ? cc[j] + NA : act[cc[j]];
-                if (c < 0) continue;
-                if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
-                if (pass == 1)
-                  for (PetscInt d = 0; d < dim; d++) nt->work[3 * nt->mark[c] + d] += nt->B[9 * i + dim * d + e] * PetscRealPart(vv[j]);
+                const PetscInt ja = part ? -1 : act[cc[j]];
+                if (!part && ja < 0) continue;
+                for (PetscInt s = 0; s < (part ? 1 : 2); s++) {
+                  const PetscInt  c = part ? cc[j] + NR : tcol[2 * ja + s];
+                  const PetscReal v = part ? PetscRealPart(vv[j]) : twt[2 * ja + s] * PetscRealPart(vv[j]);
+                  if (c < 0) continue;
+                  if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+                  if (pass == 1)
+                    for (PetscInt d = 0; d < nd; d++) nt->work[3 * nt->mark[c] + d] += Br[3 * d + e] * v;
+                }
               }
               PetscCall(MatRestoreRow(src, grow, &ncols, &cc, &vv));
             }
-            { /* the contact's own columns (A and the shift) */
-              const PetscInt c = rstart + k + e;
-              if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
-            }
           }
-          for (PetscInt d = 0; d < dim; d++) {
+          for (PetscInt e = 0; e < nd; e++) { /* the contact's own columns (A and the shift) */
+            const PetscInt c = rstart + k + e;
+            if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+          }
+          for (PetscInt d = 0; d < nd; d++) {
             const PetscInt grow = rstart + k + d;
             if (pass == 0) {
               dnz[k + d] = onz[k + d] = 0;
@@ -399,7 +506,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
                 else onz[k + d]++;
               }
             } else {
-              for (PetscInt e = 0; e < dim; e++) nt->work[3 * nt->mark[rstart + k + e] + d] += nt->A[9 * i + dim * d + e];
+              for (PetscInt e = 0; e < nd; e++) nt->work[3 * nt->mark[rstart + k + e] + d] += Ar[3 * d + e];
               dmax = PetscMax(dmax, PetscAbsReal(nt->work[3 * nt->mark[grow] + d]));
               for (PetscInt j = 0; j < nmark; j++) vals[j] = nt->work[3 * j + d];
               PetscCall(MatSetValues(J, 1, &grow, nmark, nt->cols, vals, INSERT_VALUES));
@@ -409,23 +516,36 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             nt->mark[nt->cols[j]] = -1;
             for (PetscInt d = 0; d < 3; d++) nt->work[3 * j + d] = 0;
           }
-          k += dim;
+          k += nd;
+          ka += dim;
         }
-        if (Gs) { /* equilibrium rows G_A on the last rank's tail */
+        if (Gs) { /* equilibrium rows G_A T on the last rank's tail */
           for (PetscInt j = 0; j < nglocal; j++) {
-            const PetscInt     grow = gstart + j, jrow = NA + gstart + j;
+            const PetscInt     grow = gstart + j, jrow = NR + gstart + j;
             PetscInt           ncols;
             const PetscInt    *cc;
             const PetscScalar *vv;
+            if (pass == 0) continue;
             PetscCall(MatGetRow(Gs, grow, &ncols, &cc, &vv));
-            if (pass == 1) {
-              PetscCall(MatSetValues(J, 1, &jrow, ncols, cc, vv, INSERT_VALUES));
-              PetscCall(MatSetValue(J, jrow, jrow, 0.0, INSERT_VALUES));
-            }
+            nmark = 0;
+            for (PetscInt l = 0; l < ncols; l++)
+              for (PetscInt s = 0; s < 2; s++) {
+                const PetscInt c = tcol[2 * cc[l] + s];
+                if (c < 0) continue;
+                if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+                nt->work[3 * nt->mark[c]] += twt[2 * cc[l] + s] * PetscRealPart(vv[l]);
+              }
             PetscCall(MatRestoreRow(Gs, grow, &ncols, &cc, &vv));
+            if (nt->mark[jrow] < 0) nt->mark[jrow] = nmark, nt->cols[nmark++] = jrow;
+            for (PetscInt l = 0; l < nmark; l++) {
+              vals[l]                = nt->work[3 * l];
+              nt->mark[nt->cols[l]] = -1;
+              nt->work[3 * l]        = 0;
+            }
+            PetscCall(MatSetValues(J, 1, &jrow, nmark, nt->cols, vals, INSERT_VALUES));
           }
           if (pass == 0 && rank == size - 1)
-            for (PetscInt j = 0; j < ng; j++) dnz[nA + j] = nloc, onz[nA + j] = Nloc - nloc;
+            for (PetscInt j = 0; j < ng; j++) dnz[nR + j] = nloc, onz[nR + j] = Nloc - nloc;
         }
       }
       PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
@@ -434,11 +554,12 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
          constraints) are singular; it picks the least-force solution and costs the step only
          shift x cond of accuracy, which the next steps recover */
       PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
-      for (PetscInt k = 0; k < nA; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
+      for (PetscInt k = 0; k < nR; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
       PetscCall(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
       PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
       PetscCall(PetscFree3(dnz, onz, vals));
       PetscCall(PetscFree(act));
+      PetscCall(PetscFree2(tcol, twt));
       PetscCall(MatDestroy(&GTs));
       PetscCall(MatDestroy(&Gs));
       PetscCall(KSPReset(nt->ksp)); /* the old factor, either kind */
@@ -462,20 +583,26 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     PetscCall(VecScale(nt->dr, -1.0));
     if (fp->G) PetscCall(VecZeroEntries(nt->dalpha));
     PetscCall(ISDestroy(&nt->isbuilt));
-  } else {
+  } else { /* dr_A = T y (+ c nu where the slip row is eliminated) */
     const PetscScalar *xv;
     PetscScalar       *dv;
     PetscCall(VecGetArrayRead(x, &xv));
     PetscCall(VecGetArray(nt->dr, &dv));
-    for (PetscInt i = 0, k = 0; i < fp->nc; i++)
-      if (nt->active[i])
-        for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) dv[d] = xv[k++];
+    for (PetscInt i = 0, k = 0; i < fp->nc; i++) {
+      const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
+      if (!nt->active[i]) continue;
+      if (fr[i].reduced)
+        for (PetscInt e = 0; e < 3; e++) dv[o + e] = fr[i].T[2 * e] * xv[k] + fr[i].T[2 * e + 1] * xv[k + 1] + (e ? cnu[i] * nt->nu[2 * i + e - 1] : 0);
+      else
+        for (PetscInt d = 0; d < dim; d++) dv[o + d] = xv[k + d];
+      k += fr[i].n;
+    }
     PetscCall(VecRestoreArray(nt->dr, &dv));
     PetscCall(VecRestoreArrayRead(x, &xv));
     if (fp->G) { /* dalpha from the tail of x */
       VecScatter sc;
       IS         isg;
-      PetscCall(ISCreateStride(comm, nglocal, NA + gstart, 1, &isg));
+      PetscCall(ISCreateStride(comm, nglocal, NR + gstart, 1, &isg));
       PetscCall(VecScatterCreate(x, isg, nt->dalpha, NULL, &sc));
       PetscCall(VecScatterBegin(sc, x, nt->dalpha, INSERT_VALUES, SCATTER_FORWARD));
       PetscCall(VecScatterEnd(sc, x, nt->dalpha, INSERT_VALUES, SCATTER_FORWARD));
@@ -484,6 +611,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     }
   }
   PetscCall(ISDestroy(&isA));
+  PetscCall(PetscFree2(fr, cnu));
   PetscCall(VecDestroy(&b));
   PetscCall(VecDestroy(&x));
   PetscFunctionReturn(0);
@@ -503,6 +631,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
   PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps (without sweeps: other rho)", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
   PetscCall(PetscOptionsReal("-newton_dense_fill", "Fraction of nonzero entries from which the Newton matrix is stored and factored dense (LAPACK); > 1: never", "MBCMultiplierSetFromOptions", nt->dense_fill, &nt->dense_fill, NULL));
+  PetscCall(PetscOptionsBool("-newton_slip_eliminate", "Eliminate each slipping contact's row along its slip direction from the direct Newton step (an exact reduction: two rows, not three)", "MBCMultiplierSetFromOptions", nt->slip_eliminate, &nt->slip_eliminate, NULL));
   PetscCall(PetscOptionsBool("-newton_lowrank", "While W holds, take Newton steps through the kept inverse of a reference state's Newton matrix, corrected on the rows that differ", "MBCMultiplierSetFromOptions", nt->lowrank, &nt->lowrank, NULL));
   PetscCall(PetscOptionsReal("-newton_lowrank_max", "... unless the rows that differ exceed this fraction of the active ones", "MBCMultiplierSetFromOptions", nt->lowrank_max, &nt->lowrank_max, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
@@ -585,7 +714,7 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
     PetscCall(MBCMultiplierDiagonalBlocks(fp, Wd, &nt->diag));
   }
   PetscCall(PetscMalloc5(2 * fp->nc + 1, &nt->rho, nrows + 1, &nt->frozen, 9 * fp->nc + 1, &nt->A, 9 * fp->nc + 1, &nt->B, fp->nc + 1, &nt->active));
-  PetscCall(PetscCalloc2(fp->nc + 1, &nt->sticks, fp->nc + 1, &nt->refopen));
+  PetscCall(PetscCalloc3(fp->nc + 1, &nt->sticks, fp->nc + 1, &nt->refopen, 2 * fp->nc + 1, &nt->nu));
   for (PetscInt i = 0; i < fp->nc; i++)
     for (PetscInt d = 0, dim = fp->off[i + 1] - fp->off[i]; d < dim; d++) dmax = PetscMax(dmax, nt->diag[9 * i + (dim + 1) * d]);
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)m)));
@@ -787,7 +916,7 @@ static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
   PetscFunctionBegin;
   PetscCall(PetscFree(nt->diag));
   PetscCall(PetscFree5(nt->rho, nt->frozen, nt->A, nt->B, nt->active));
-  PetscCall(PetscFree2(nt->sticks, nt->refopen));
+  PetscCall(PetscFree3(nt->sticks, nt->refopen, nt->nu));
   PetscCall(MatDestroy(&nt->Z));
   PetscCall(PetscFree2(nt->WZ, nt->oidx));
   nt->zbuilt  = PETSC_FALSE;
@@ -890,6 +1019,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->predictor    = PETSC_TRUE;
   nt->shift        = 1e-12;
   nt->dense_fill   = 0.5;
+  nt->slip_eliminate = PETSC_TRUE;
   nt->lowrank      = PETSC_TRUE;
   nt->lowrank_max  = 0.6;
   m->data          = nt;

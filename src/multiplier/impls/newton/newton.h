@@ -15,6 +15,7 @@ typedef struct {
   PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
   PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
   PetscReal     dense_fill;   /* a Newton matrix with at least this fraction of its entries nonzero is factored dense */
+  PetscBool     slip_eliminate; /* each slipping contact's row along its slip direction eliminated (two rows, not three) */
   MBCMultiplier pgs;
   KSP           ksp;          /* the sparse LU (MUMPS; on several ranks under PCREDUNDANT) */
   KSP           kdense;       /* the dense LU (LAPACK; on several ranks ScaLAPACK's), prefix -mbc_newton_dense_ */
@@ -26,6 +27,7 @@ typedef struct {
   PetscBool *frozen;     /* per local row: a direction without flexibility */
   PetscReal *A, *B;      /* 9 per contact: the Jacobian blocks at the current iterate */
   PetscBool *active;     /* per contact: in the Newton system (not separated) */
+  PetscReal *nu;         /* 2 per contact: its slip direction at the current iterate (0, 0: not slipping) */
   Vec        phi, dr, wdr, rt, ut, dalpha, alphat;
   PetscBool  wdr_of_dr;  /* wdr = W dr already (the kept inverse's residual computed it) */
   PetscReal *work;       /* 3 x (reduced size): one contact's rows of the Newton matrix */
