@@ -378,9 +378,9 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
            earthquake) */
         IS              isall;
         const PetscInt *all;
-        PetscInt        NW, *lcol;
+        PetscInt        NW, *lcol, n2;
         PetscReal      *lwt;
-        PetscMPIInt     n2, *cnt, *dsp;
+        PetscMPIInt    *cnt, *dsp;
         PetscCall(MatGetSize(fp->W, &NW, NULL));
         PetscCall(PetscMalloc1(NW + 1, &act));
         for (PetscInt c = 0; c < NW; c++) act[c] = -1;
@@ -391,7 +391,6 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
         PetscCall(ISDestroy(&isall));
         PetscCall(MatGetOwnershipRange(fp->W, &wstart, NULL));
         PetscCall(PetscMalloc2(2 * nA + 1, &lcol, 2 * nA + 1, &lwt));
-        PetscCall(PetscMalloc2(2 * NA + 1, &tcol, 2 * NA + 1, &twt));
         for (PetscInt i = 0, ka = 0, k = rstart; i < fp->nc; i++) {
           const PetscInt dim = fp->off[i + 1] - fp->off[i];
           if (!nt->active[i]) continue;
@@ -403,13 +402,9 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             }
           k += fr[i].n;
         }
-        PetscCall(PetscMPIIntCast(2 * nA, &n2));
-        PetscCall(PetscMalloc2(size, &cnt, size + 1, &dsp));
-        PetscCallMPI(MPI_Allgather(&n2, 1, MPI_INT, cnt, 1, MPI_INT, comm));
-        dsp[0] = 0;
-        for (PetscMPIInt p = 0; p < size; p++) dsp[p + 1] = dsp[p] + cnt[p];
-        PetscCallMPI(MPI_Allgatherv(lcol, n2, MPIU_INT, tcol, cnt, dsp, MPIU_INT, comm));
-        PetscCallMPI(MPI_Allgatherv(lwt, n2, MPIU_REAL, twt, cnt, dsp, MPIU_REAL, comm));
+        PetscCall(MBCNewtonRowsAllGather(comm, 2 * nA, lcol, &n2, &tcol, &cnt, &dsp));
+        PetscCall(PetscMalloc1(n2 + 1, &twt));
+        PetscCallMPI(MPI_Allgatherv(lwt, cnt[rank], MPIU_REAL, twt, cnt, dsp, MPIU_REAL, comm));
         PetscCall(PetscFree2(cnt, dsp));
         PetscCall(PetscFree2(lcol, lwt));
       }
@@ -458,7 +453,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
           const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o, nd = fr[i].n;
           PetscReal      Br[9], Ar[9]; /* L B (nd x dim) and L A T (nd x nd) */
           if (!nt->active[i]) continue;
-          for (PetscInt d = 0; d < nd; d++) {
+          for (PetscInt d = 0; d < nd && pass == 1; d++) {
             for (PetscInt e = 0; e < dim; e++) {
               Br[3 * d + e] = 0;
               for (PetscInt g = 0; g < dim; g++) Br[3 * d + e] += FrameL(&fr[i], d, g) * nt->B[9 * i + dim * g + e];
@@ -559,7 +554,8 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
       PetscCall(PetscFree3(dnz, onz, vals));
       PetscCall(PetscFree(act));
-      PetscCall(PetscFree2(tcol, twt));
+      PetscCall(PetscFree(tcol));
+      PetscCall(PetscFree(twt));
       PetscCall(MatDestroy(&GTs));
       PetscCall(MatDestroy(&Gs));
       PetscCall(KSPReset(nt->ksp)); /* the old factor, either kind */

@@ -71,9 +71,7 @@ static PetscErrorCode DenseRelayout(Mat A, PetscInt nl, Mat *B)
   PetscFunctionReturn(0);
 }
 
-/* every rank's rows[0..nl) gathered on every rank, in rank order: *all (n of them, PetscFree) and
-   the counts and displacements of the gather (PetscFree2(*cnt, *dsp)) */
-static PetscErrorCode RowsAllGather(MPI_Comm comm, PetscInt nl, const PetscInt rows[], PetscInt *n, PetscInt **all, PetscMPIInt **cnt, PetscMPIInt **dsp)
+PetscErrorCode MBCNewtonRowsAllGather(MPI_Comm comm, PetscInt nl, const PetscInt rows[], PetscInt *n, PetscInt **all, PetscMPIInt **cnt, PetscMPIInt **dsp)
 {
   PetscMPIInt size, kl;
 
@@ -136,7 +134,7 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
       for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) orow[nloc++] = rs + d;
   {
     PetscInt *all;
-    PetscCall(RowsAllGather(comm, nloc, orow, &nt->nO, &all, &cnt, &dsp));
+    PetscCall(MBCNewtonRowsAllGather(comm, nloc, orow, &nt->nO, &all, &cnt, &dsp));
     PetscCall(PetscMalloc2((size_t)nt->nO * N + 1, &nt->WZ, N + 1, &nt->oidx));
     for (PetscInt r = 0; r < N; r++) nt->oidx[r] = -1;
     for (PetscInt o = 0; o < nt->nO; o++) nt->oidx[all[o]] = o;
@@ -614,7 +612,7 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
     }
   }
   PetscCall(PetscMPIIntCast(nloc, &kl));
-  PetscCall(RowsAllGather(comm, nloc, lrow, &lr.k, &lr.row, &cnt, &dsp));
+  PetscCall(MBCNewtonRowsAllGather(comm, nloc, lrow, &lr.k, &lr.row, &cnt, &dsp));
   PetscCall(PetscMalloc1(LR_ROW * (lr.k + 1), &lr.pq));
   for (PetscMPIInt p = 0; p < size; p++) cnt[p] *= LR_ROW, dsp[p] *= LR_ROW;
   PetscCallMPI(MPI_Allgatherv(lpq, LR_ROW * kl, MPIU_REAL, lr.pq, cnt, dsp, MPIU_REAL, comm));
