@@ -98,11 +98,11 @@ static PetscErrorCode EntryCSR(EntryList *l, PetscInt npoints, PetscInt nnodes, 
 }
 
 /* Shape functions and area element at reference point (u, v) of [0,1]^2 on master face f:
-   bilinear map for a quad4, the collapsed (Duffy) map for a tri3. */
-static void FacePoint(MBCSurface *m, PetscInt f, PetscReal u, PetscReal v, PetscReal N[], PetscReal x[], PetscReal nrm[], PetscReal *dA)
+   bilinear map for a quad4, the collapsed (Duffy) map for a tri3; c: the tangents' cross product. */
+static void FacePoint(MBCSurface *m, PetscInt f, PetscReal u, PetscReal v, PetscReal N[], PetscReal x[], PetscReal nrm[], PetscReal *dA, PetscReal c[3])
 {
   const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
-  PetscReal       dx[2][3] = {{0, 0, 0}, {0, 0, 0}}, c[3];
+  PetscReal       dx[2][3] = {{0, 0, 0}, {0, 0, 0}};
 
   if (m->fnv[f] == 4) {
     const PetscReal dNu[4] = {-(1 - v), 1 - v, v, -v}, dNv[4] = {-(1 - u), -u, u, 1 - u};
@@ -175,8 +175,8 @@ static PetscErrorCode DualBasis(MBCSurface *m, PetscInt f, PetscInt nq, const Pe
   PetscFunctionBegin;
   for (PetscInt a = 0; a < nq; a++)
     for (PetscInt b = 0; b < nq; b++) {
-      PetscReal N[4], x[3], nrm[3], dA;
-      FacePoint(m, f, xq[a], xq[b], N, x, nrm, &dA);
+      PetscReal N[4], x[3], nrm[3], dA, cr[3];
+      FacePoint(m, f, xq[a], xq[b], N, x, nrm, &dA, cr);
       dA *= wq[a] * wq[b];
       for (PetscInt i = 0; i < nv; i++) {
         D[i] += N[i] * dA;
@@ -220,28 +220,7 @@ PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *c)
   PetscFunctionReturn(0);
 }
 
-/* The plane of master face f (its centre and Newell normal) with an in-plane basis e1, e2
-   (e1 x e2 = n): the segments of the mortar integration are cut in it. */
-typedef struct {
-  PetscReal c[3], n[3], e1[3], e2[3];
-} FacePlane;
-
-static void PlaneOf(MBCSurface *m, PetscInt f, FacePlane *P)
-{
-  const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
-  PetscReal       a;
-  for (PetscInt d = 0; d < 3; d++) {
-    P->c[d] = m->fcenter[3 * f + d];
-    P->n[d] = m->fnormal[3 * f + d];
-  }
-  MBCSub(&m->x[3 * fv[1]], &m->x[3 * fv[0]], P->e1);
-  a = MBCDot(P->e1, P->n);
-  for (PetscInt d = 0; d < 3; d++) P->e1[d] -= a * P->n[d];
-  MBCNormalize(P->e1);
-  MBCCross(P->n, P->e1, P->e2);
-}
-
-static void To2D(const FacePlane *P, const PetscReal x[], PetscReal y[])
+static void To2D(const MBCFacePlane *P, const PetscReal x[], PetscReal y[])
 {
   PetscReal e[3];
   MBCSub(x, P->c, e);
@@ -292,35 +271,20 @@ static void Clip(PetscReal y[][2], PetscInt *n, const PetscReal z[][2], PetscInt
 /* The master face point whose projection on the face plane is y: its shape functions N, position x
    (on the face itself, warped quads too), interpolated unit normal and the ratio of its area
    element to the projected one. Barycentric for a tri3, Newton on the bilinear map for a quad4. */
-static void MasterAt(MBCSurface *m, PetscInt f, const FacePlane *P, const PetscReal Y[][2], const PetscReal y[], PetscReal N[], PetscReal x[], PetscReal nrm[], PetscReal *ratio)
+static void MasterAt(MBCSurface *m, PetscInt f, const MBCFacePlane *P, const PetscReal y[], PetscReal N[], PetscReal x[], PetscReal nrm[], PetscReal *ratio)
 {
-  const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
-  PetscReal       u = 0.5, v = 0.5, c[3], dA;
+  PetscReal u = 0.5, v = 0.5, c[3], dA;
 
   if (m->fnv[f] == 3) {
+    const PetscReal(*Y)[2] = P->Y;
     const PetscReal a11 = Y[1][0] - Y[0][0], a12 = Y[2][0] - Y[0][0], a21 = Y[1][1] - Y[0][1], a22 = Y[2][1] - Y[0][1], det = a11 * a22 - a12 * a21;
     const PetscReal r0 = y[0] - Y[0][0], r1 = y[1] - Y[0][1], a = (a22 * r0 - a12 * r1) / det, b = (a11 * r1 - a21 * r0) / det;
     u = a;
     v = a < 1 ? b / (1 - a) : 0; /* FacePoint's collapsed coordinates */
-  } else (void)MBCBilinearInverse(Y, y, &u, &v); /* a convex quad: converges */
-  FacePoint(m, f, u, v, N, x, nrm, &dA);
-  { /* area element of the face over that of its projection on the plane */
-    PetscReal dx[2][3] = {{0, 0, 0}, {0, 0, 0}};
-    if (m->fnv[f] == 4) {
-      const PetscReal dNu[4] = {-(1 - v), 1 - v, v, -v}, dNv[4] = {-(1 - u), -u, u, 1 - u};
-      for (PetscInt i = 0; i < 4; i++)
-        for (PetscInt d = 0; d < 3; d++) {
-          dx[0][d] += dNu[i] * m->x[3 * fv[i] + d];
-          dx[1][d] += dNv[i] * m->x[3 * fv[i] + d];
-        }
-    } else
-      for (PetscInt d = 0; d < 3; d++) {
-        dx[0][d] = m->x[3 * fv[1] + d] - m->x[3 * fv[0] + d];
-        dx[1][d] = m->x[3 * fv[2] + d] - m->x[3 * fv[0] + d];
-      }
-    MBCCross(dx[0], dx[1], c);
-    *ratio = PetscSqrtReal(MBCDot(c, c)) / PetscAbsReal(MBCDot(c, P->n));
-  }
+  } else (void)MBCBilinearInverse(P->B, y, &u, &v); /* a convex quad: converges */
+  FacePoint(m, f, u, v, N, x, nrm, &dA, c);
+  /* area element of the face over that of its projection on the plane */
+  *ratio = PetscSqrtReal(MBCDot(c, c)) / PetscAbsReal(MBCDot(c, P->n));
 }
 
 static PetscErrorCode FaceListAdd(PetscInt **faces, PetscInt *n, PetscInt *cap, PetscInt g)
@@ -365,8 +329,8 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
     const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
     const PetscInt  nv = m->fnv[f];
     PetscBool       any = PETSC_FALSE;
-    FacePlane       P;
-    PetscReal       Y[MBC_MAX_FACE_NODES][2], amaster, rf;
+    MBCFacePlane    P;
+    PetscReal       amaster, rf;
 
     for (PetscInt i = 0; i < nv; i++) any = (PetscBool)(any || pointOf[fv[i]] >= 0);
     if (!any) continue;
@@ -378,9 +342,8 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
     for (PetscInt i = 0; i < nv; i++)
       if (pointOf[fv[i]] >= 0) area[pointOf[fv[i]]] += Dm[i];
     if (!integrate) continue;
-    PlaneOf(m, f, &P);
-    for (PetscInt i = 0; i < nv; i++) To2D(&P, &m->x[3 * fv[i]], Y[i]);
-    amaster = PetscAbsReal(PolyArea2(Y, nv));
+    MBCSurfaceFacePlane(m, f, &P);
+    amaster = PetscAbsReal(PolyArea2(P.Y, nv));
     /* seeds: the slave faces around the search candidates of the face's master nodes and the faces of their points */
     nface = 0;
     if (brute)
@@ -404,15 +367,17 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
       }
     for (PetscInt q = 0; q < nface; q++) {
       const PetscInt  g = faces[q], ng = s->fnv[g], *gv = &s->fnode[MBC_MAX_FACE_NODES * g];
-      PetscReal       Z[MBC_MAX_FACE_NODES][2], W[MBC_MAX_CLIP][2], e[3], apiece;
+      PetscReal       Z[MBC_MAX_FACE_NODES][2], W[MBC_MAX_CLIP][2], e[3], apiece, sw[MBC_MAX_FACE_NODES][MBC_MAX_FACE_NODES];
+      PetscBool       hit[MBC_MAX_FACE_NODES][MBC_MAX_FACE_NODES];
       PetscInt        nw = nv;
+      MBCFacePlane    Pg;
 
       if (!(MBCDot(&s->fnormal[3 * g], P.n) < 0)) continue; /* the slave face must face the master face */
       MBCSub(&s->fcenter[3 * g], P.c, e);
       if (PetscAbsReal(MBCDot(e, P.n)) > 2 * c->h) continue; /* a face of the slave surface far behind or ahead */
       for (PetscInt i = 0; i < ng; i++) To2D(&P, &s->x[3 * gv[ng - 1 - i]], Z[i]); /* reversed: counter-clockwise seen along -n */
       if (!(PolyArea2(Z, ng) > 1e-12 * amaster)) continue;                         /* edge-on */
-      for (PetscInt i = 0; i < nv; i++) W[i][0] = Y[i][0], W[i][1] = Y[i][1];
+      for (PetscInt i = 0; i < nv; i++) W[i][0] = P.Y[i][0], W[i][1] = P.Y[i][1];
       Clip(W, &nw, Z, ng);
       apiece = nw >= 3 ? PolyArea2(W, nw) : 0;
       /* no overlap, or a sliver along a shared edge: below 1e-6 of the face it changes the
@@ -437,6 +402,10 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
         g2 += cr, G[0] += (p0[0] + p1[0]) * cr, G[1] += (p0[1] + p1[1]) * cr;
       }
       G[0] /= 3 * g2, G[1] /= 3 * g2;
+      /* the slave weights of the piece summed here, entered once per (point, slave node) */
+      MBCSurfaceFacePlane(s, g, &Pg);
+      for (PetscInt i = 0; i < nv; i++)
+        for (PetscInt j = 0; j < ng; j++) sw[i][j] = 0, hit[i][j] = PETSC_FALSE;
       for (PetscInt t = 0; t < nw; t++) {
         const PetscReal *w0 = W[t], *w1 = W[(t + 1) % nw];
         const PetscReal  a2 = (w0[0] - G[0]) * (w1[1] - G[1]) - (w1[0] - G[0]) * (w0[1] - G[1]);
@@ -446,9 +415,9 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
             PetscReal       y[2], N[4], psi[4], x[3], nrm[3], ratio, dA, qual;
             MBCContactPoint cp;
             for (PetscInt d = 0; d < 2; d++) y[d] = G[d] + ua * (w0[d] - G[d]) + vb * (w1[d] - G[d]);
-            MasterAt(m, f, &P, Y, y, N, x, nrm, &ratio);
+            MasterAt(m, f, &P, y, N, x, nrm, &ratio);
             dA = wq[a] * wq[b] * (1 - xq[a]) * a2 * ratio;
-            if (!MBCCoupleProjectOnFace(c, x, nrm, g, PETSC_TRUE, &cp, &qual)) continue;
+            if (!MBCCoupleProjectOnFacePlane(c, x, nrm, g, &Pg, PETSC_TRUE, &cp, &qual)) continue;
             for (PetscInt i = 0; i < nv; i++) {
               psi[i] = 0;
               for (PetscInt j = 0; j < nv; j++) psi[i] += C[MBC_MAX_FACE_NODES * i + j] * N[j];
@@ -461,10 +430,13 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
               covered[k] += psi[i] * dA;
               gsum[k] += psi[i] * dA * cp.gap;
               for (PetscInt j = 0; j < cp.nv; j++)
-                if (cp.w[j] != 0) PetscCall(EntryAdd(sl, (PetscInt64)k * s->nnodes + gv[j], psi[i] * cp.w[j] * dA));
+                if (cp.w[j] != 0) sw[i][j] += psi[i] * cp.w[j] * dA, hit[i][j] = PETSC_TRUE;
             }
           }
       }
+      for (PetscInt i = 0; i < nv; i++)
+        for (PetscInt j = 0; j < ng; j++)
+          if (hit[i][j]) PetscCall(EntryAdd(sl, (PetscInt64)pointOf[fv[i]] * s->nnodes + gv[j], sw[i][j]));
     }
   }
   PetscCall(PetscFree(faces));

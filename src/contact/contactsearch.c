@@ -229,6 +229,12 @@ PetscErrorCode MBCCoupleGlobalSearch(MBCCouple *c, PetscReal cell_factor, PetscR
    is skipped (the caller knows the point lies on f: a segment of the mortar integration). */
 PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, PetscBool force, MBCContactPoint *cp, PetscReal *quality)
 {
+  return MBCCoupleProjectOnFacePlane(c, xm, nm, f, NULL, force, cp, quality);
+}
+
+/* The same with the slave face's plane P given (NULL: computed here if needed). */
+PetscBool MBCCoupleProjectOnFacePlane(MBCCouple *c, const PetscReal xm[], const PetscReal nm[], PetscInt f, const MBCFacePlane *P, PetscBool force, MBCContactPoint *cp, PetscReal *quality)
+{
   MBCSurface      *s = &c->slave;
   const PetscReal *nf = &s->fnormal[3 * f], *cf = &s->fcenter[3 * f];
   const PetscInt   nv = s->fnv[f], *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
@@ -257,23 +263,19 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
     for (PetscInt i = 0; i < 3; i++) cp->w[i] = PetscMax(sub[(i + 1) % 3], 0) / area;
     cp->w[3] = 0;
   } else { /* the face's bilinear shape functions at p (inverse of the bilinear map in the face's
-              plane, Newton from the centre; clamped onto the face outside it): the trace of the
+              plane by Newton; clamped onto the face outside it): the trace of the
               slave element, so the slave nodes get consistent loads on any convex quad */
-    PetscReal e1[3], e2[3], Y[4][2], y[2], u, v, a;
-    MBCSub(&s->x[3 * fv[1]], &s->x[3 * fv[0]], e1);
-    a = MBCDot(e1, nf);
-    for (PetscInt d = 0; d < 3; d++) e1[d] -= a * nf[d];
-    MBCNormalize(e1);
-    MBCCross(nf, e1, e2);
-    for (PetscInt i = 0; i < 4; i++) {
-      MBCSub(&s->x[3 * fv[i]], cf, e);
-      Y[i][0] = MBCDot(e, e1);
-      Y[i][1] = MBCDot(e, e2);
+    MBCFacePlane Pf;
+    PetscReal    y[2], u, v;
+    if (!P) {
+      MBCSurfaceFacePlane(s, f, &Pf);
+      P = &Pf;
     }
     MBCSub(p, cf, e);
-    y[0] = MBCDot(e, e1);
-    y[1] = MBCDot(e, e2);
-    if (!MBCBilinearInverse(Y, y, &u, &v)) return PETSC_FALSE;
+    y[0] = MBCDot(e, P->e1);
+    y[1] = MBCDot(e, P->e2);
+    u = v = 0.5;
+    if (!MBCBilinearInverse(P->B, y, &u, &v)) return PETSC_FALSE;
     u        = PetscMin(PetscMax(u, 0), 1);
     v        = PetscMin(PetscMax(v, 0), 1);
     cp->w[0] = (1 - u) * (1 - v), cp->w[1] = u * (1 - v), cp->w[2] = u * v, cp->w[3] = (1 - u) * v;
@@ -308,27 +310,55 @@ PetscBool MBCCoupleProjectOnFace(MBCCouple *c, const PetscReal xm[], const Petsc
   return PETSC_TRUE;
 }
 
-/* (u, v) in [0,1]^2 of the bilinear map of the plane quad Y (vertices counter-clockwise) with image y:
-   Newton from the centre, exact in one step on parallelograms. */
-PetscBool MBCBilinearInverse(const PetscReal Y[][2], const PetscReal y[], PetscReal *u, PetscReal *v)
+/* The plane of face f: see MBCFacePlane. */
+void MBCSurfaceFacePlane(const MBCSurface *s, PetscInt f, MBCFacePlane *P)
 {
-  *u = 0.5, *v = 0.5;
+  const PetscInt *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
+  const PetscInt  nv = s->fnv[f];
+  PetscReal       a, e[3];
+
+  for (PetscInt d = 0; d < 3; d++) {
+    P->c[d] = s->fcenter[3 * f + d];
+    P->n[d] = s->fnormal[3 * f + d];
+  }
+  MBCSub(&s->x[3 * fv[1]], &s->x[3 * fv[0]], P->e1);
+  a = MBCDot(P->e1, P->n);
+  for (PetscInt d = 0; d < 3; d++) P->e1[d] -= a * P->n[d];
+  MBCNormalize(P->e1);
+  MBCCross(P->n, P->e1, P->e2);
+  for (PetscInt i = 0; i < nv; i++) {
+    MBCSub(&s->x[3 * fv[i]], P->c, e);
+    P->Y[i][0] = MBCDot(e, P->e1);
+    P->Y[i][1] = MBCDot(e, P->e2);
+  }
+  for (PetscInt d = 0; d < 2 && nv == 4; d++) {
+    P->B[0][d] = P->Y[0][d];
+    P->B[1][d] = P->Y[1][d] - P->Y[0][d];
+    P->B[2][d] = P->Y[3][d] - P->Y[0][d];
+    P->B[3][d] = P->Y[0][d] - P->Y[1][d] + P->Y[2][d] - P->Y[3][d];
+  }
+}
+
+/* (u, v) of y under a quad's bilinear map B0 + B1 u + B2 v + B3 u v (MBCFacePlane's B): Newton from
+   (*u, *v), exact in one step on parallelograms (B3 = 0). Its error after a step is about
+   |B3| / |J| (|du| + |dv|)^2, below 1e-16 once the step is below 1e-9 on a convex quad
+   (|B3| <= |J|): that step is the last one. Start from the centre: from elsewhere in a strongly
+   distorted quad it can find the map's other root (tests/c/test_bilinear.c). */
+PetscBool MBCBilinearInverse(const PetscReal B[][2], const PetscReal y[], PetscReal *u, PetscReal *v)
+{
   for (PetscInt it = 0; it < 30; it++) {
-    const PetscReal U = *u, V = *v, N[4] = {(1 - U) * (1 - V), U * (1 - V), U * V, (1 - U) * V}, dNu[4] = {-(1 - V), 1 - V, V, -V}, dNv[4] = {-(1 - U), -U, U, 1 - U};
-    PetscReal       r[2] = {-y[0], -y[1]}, J[2][2] = {{0, 0}, {0, 0}}, det, du, dv;
-    for (PetscInt i = 0; i < 4; i++)
-      for (PetscInt d = 0; d < 2; d++) {
-        r[d] += N[i] * Y[i][d];
-        J[d][0] += dNu[i] * Y[i][d];
-        J[d][1] += dNv[i] * Y[i][d];
-      }
-    det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    const PetscReal U = *u, V = *v;
+    const PetscReal r0 = B[0][0] + B[1][0] * U + B[2][0] * V + B[3][0] * U * V - y[0], r1 = B[0][1] + B[1][1] * U + B[2][1] * V + B[3][1] * U * V - y[1];
+    const PetscReal J00 = B[1][0] + B[3][0] * V, J01 = B[2][0] + B[3][0] * U, J10 = B[1][1] + B[3][1] * V, J11 = B[2][1] + B[3][1] * U;
+    const PetscReal det = J00 * J11 - J01 * J10;
+    PetscReal       du, dv, idet;
     if (!(PetscAbsReal(det) > 0)) return PETSC_FALSE;
-    du = (J[1][1] * r[0] - J[0][1] * r[1]) / det;
-    dv = (J[0][0] * r[1] - J[1][0] * r[0]) / det;
+    idet = 1 / det;
+    du   = (J11 * r0 - J01 * r1) * idet;
+    dv   = (J00 * r1 - J10 * r0) * idet;
     *u -= du;
     *v -= dv;
-    if (PetscAbsReal(du) + PetscAbsReal(dv) < 1e-13) return PETSC_TRUE;
+    if (PetscAbsReal(du) + PetscAbsReal(dv) < 1e-9) return PETSC_TRUE;
   }
   return PETSC_FALSE;
 }

@@ -136,9 +136,21 @@ PETSC_EXTERN PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *);
 PETSC_EXTERN PetscErrorCode MBCCoupleInterference(MBCCouple *, PetscInt, PetscReal[]);
 PETSC_EXTERN PetscErrorCode MBCCoupleCheckSearch(MBCCouple *, PetscInt *, PetscInt *, PetscReal *);
 PETSC_EXTERN PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *, PetscInt, PetscInt *, PetscReal *, PetscReal *);
-PETSC_INTERN PetscBool      MBCBilinearInverse(const PetscReal[][2], const PetscReal[], PetscReal *, PetscReal *);
 PETSC_INTERN PetscBool      MBCCoupleKeepsFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, PetscInt, MBCContactPoint *);
 PETSC_INTERN PetscBool      MBCCoupleProjectOnFace(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, PetscBool, MBCContactPoint *, PetscReal *);
+
+/* A face in its own plane: centre and Newell normal n, in-plane basis e1, e2 (e1 along the first
+   edge, e1 x e2 = n), the vertices' plane coordinates Y and, for a quad, its bilinear map
+   Y(u, v) = B0 + B1 u + B2 v + B3 u v. Computed once per face where many points meet it (the mortar
+   integration's quadrature points) instead of at every projection. */
+typedef struct {
+  PetscReal c[3], n[3], e1[3], e2[3];
+  PetscReal Y[MBC_MAX_FACE_NODES][2], B[4][2];
+} MBCFacePlane;
+
+PETSC_INTERN void      MBCSurfaceFacePlane(const MBCSurface *, PetscInt, MBCFacePlane *);
+PETSC_EXTERN PetscBool MBCBilinearInverse(const PetscReal[][2], const PetscReal[], PetscReal *, PetscReal *); /* of MBCFacePlane's B */
+PETSC_INTERN PetscBool MBCCoupleProjectOnFacePlane(MBCCouple *, const PetscReal[], const PetscReal[], PetscInt, const MBCFacePlane *, PetscBool, MBCContactPoint *, PetscReal *);
 
 static inline void MBCSub(const PetscReal a[], const PetscReal b[], PetscReal c[])
 {
