@@ -18,7 +18,7 @@ PetscErrorCode MBCContactCreate(MPI_Comm comm, MBCScene scene, MBCContact *conta
   c->extension   = 0.1;
   c->hysteresis  = 0.05;
   c->integrate   = PETSC_TRUE;
-  c->nquad       = 4;
+  c->nquad       = 3; /* a piece of parallelogram or triangle faces: degree 4, exact from 3 on (contactintegrate.c) */
   c->ncouples    = scene->ncouples;
   c->penetration_tol   = -0.05;
   c->check_penetration = PETSC_TRUE;

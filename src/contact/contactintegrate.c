@@ -306,8 +306,10 @@ static PetscErrorCode FaceListAdd(PetscInt **faces, PetscInt *n, PetscInt *cap, 
    cut, in its plane, by the orthogonal projections of the slave faces that face it; each piece (a
    convex polygon, master face ∩ slave face) is split into triangles and integrated with a collapsed
    nq x nq Gauss rule, the slave weights taken on that slave face. The integrand is smooth on each
-   piece, so the integrals are exact for flat faces (the Gauss grid over the whole master face it
-   replaces missed the weights' kinks by 3.6 % in the pressure of a 2 x 2 master on a 3 x 3 slave).
+   piece: psi_i times a slave weight, degree 4 in the plane on triangles and flat parallelograms,
+   which the collapsed rule integrates exactly from nq = 3 on (degree 2 nq - 2; the Gauss grid over
+   the whole master face it replaces missed the weights' kinks by 3.6 % in the pressure of a 2 x 2
+   master on a 3 x 3 slave).
    The slave faces of a master face are found by a flood from the faces around its nodes' search
    candidates over the faces that share a vertex with a cut one, so none is missed however fine the
    slave mesh (brute: every slave face, for -mbc_contact_check_search). */
