@@ -25,12 +25,11 @@ typedef struct {
 } Entry;
 
 /* The weights summed per key as they come (open addressing). A point gets a handful of distinct
-   nodes but thousands of contributions: every quadrature point of every piece, 16 per point on
-   quads. Until stop 31 they were kept as a list and merged at the end: 4 M entries, about 250 MB
-   with the merge's copies, on the 198k dam. That grows with the contact surface and is held
-   while a dynamic step's re-search runs beside the factors. Each key's sum takes its terms in the
-   order they came, as the list's merge did, so the bits are the same. The 198k run's wall did
-   not change: its later phases fault the same pages. */
+   nodes but many contributions: one per piece it covers, each piece's quadrature points summed
+   before (Integrate). Kept as a list of every contribution and merged at the end they took 4 M
+   entries, about 250 MB, on the 198k dam, held while a dynamic step's re-search runs beside the
+   factors. Each key's sum takes its terms in the order they come, so the bits do not depend on
+   the table's size. */
 typedef struct {
   Entry *e;
   size_t n, cap; /* keys held, slots (a power of 2) */

@@ -41,7 +41,9 @@ def test_dense_and_sparse_newton_matrix_agree(tmp_path, joints, nproc):
     dense = "dense (LAPACK LU)" if nproc == 1 else "dense (ScaLAPACK LU)"
     assert all(kind == dense for _, fill, kind in fd) and min(float(f) for _, f, _ in fd) >= 0.5
     assert all(kind == "sparse" for _, _, kind in fs)
-    assert [n for n, _, _ in fd] == [n for n, _, _ in fs]  # the same step systems, iteration by iteration
+    # the same step systems, iteration by iteration (the message keeps both lists and the residual
+    # history: a rare 4-rank run once listed one matrix less on the dense side, cause not found)
+    assert [n for n, _, _ in fd] == [n for n, _, _ in fs], (fd, fs, [l for l in d.stdout.splitlines() if "Newton" in l][-20:], [l for l in s.stdout.splitlines() if "Newton" in l][-20:])
     assert len(fd) >= (5 if joints else 1)
     u0, f0 = final(str(tmp_path / "sparse.h5"))
     u1, f1 = final(str(tmp_path / "dense.h5"))
