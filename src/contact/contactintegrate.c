@@ -219,14 +219,6 @@ PetscErrorCode MBCCoupleIntegrateReset(MBCCouple *c)
   PetscFunctionReturn(0);
 }
 
-static void To2D(const MBCFacePlane *P, const PetscReal x[], PetscReal y[])
-{
-  PetscReal e[3];
-  MBCSub(x, P->c, e);
-  y[0] = MBCDot(e, P->e1);
-  y[1] = MBCDot(e, P->e2);
-}
-
 /* twice the signed area of the polygon y[0..n) */
 static PetscReal PolyArea2(const PetscReal y[][2], PetscInt n)
 {
@@ -376,7 +368,7 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
       if (!(MBCDot(&s->fnormal[3 * g], P.n) < 0)) continue; /* the slave face must face the master face */
       MBCSub(&s->fcenter[3 * g], P.c, e);
       if (PetscAbsReal(MBCDot(e, P.n)) > 2 * c->h) continue; /* a face of the slave surface far behind or ahead */
-      for (PetscInt i = 0; i < ng; i++) To2D(&P, &s->x[3 * gv[ng - 1 - i]], Z[i]); /* reversed: counter-clockwise seen along -n */
+      for (PetscInt i = 0; i < ng; i++) MBCFacePlaneCoords(&P, &s->x[3 * gv[ng - 1 - i]], Z[i]); /* reversed: counter-clockwise seen along -n */
       if (!(PolyArea2(Z, ng) > 1e-12 * amaster)) continue;                         /* edge-on */
       for (PetscInt i = 0; i < nv; i++) W[i][0] = P.Y[i][0], W[i][1] = P.Y[i][1];
       Clip(W, &nw, Z, ng);

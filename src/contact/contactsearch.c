@@ -271,9 +271,7 @@ PetscBool MBCCoupleProjectOnFacePlane(MBCCouple *c, const PetscReal xm[], const 
       MBCSurfaceFacePlane(s, f, &Pf);
       P = &Pf;
     }
-    MBCSub(p, cf, e);
-    y[0] = MBCDot(e, P->e1);
-    y[1] = MBCDot(e, P->e2);
+    MBCFacePlaneCoords(P, p, y);
     u = v = 0.5;
     if (!MBCBilinearInverse(P->B, y, &u, &v)) return PETSC_FALSE;
     u        = PetscMin(PetscMax(u, 0), 1);
@@ -315,7 +313,7 @@ void MBCSurfaceFacePlane(const MBCSurface *s, PetscInt f, MBCFacePlane *P)
 {
   const PetscInt *fv = &s->fnode[MBC_MAX_FACE_NODES * f];
   const PetscInt  nv = s->fnv[f];
-  PetscReal       a, e[3];
+  PetscReal       a;
 
   for (PetscInt d = 0; d < 3; d++) {
     P->c[d] = s->fcenter[3 * f + d];
@@ -326,11 +324,7 @@ void MBCSurfaceFacePlane(const MBCSurface *s, PetscInt f, MBCFacePlane *P)
   for (PetscInt d = 0; d < 3; d++) P->e1[d] -= a * P->n[d];
   MBCNormalize(P->e1);
   MBCCross(P->n, P->e1, P->e2);
-  for (PetscInt i = 0; i < nv; i++) {
-    MBCSub(&s->x[3 * fv[i]], P->c, e);
-    P->Y[i][0] = MBCDot(e, P->e1);
-    P->Y[i][1] = MBCDot(e, P->e2);
-  }
+  for (PetscInt i = 0; i < nv; i++) MBCFacePlaneCoords(P, &s->x[3 * fv[i]], P->Y[i]);
   for (PetscInt d = 0; d < 2 && nv == 4; d++) {
     P->B[0][d] = P->Y[0][d];
     P->B[1][d] = P->Y[1][d] - P->Y[0][d];

@@ -174,6 +174,14 @@ static inline PetscReal MBCNormalize(PetscReal a[])
   if (n > 0) a[0] /= n, a[1] /= n, a[2] /= n;
   return n;
 }
+/* x's coordinates y in the plane of P (MBCFacePlane): along e1, e2 from its centre */
+static inline void MBCFacePlaneCoords(const MBCFacePlane *P, const PetscReal x[], PetscReal y[])
+{
+  PetscReal e[3];
+  MBCSub(x, P->c, e);
+  y[0] = MBCDot(e, P->e1);
+  y[1] = MBCDot(e, P->e2);
+}
 /* signed area of triangle (a, b, c) seen along the unit normal n */
 static inline PetscReal MBCArea(const PetscReal a[], const PetscReal b[], const PetscReal c[], const PetscReal n[])
 {
