@@ -159,15 +159,9 @@ static PetscErrorCode NewtonLUSolve(KSP klu, Vec b, Vec x, KSPConvergedReason *r
   PetscCall(KSPSolve(klu, bj, xj));
   PetscCall(KSPGetConvergedReason(klu, reason));
   {
-    PC             pc;
-    PCFailedReason pcr;
-    PetscMPIInt    failed;
+    PC pc;
     PetscCall(KSPGetPC(klu, &pc));
     PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCMBCMIXEDLU, &refined));
-    PetscCall(PCGetFailedReasonRank(pc, &pcr)); /* PCMBCMIXEDLU's factor in double, made in a solve, singular */
-    failed = pcr != PC_NOERROR;
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &failed, 1, MPI_INT, MPI_LOR, PetscObjectComm((PetscObject)klu)));
-    if (failed) *reason = KSP_DIVERGED_PC_FAILED;
   }
   if (*reason >= 0 && !refined) {
     PetscCall(VecDuplicate(bj, &res));
