@@ -237,6 +237,15 @@ static inline PetscReal FrameT(const NewtonFrame *f, PetscInt e, PetscInt d)
    rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
    [B G_A^T; G_A 0] with constraints, each slipping contact in its frame (NewtonFrame). J's rows:
    each rank's active contacts' rows in rank order, then the rigid modes on the last rank. */
+/* W's rows o .. o + dim - 1 (a contact's) have the same columns (W's CSR arrays) */
+static PetscBool NewtonRowsAlike(const PetscInt wi[], const PetscInt wj[], PetscInt o, PetscInt dim)
+{
+  const PetscInt n = wi[o + 1] - wi[o];
+  for (PetscInt e = 1; e < dim; e++)
+    if (wi[o + e + 1] - wi[o + e] != n || memcmp(wj + wi[o], wj + wi[o + e], (size_t)n * sizeof(PetscInt))) return PETSC_FALSE;
+  return PETSC_TRUE;
+}
+
 static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
 {
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
@@ -370,8 +379,11 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       Mat          J, GTs = NULL, Gs = NULL;
       PetscInt    *dnz, *onz, jstart, jend, nmark, *act, wstart, *tcol;
       PetscReal    dmax = 0, nnz = 0, *twt;
-      PetscBool    dense = PETSC_FALSE;
+      PetscBool    dense = PETSC_FALSE, rowij = PETSC_FALSE;
       PetscScalar *vals;
+      PetscInt     nwi;
+      const PetscInt    *wi = NULL, *wj = NULL;
+      const PetscScalar *wa = NULL;
       { /* per column of W, its active row (-1: not active), and per active row the (up to two)
            columns of J it contributes to with their weights (T's row): J's rows are read from W's
            own rows (copying W_AA out first, MatCreateSubMatrix, took 4 s of a 90-step dam
@@ -430,6 +442,12 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       for (PetscInt k = 0; k <= Nloc; k++) nt->mark[k] = -1;
       for (PetscInt k = 0; k < 3 * (Nloc + 1); k++) nt->work[k] = 0;
       PetscCall(PetscMalloc3(nloc + 1, &dnz, nloc + 1, &onz, Nloc + 1, &vals));
+      if (!GTs) { /* one rank: W's CSR arrays, read a contact at a time */
+        PetscBool seq;
+        PetscCall(PetscObjectTypeCompare((PetscObject)fp->W, MATSEQAIJ, &seq));
+        if (seq) PetscCall(MatGetRowIJ(fp->W, 0, PETSC_FALSE, PETSC_FALSE, &nwi, &wi, &wj, &rowij));
+        if (rowij) PetscCall(MatSeqAIJGetArrayRead(fp->W, &wa));
+      }
       /* two passes over the active contacts: the row patterns (preallocation), then the values */
       for (PetscInt pass = 0; pass < 2; pass++) {
         if (pass == 1) { /* dense storage and LAPACK's LU when J is mostly nonzero: a dam's
@@ -465,27 +483,45 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             }
           }
           nmark = 0;
-          for (PetscInt e = 0; e < dim; e++) { /* the union of the contact's rows of W_AA and G_A^T */
-            for (PetscInt part = 0; part < (GTs ? 2 : 1); part++) {
-              Mat                src = part ? GTs : fp->W;
-              const PetscInt     grow = part ? astart + ka + e : wstart + o + e;
-              PetscInt           ncols;
-              const PetscInt    *cc;
-              const PetscScalar *vv;
-              PetscCall(MatGetRow(src, grow, &ncols, &cc, &vv));
-              for (PetscInt j = 0; j < ncols; j++) {
-                const PetscInt ja = part ? -1 : act[cc[j]];
-                if (!part && ja < 0) continue;
-                for (PetscInt s = 0; s < (part ? 1 : 2); s++) {
-                  const PetscInt  c = part ? cc[j] + NR : tcol[2 * ja + s];
-                  const PetscReal v = part ? PetscRealPart(vv[j]) : twt[2 * ja + s] * PetscRealPart(vv[j]);
-                  if (c < 0) continue;
-                  if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
-                  if (pass == 1)
-                    for (PetscInt d = 0; d < nd; d++) nt->work[3 * nt->mark[c] + d] += Br[3 * d + e] * v;
-                }
+          if (wa && NewtonRowsAlike(wi, wj, o, dim)) { /* one pass over the columns for all its rows */
+            const PetscInt *cc = wj + wi[o];
+            for (PetscInt j = 0; j < wi[o + 1] - wi[o]; j++) {
+              const PetscInt ja = act[cc[j]];
+              PetscReal      bw[3] = {0, 0, 0}; /* L B W's column j on the contact's rows */
+              if (ja < 0) continue;
+              for (PetscInt d = 0; d < nd && pass == 1; d++)
+                for (PetscInt e = 0; e < dim; e++) bw[d] += Br[3 * d + e] * PetscRealPart(wa[wi[o + e] + j]);
+              for (PetscInt s = 0; s < 2; s++) {
+                const PetscInt c = tcol[2 * ja + s];
+                if (c < 0) continue;
+                if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+                if (pass == 1)
+                  for (PetscInt d = 0; d < nd; d++) nt->work[3 * nt->mark[c] + d] += twt[2 * ja + s] * bw[d];
               }
-              PetscCall(MatRestoreRow(src, grow, &ncols, &cc, &vv));
+            }
+          } else {
+            for (PetscInt e = 0; e < dim; e++) { /* the union of the contact's rows of W_AA and G_A^T */
+              for (PetscInt part = 0; part < (GTs ? 2 : 1); part++) {
+                Mat                src = part ? GTs : fp->W;
+                const PetscInt     grow = part ? astart + ka + e : wstart + o + e;
+                PetscInt           ncols;
+                const PetscInt    *cc;
+                const PetscScalar *vv;
+                PetscCall(MatGetRow(src, grow, &ncols, &cc, &vv));
+                for (PetscInt j = 0; j < ncols; j++) {
+                  const PetscInt ja = part ? -1 : act[cc[j]];
+                  if (!part && ja < 0) continue;
+                  for (PetscInt s = 0; s < (part ? 1 : 2); s++) {
+                    const PetscInt  c = part ? cc[j] + NR : tcol[2 * ja + s];
+                    const PetscReal v = part ? PetscRealPart(vv[j]) : twt[2 * ja + s] * PetscRealPart(vv[j]);
+                    if (c < 0) continue;
+                    if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+                    if (pass == 1)
+                      for (PetscInt d = 0; d < nd; d++) nt->work[3 * nt->mark[c] + d] += Br[3 * d + e] * v;
+                  }
+                }
+                PetscCall(MatRestoreRow(src, grow, &ncols, &cc, &vv));
+              }
             }
           }
           for (PetscInt e = 0; e < nd; e++) { /* the contact's own columns (A and the shift) */
@@ -543,6 +579,8 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             for (PetscInt j = 0; j < ng; j++) dnz[nR + j] = nloc, onz[nR + j] = Nloc - nloc;
         }
       }
+      if (wa) PetscCall(MatSeqAIJRestoreArrayRead(fp->W, &wa));
+      if (rowij) PetscCall(MatRestoreRowIJ(fp->W, 0, PETSC_FALSE, PETSC_FALSE, &nwi, &wi, &wj, &rowij));
       PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
       PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
       /* a shift of the contact rows: stick rows of a rank-deficient W (rigid bodies, redundant
@@ -757,7 +795,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
   MBCFrictionProblem *fp = m->fp;
   PetscReal           psi, *hist;
   PetscReal           best;
-  PetscBool           slips;
+  PetscBool           slips, ufresh = PETSC_TRUE; /* u = W r + q (+ G^T alpha) computed, not accumulated */
   PetscInt            fails = 0, stall = 0, restarts = 0;
   Vec                 rbest, abest = NULL;
   char                line[128] = "";
@@ -804,6 +842,12 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
   for (m->its = 0;; m->its++) {
     PetscReal ref = hist[0], t = 1, psit = psi;
     PetscInt  ls;
+    if (!ufresh && m->merit < m->rtol) { /* converged on the accumulated u: confirmed on u afresh */
+      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
+      ufresh = PETSC_TRUE;
+    }
     PetscCall(MBCMultiplierMonitorMerit(m, m->its, m->merit, line));
     if (PetscIsInfOrNanReal(m->merit)) m->reason = MBC_MULTIPLIER_DIVERGED_NANORINF;
     else if (m->merit < m->rtol) m->reason = MBC_MULTIPLIER_CONVERGED_RTOL;
@@ -826,11 +870,16 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       if (fp->G) PetscCall(VecCopy(nt->alphat, fp->alpha));
       if (ls == nt->ls_max) fails++, nt->lsfail++;
       else fails = 0;
-    } else { /* Gauss-Seidel sweeps instead */
+      /* u + t W dr, not W r + q afresh: a product of W less an iteration (a third of a kept-inverse
+         step's cost); the rounding it accumulates is removed where the merit says converged */
+      PetscCall(VecCopy(nt->ut, u));
+      ufresh = PETSC_FALSE;
+    } else { /* Gauss-Seidel sweeps instead (u afresh after them) */
       nt->lsfail++;
       PetscCall(NewtonSweeps(m, nt->pgs_fallback, r, u));
+      if (!nt->pgs_fallback) PetscCall(MBCFrictionVelocity(fp, r, u));
+      ufresh = PETSC_TRUE;
     }
-    PetscCall(MBCFrictionVelocity(fp, r, u)); /* afresh, not accumulated */
     PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
     if (m->merit < 0.5 * best || (m->merit < best && stall < nt->watchdog)) { /* the best iterate, kept */
       if (m->merit < 0.5 * best) stall = 0;
@@ -860,6 +909,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       } else PetscCall(NewtonSweeps(m, restarts * nt->pgs_fallback, r, u));
       PetscCall(MBCFrictionVelocity(fp, r, u));
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
+      ufresh = PETSC_TRUE;
       stall = 0;
     }
     PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
@@ -867,6 +917,10 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     for (PetscInt k = nt->nonmonotone - 1; k > 0; k--) hist[k] = hist[k - 1];
     hist[0] = psi;
     if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (!NewtonCanSweep(m) ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
+  }
+  if (!ufresh) { /* a solve stopped unconverged on the accumulated u */
+    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
   }
   if (m->reason > 0) { /* the iterate into the cones (Newton's iterates are not in them), kept if it
                           still meets the tolerance: with a rank-deficient W a projection can move u
