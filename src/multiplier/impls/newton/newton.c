@@ -237,12 +237,56 @@ static inline PetscReal FrameT(const NewtonFrame *f, PetscInt e, PetscInt d)
    rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
    [B G_A^T; G_A 0] with constraints, each slipping contact in its frame (NewtonFrame). J's rows:
    each rank's active contacts' rows in rank order, then the rigid modes on the last rank. */
-/* W's rows o .. o + dim - 1 (a contact's) have the same columns (W's CSR arrays) */
-static PetscBool NewtonRowsAlike(const PetscInt wi[], const PetscInt wj[], PetscInt o, PetscInt dim)
+/* A part of W's local rows in CSR (an AIJ W: on several ranks its diagonal block, columns from
+   cstart, and its off-diagonal block, columns through cmap), for the Newton matrix's assembly. */
+typedef struct {
+  Mat                A;
+  PetscInt           n, cstart;
+  const PetscInt    *i, *j, *cmap;
+  const PetscScalar *a;
+  PetscBool          done;
+} WCSR;
+
+static PetscErrorCode WCSRGet(Mat W, WCSR w[2], PetscInt *n)
 {
-  const PetscInt n = wi[o + 1] - wi[o];
-  for (PetscInt e = 1; e < dim; e++)
-    if (wi[o + e + 1] - wi[o + e] != n || memcmp(wj + wi[o], wj + wi[o + e], (size_t)n * sizeof(PetscInt))) return PETSC_FALSE;
+  PetscBool seq, mpi;
+
+  PetscFunctionBegin;
+  *n = 0;
+  PetscCall(PetscObjectTypeCompare((PetscObject)W, MATSEQAIJ, &seq));
+  PetscCall(PetscObjectTypeCompare((PetscObject)W, MATMPIAIJ, &mpi));
+  if (seq) w[0].A = W, *n = 1;
+  else if (mpi) {
+    PetscCall(MatMPIAIJGetSeqAIJ(W, &w[0].A, &w[1].A, &w[1].cmap));
+    PetscCall(MatGetOwnershipRangeColumn(W, &w[0].cstart, NULL));
+    *n = 2;
+  }
+  for (PetscInt p = 0; p < *n; p++) {
+    PetscCall(MatGetRowIJ(w[p].A, 0, PETSC_FALSE, PETSC_FALSE, &w[p].n, &w[p].i, &w[p].j, &w[p].done));
+    PetscCheck(w[p].done, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W's CSR arrays not available");
+    PetscCall(MatSeqAIJGetArrayRead(w[p].A, &w[p].a));
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode WCSRRestore(WCSR w[2], PetscInt n)
+{
+  PetscFunctionBegin;
+  for (PetscInt p = 0; p < n; p++) {
+    PetscCall(MatSeqAIJRestoreArrayRead(w[p].A, &w[p].a));
+    PetscCall(MatRestoreRowIJ(w[p].A, 0, PETSC_FALSE, PETSC_FALSE, &w[p].n, &w[p].i, &w[p].j, &w[p].done));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* W's local rows o .. o + dim - 1 (a contact's) have the same columns in every part */
+static PetscBool WCSRRowsAlike(const WCSR w[2], PetscInt n, PetscInt o, PetscInt dim)
+{
+  for (PetscInt p = 0; p < n; p++) {
+    const PetscInt *wi = w[p].i, *wj = w[p].j, c = wi[o + 1] - wi[o];
+    for (PetscInt e = 1; e < dim; e++)
+      if (wi[o + e + 1] - wi[o + e] != c || memcmp(wj + wi[o], wj + wi[o + e], (size_t)c * sizeof(PetscInt))) return PETSC_FALSE;
+  }
   return PETSC_TRUE;
 }
 
@@ -379,11 +423,10 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       Mat          J, GTs = NULL, Gs = NULL;
       PetscInt    *dnz, *onz, jstart, jend, nmark, *act, wstart, *tcol;
       PetscReal    dmax = 0, nnz = 0, *twt;
-      PetscBool    dense = PETSC_FALSE, rowij = PETSC_FALSE;
+      PetscBool    dense = PETSC_FALSE;
       PetscScalar *vals;
-      PetscInt     nwi;
-      const PetscInt    *wi = NULL, *wj = NULL;
-      const PetscScalar *wa = NULL;
+      WCSR         wcsr[2] = {{0}}; /* W's CSR parts on this rank: its diagonal and off-diagonal blocks */
+      PetscInt     nwcsr   = 0;
       { /* per column of W, its active row (-1: not active), and per active row the (up to two)
            columns of J it contributes to with their weights (T's row): J's rows are read from W's
            own rows (copying W_AA out first, MatCreateSubMatrix, took 4 s of a 90-step dam
@@ -442,12 +485,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       for (PetscInt k = 0; k <= Nloc; k++) nt->mark[k] = -1;
       for (PetscInt k = 0; k < 3 * (Nloc + 1); k++) nt->work[k] = 0;
       PetscCall(PetscMalloc3(nloc + 1, &dnz, nloc + 1, &onz, Nloc + 1, &vals));
-      if (!GTs) { /* one rank: W's CSR arrays, read a contact at a time */
-        PetscBool seq;
-        PetscCall(PetscObjectTypeCompare((PetscObject)fp->W, MATSEQAIJ, &seq));
-        if (seq) PetscCall(MatGetRowIJ(fp->W, 0, PETSC_FALSE, PETSC_FALSE, &nwi, &wi, &wj, &rowij));
-        if (rowij) PetscCall(MatSeqAIJGetArrayRead(fp->W, &wa));
-      }
+      if (!GTs) PetscCall(WCSRGet(fp->W, wcsr, &nwcsr));
       /* two passes over the active contacts: the row patterns (preallocation), then the values */
       for (PetscInt pass = 0; pass < 2; pass++) {
         if (pass == 1) { /* dense storage and LAPACK's LU when J is mostly nonzero: a dam's
@@ -483,20 +521,23 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             }
           }
           nmark = 0;
-          if (wa && NewtonRowsAlike(wi, wj, o, dim)) { /* one pass over the columns for all its rows */
-            const PetscInt *cc = wj + wi[o];
-            for (PetscInt j = 0; j < wi[o + 1] - wi[o]; j++) {
-              const PetscInt ja = act[cc[j]];
-              PetscReal      bw[3] = {0, 0, 0}; /* L B W's column j on the contact's rows */
-              if (ja < 0) continue;
-              for (PetscInt d = 0; d < nd && pass == 1; d++)
-                for (PetscInt e = 0; e < dim; e++) bw[d] += Br[3 * d + e] * PetscRealPart(wa[wi[o + e] + j]);
-              for (PetscInt s = 0; s < 2; s++) {
-                const PetscInt c = tcol[2 * ja + s];
-                if (c < 0) continue;
-                if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
-                if (pass == 1)
-                  for (PetscInt d = 0; d < nd; d++) nt->work[3 * nt->mark[c] + d] += twt[2 * ja + s] * bw[d];
+          if (nwcsr && WCSRRowsAlike(wcsr, nwcsr, o, dim)) { /* one pass over the columns for all its rows */
+            for (PetscInt part = 0; part < nwcsr; part++) {
+              const WCSR     *w  = &wcsr[part];
+              const PetscInt *cc = w->j + w->i[o];
+              for (PetscInt j = 0; j < w->i[o + 1] - w->i[o]; j++) {
+                const PetscInt ja = act[w->cmap ? w->cmap[cc[j]] : w->cstart + cc[j]];
+                PetscReal      bw[3] = {0, 0, 0}; /* L B W's column on the contact's rows */
+                if (ja < 0) continue;
+                for (PetscInt d = 0; d < nd && pass == 1; d++)
+                  for (PetscInt e = 0; e < dim; e++) bw[d] += Br[3 * d + e] * PetscRealPart(w->a[w->i[o + e] + j]);
+                for (PetscInt s = 0; s < 2; s++) {
+                  const PetscInt c = tcol[2 * ja + s];
+                  if (c < 0) continue;
+                  if (nt->mark[c] < 0) nt->mark[c] = nmark, nt->cols[nmark++] = c;
+                  if (pass == 1)
+                    for (PetscInt d = 0; d < nd; d++) nt->work[3 * nt->mark[c] + d] += twt[2 * ja + s] * bw[d];
+                }
               }
             }
           } else {
@@ -579,8 +620,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             for (PetscInt j = 0; j < ng; j++) dnz[nR + j] = nloc, onz[nR + j] = Nloc - nloc;
         }
       }
-      if (wa) PetscCall(MatSeqAIJRestoreArrayRead(fp->W, &wa));
-      if (rowij) PetscCall(MatRestoreRowIJ(fp->W, 0, PETSC_FALSE, PETSC_FALSE, &nwi, &wi, &wj, &rowij));
+      PetscCall(WCSRRestore(wcsr, nwcsr));
       PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
       PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
       /* a shift of the contact rows: stick rows of a rank-deficient W (rigid bodies, redundant

@@ -89,47 +89,80 @@ PetscErrorCode MBCNewtonRowsAllGather(MPI_Comm comm, PetscInt nl, const PetscInt
 }
 
 /* W's rows `rows` (global, the same on every rank), dense on every rank: W is most of the time
-   more than half full, and dense products run at BLAS's speed. On one rank the rows are written
-   straight from W's (MatCreateSubMatrices and MatConvert copied them twice, 2.4 s of the 49k
-   dam's 90 earthquake steps); on several the other ranks' rows come by MatCreateSubMatrices. */
+   more than half full, and dense products run at BLAS's speed. Each rank writes the rows it owns
+   straight from W's and a sum over the ranks completes them (every row has one owner, the others
+   add zeros). MatCreateSubMatrices and MatConvert copied them twice: 2.4 s of the 49k dam's 90
+   earthquake steps on one rank, 5.6 s on two. */
 static PetscErrorCode WRowsDense(Mat W, IS rows, Mat *D)
 {
-  PetscInt    N;
-  PetscMPIInt size;
+  const PetscInt *idx;
+  PetscInt        N, k, lda, rs, re;
+  PetscScalar    *d;
+  MPI_Comm        comm = PetscObjectComm((PetscObject)W);
+  PetscMPIInt     size;
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(W, &N, NULL));
-  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)W), &size));
-  if (size == 1) {
-    const PetscInt *idx;
-    PetscInt        k, lda;
-    PetscScalar    *d;
-    PetscCall(ISGetLocalSize(rows, &k));
-    PetscCall(ISGetIndices(rows, &idx));
-    PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, k, N, NULL, D));
-    PetscCall(MatDenseGetLDA(*D, &lda));
-    PetscCall(MatDenseGetArrayWrite(*D, &d));
-    for (PetscInt r = 0; r < k; r++) {
-      PetscInt           nc;
-      const PetscInt    *cols;
-      const PetscScalar *vals;
-      PetscCall(MatGetRow(W, idx[r], &nc, &cols, &vals));
-      for (PetscInt j = 0; j < nc; j++) d[(size_t)cols[j] * lda + r] = vals[j];
-      PetscCall(MatRestoreRow(W, idx[r], &nc, &cols, &vals));
-    }
-    PetscCall(MatDenseRestoreArrayWrite(*D, &d));
-    PetscCall(ISRestoreIndices(rows, &idx));
-  } else {
-    IS   isall;
-    Mat *sub;
-    PetscCall(ISCreateStride(PETSC_COMM_SELF, N, 0, 1, &isall));
-    PetscCall(MatCreateSubMatrices(W, 1, &rows, &isall, MAT_INITIAL_MATRIX, &sub));
-    PetscCall(MatConvert(sub[0], MATSEQDENSE, MAT_INITIAL_MATRIX, D));
-    PetscCall(MatDestroySubMatrices(1, &sub));
-    PetscCall(ISDestroy(&isall));
+  PetscCall(MatGetOwnershipRange(W, &rs, &re));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(ISGetLocalSize(rows, &k));
+  PetscCall(ISGetIndices(rows, &idx));
+  PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, k, N, NULL, D));
+  PetscCall(MatDenseGetLDA(*D, &lda));
+  PetscCall(MatDenseGetArrayWrite(*D, &d)); /* zeroed by MatSeqDenseSetPreallocation */
+  for (PetscInt r = 0; r < k; r++) {
+    PetscInt           nc;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    if (idx[r] < rs || idx[r] >= re) continue;
+    PetscCall(MatGetRow(W, idx[r], &nc, &cols, &vals));
+    for (PetscInt j = 0; j < nc; j++) d[(size_t)cols[j] * lda + r] = vals[j];
+    PetscCall(MatRestoreRow(W, idx[r], &nc, &cols, &vals));
   }
+  if (size > 1 && k) {
+    PetscMPIInt n;
+    PetscCheck(lda == k, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W's rows: a dense leading dimension %" PetscInt_FMT " for %" PetscInt_FMT " rows", lda, k);
+    PetscCall(PetscMPIIntCast((PetscInt64)k * N, &n));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, d, n, MPIU_SCALAR, MPIU_SUM, comm));
+  }
+  PetscCall(MatDenseRestoreArrayWrite(*D, &d));
+  PetscCall(ISRestoreIndices(rows, &idx));
   PetscCall(MatAssemblyBegin(*D, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*D, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
+/* Z's entries on the rows and columns `rows` (global, the same on every rank), k x k column-major
+   on every rank: each rank copies its own rows of Z (stored by columns, every column on every
+   rank), a sum over the ranks completes them; MatCreateSubMatrices on the MPI dense Z took 4 s of
+   the 49k dam's 90 earthquake steps on two ranks. */
+static PetscErrorCode ZRowsCols(Mat Z, IS rows, PetscScalar **zkk)
+{
+  const PetscInt    *idx;
+  const PetscScalar *z;
+  PetscInt           k, lda, rs, re;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)Z);
+  PetscMPIInt        size;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetOwnershipRange(Z, &rs, &re));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(ISGetLocalSize(rows, &k));
+  PetscCall(ISGetIndices(rows, &idx));
+  PetscCall(PetscCalloc1((size_t)k * k + 1, zkk));
+  PetscCall(MatDenseGetLDA(Z, &lda));
+  PetscCall(MatDenseGetArrayRead(Z, &z));
+  for (PetscInt r = 0; r < k; r++) {
+    if (idx[r] < rs || idx[r] >= re) continue;
+    for (PetscInt c = 0; c < k; c++) (*zkk)[(size_t)c * k + r] = z[(size_t)idx[c] * lda + idx[r] - rs];
+  }
+  PetscCall(MatDenseRestoreArrayRead(Z, &z));
+  PetscCall(ISRestoreIndices(rows, &idx));
+  if (size > 1 && k) {
+    PetscMPIInt n;
+    PetscCall(PetscMPIIntCast((PetscInt64)k * k, &n));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, *zkk, n, MPIU_SCALAR, MPIU_SUM, comm));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -473,16 +506,13 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp = m->fp;
-  const PetscScalar  *z;
-  PetscInt            lda;
-  Mat                *zcc;
+  PetscScalar        *z;
+  const PetscInt      lda = lr->k;
   PetscBLASInt        kb;
 
   PetscFunctionBegin;
-  PetscCall(MatCreateSubMatrices(nt->Z, 1, &lr->is, &lr->is, MAT_INITIAL_MATRIX, &zcc));
+  PetscCall(ZRowsCols(nt->Z, lr->is, &z));
   PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
-  PetscCall(MatDenseGetArrayRead(zcc[0], &z));
-  PetscCall(MatDenseGetLDA(zcc[0], &lda));
   PetscCall(PetscMalloc2(lr->k * lr->k, &lr->M, lr->k, &lr->piv));
   for (PetscInt c = 0; c < lr->k; c++)
     for (PetscInt r = 0; r < lr->k; r++) {
@@ -504,8 +534,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
       }
       lr->M[c * lr->k + r] = v;
     }
-  PetscCall(MatDenseRestoreArrayRead(zcc[0], &z));
-  PetscCall(MatDestroySubMatrices(1, &zcc));
+  PetscCall(PetscFree(z));
   PetscCall(PetscBLASIntCast(lr->k, &kb));
   PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&kb, &kb, lr->M, &kb, lr->piv, info));
   PetscFunctionReturn(0);
