@@ -232,11 +232,6 @@ static inline PetscReal FrameT(const NewtonFrame *f, PetscInt e, PetscInt d)
   return f->reduced ? f->T[2 * e + d] : (PetscReal)(e == d);
 }
 
-/* The Newton step at the current iterate (A, B, active from ACResidual): dr on every row,
-   dalpha with equilibrium constraints. Rows of separated contacts: dr = -phi = -r. The active
-   rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
-   [B G_A^T; G_A 0] with constraints, each slipping contact in its frame (NewtonFrame). J's rows:
-   each rank's active contacts' rows in rank order, then the rigid modes on the last rank. */
 /* A part of W's local rows in CSR (an AIJ W: on several ranks its diagonal block, columns from
    cstart, and its off-diagonal block, columns through cmap), for the Newton matrix's assembly. */
 typedef struct {
@@ -290,6 +285,11 @@ static PetscBool WCSRRowsAlike(const WCSR w[2], PetscInt n, PetscInt o, PetscInt
   return PETSC_TRUE;
 }
 
+/* The Newton step at the current iterate (A, B, active from ACResidual): dr on every row,
+   dalpha with equilibrium constraints. Rows of separated contacts: dr = -phi = -r. The active
+   rows solve J dr_A = -phi_A - B_A (W dr_I)_A with J = A + B W_AA (+ shift), bordered by
+   [B G_A^T; G_A 0] with constraints, each slipping contact in its frame (NewtonFrame). J's rows:
+   each rank's active contacts' rows in rank order, then the rigid modes on the last rank. */
 static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
 {
   MBC_Newton         *nt   = (MBC_Newton *)m->data;

@@ -88,6 +88,20 @@ PetscErrorCode MBCNewtonRowsAllGather(MPI_Comm comm, PetscInt nl, const PetscInt
   PetscFunctionReturn(0);
 }
 
+/* a[0 .. n) summed over the ranks, in place: arrays whose rows each rank filled only where it
+   owns them (the others hold zeros there) */
+static PetscErrorCode SumOverRanks(MPI_Comm comm, PetscScalar a[], PetscInt64 n)
+{
+  PetscMPIInt size, nm;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  if (size == 1 || !n) PetscFunctionReturn(0);
+  PetscCall(PetscMPIIntCast(n, &nm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, a, nm, MPIU_SCALAR, MPIU_SUM, comm));
+  PetscFunctionReturn(0);
+}
+
 /* W's rows `rows` (global, the same on every rank), dense on every rank: W is most of the time
    more than half full, and dense products run at BLAS's speed. Each rank writes the rows it owns
    straight from W's and a sum over the ranks completes them (every row has one owner, the others
@@ -98,13 +112,10 @@ static PetscErrorCode WRowsDense(Mat W, IS rows, Mat *D)
   const PetscInt *idx;
   PetscInt        N, k, lda, rs, re;
   PetscScalar    *d;
-  MPI_Comm        comm = PetscObjectComm((PetscObject)W);
-  PetscMPIInt     size;
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(W, &N, NULL));
   PetscCall(MatGetOwnershipRange(W, &rs, &re));
-  PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(ISGetLocalSize(rows, &k));
   PetscCall(ISGetIndices(rows, &idx));
   PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, k, N, NULL, D));
@@ -119,12 +130,8 @@ static PetscErrorCode WRowsDense(Mat W, IS rows, Mat *D)
     for (PetscInt j = 0; j < nc; j++) d[(size_t)cols[j] * lda + r] = vals[j];
     PetscCall(MatRestoreRow(W, idx[r], &nc, &cols, &vals));
   }
-  if (size > 1 && k) {
-    PetscMPIInt n;
-    PetscCheck(lda == k, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W's rows: a dense leading dimension %" PetscInt_FMT " for %" PetscInt_FMT " rows", lda, k);
-    PetscCall(PetscMPIIntCast((PetscInt64)k * N, &n));
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, d, n, MPIU_SCALAR, MPIU_SUM, comm));
-  }
+  PetscCheck(!k || lda == k, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W's rows: a dense leading dimension %" PetscInt_FMT " for %" PetscInt_FMT " rows", lda, k);
+  PetscCall(SumOverRanks(PetscObjectComm((PetscObject)W), d, (PetscInt64)k * N));
   PetscCall(MatDenseRestoreArrayWrite(*D, &d));
   PetscCall(ISRestoreIndices(rows, &idx));
   PetscCall(MatAssemblyBegin(*D, MAT_FINAL_ASSEMBLY));
@@ -141,12 +148,9 @@ static PetscErrorCode ZRowsCols(Mat Z, IS rows, PetscScalar **zkk)
   const PetscInt    *idx;
   const PetscScalar *z;
   PetscInt           k, lda, rs, re;
-  MPI_Comm           comm = PetscObjectComm((PetscObject)Z);
-  PetscMPIInt        size;
 
   PetscFunctionBegin;
   PetscCall(MatGetOwnershipRange(Z, &rs, &re));
-  PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(ISGetLocalSize(rows, &k));
   PetscCall(ISGetIndices(rows, &idx));
   PetscCall(PetscCalloc1((size_t)k * k + 1, zkk));
@@ -158,11 +162,7 @@ static PetscErrorCode ZRowsCols(Mat Z, IS rows, PetscScalar **zkk)
   }
   PetscCall(MatDenseRestoreArrayRead(Z, &z));
   PetscCall(ISRestoreIndices(rows, &idx));
-  if (size > 1 && k) {
-    PetscMPIInt n;
-    PetscCall(PetscMPIIntCast((PetscInt64)k * k, &n));
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, *zkk, n, MPIU_SCALAR, MPIU_SUM, comm));
-  }
+  PetscCall(SumOverRanks(PetscObjectComm((PetscObject)Z), *zkk, (PetscInt64)k * k));
   PetscFunctionReturn(0);
 }
 
@@ -176,7 +176,7 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
   PetscInt            N, rs, re, nl, nloc = 0, *orow, lda, ldo;
-  PetscMPIInt         size, *cnt, *dsp;
+  PetscMPIInt        *cnt, *dsp;
   IS                  isO;
   Mat                 wod;
   const PetscScalar  *z, *w;
@@ -187,7 +187,6 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   PetscCall(MatGetSize(fp->W, &N, NULL));
   PetscCall(MatGetOwnershipRange(fp->W, &rs, &re));
   nl = re - rs;
-  PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscMalloc1(fp->off[fp->nc] + 1, &orow));
   for (PetscInt i = 0; i < fp->nc; i++)
     if (nt->refopen[i])
@@ -222,11 +221,7 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
   PetscCall(MatDenseRestoreArrayRead(wod, &w));
   PetscCall(MatDestroy(&wod));
-  if (size > 1) {
-    PetscMPIInt n;
-    PetscCall(PetscMPIIntCast(nt->nO * N, &n));
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, nt->WZ, n, MPIU_SCALAR, MPIU_SUM, comm));
-  }
+  PetscCall(SumOverRanks(comm, nt->WZ, (PetscInt64)nt->nO * N));
   PetscCall(ISDestroy(&isO));
   PetscFunctionReturn(0);
 }
