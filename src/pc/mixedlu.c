@@ -1,5 +1,7 @@
 /* PCMBCMIXEDLU ("mbcmixedlu"): a dense LU in single precision whose solves are refined in double,
-   LAPACK's dsgesv with the factor kept for several solves. On one rank (MATSEQDENSE).
+   LAPACK's dsgesv with the factor kept for several solves. On one rank a MATSEQDENSE (LAPACK), on
+   several a MATSCALAPACK (ScaLAPACK's psgetrf on its block-cyclic array; the residual by its own
+   product, in double).
    Why: the contact Newton matrix of a dam is dense (every contact couples with every other through
    the bodies) and its LU is most of an earthquake step; single precision's LU runs at twice double's
    speed (OpenBLAS here: 27 against 14 GFlop/s at n = 2000), and a refinement step costs two passes
@@ -12,6 +14,11 @@
 #include <petsc/private/pcimpl.h>
 #include <petscblaslapack.h>
 #include <float.h>
+#if defined(PETSC_HAVE_SCALAPACK)
+  #include <petsc/private/petscscalapack.h>
+PETSC_EXTERN void psgetrf_(const PetscBLASInt *, const PetscBLASInt *, float *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, PetscBLASInt *, PetscBLASInt *);
+PETSC_EXTERN void psgetrs_(const char *, const PetscBLASInt *, const PetscBLASInt *, const float *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, float *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, PetscBLASInt *);
+#endif
 
 PETSC_EXTERN void sgetrf_(const PetscBLASInt *, const PetscBLASInt *, float *, const PetscBLASInt *, PetscBLASInt *, PetscBLASInt *);
 PETSC_EXTERN void sgetrs_(const char *, const PetscBLASInt *, const PetscBLASInt *, const float *, const PetscBLASInt *, const PetscBLASInt *, float *, const PetscBLASInt *, PetscBLASInt *);
@@ -24,6 +31,12 @@ typedef struct {
   PetscScalar  *dlu; /* J's double factor, made where the refinement failed */
   float        *sw;  /* a right side in single precision */
   PetscScalar  *r;   /* the residual */
+  /* on several ranks: slu, dlu and piv are this rank's block-cyclic parts (J's descriptor); a
+     right side goes from J's row layout (xdesc) to a column of the process grid (x2desc, x2d) */
+  PetscBool     dist;
+  PetscBLASInt  xdesc[9], x2desc[9], lszx;
+  PetscScalar  *x2d;
+  Vec           rv, sv; /* the residual, a correction */
   PetscReal     jnorm;
   PetscInt      maxit;
   PetscInt      solves, steps, doubles; /* solves, refinement steps, factors made in double */
@@ -62,9 +75,174 @@ static PetscErrorCode PCReset_MBCMixedLU(PC pc)
   PetscCall(PetscFree(lu->slu));
   PetscCall(PetscFree(lu->dlu));
   PetscCall(PetscFree3(lu->piv, lu->sw, lu->r));
-  lu->n = 0;
+  PetscCall(PetscFree(lu->x2d));
+  PetscCall(VecDestroy(&lu->rv));
+  PetscCall(VecDestroy(&lu->sv));
+  lu->n    = 0;
+  lu->dist = PETSC_FALSE;
   PetscFunctionReturn(0);
 }
+
+#if defined(PETSC_HAVE_SCALAPACK)
+/* a LAPACK info reduced over the ranks by op (MPI_MIN, MPI_MAX) */
+static PetscErrorCode InfoReduce(MPI_Comm comm, MPI_Op op, PetscBLASInt *info)
+{
+  PetscMPIInt v = (PetscMPIInt)*info;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_INT, op, comm));
+  *info = (PetscBLASInt)v;
+  PetscFunctionReturn(0);
+}
+
+/* J's double factor over the ranks in place of the single one; *zero as MixedLUDouble's */
+static PetscErrorCode MixedLUDistDouble(PC pc, PetscBLASInt *zero)
+{
+  PC_MBCMixedLU *lu = (PC_MBCMixedLU *)pc->data;
+  Mat_ScaLAPACK *a  = (Mat_ScaLAPACK *)pc->pmat->data;
+  PetscBLASInt   one = 1, info;
+  const size_t   nloc = (size_t)a->lld * a->locc;
+
+  PetscFunctionBegin;
+  PetscCall(PetscFree(lu->slu));
+  PetscCall(PetscMalloc1(nloc + 1, &lu->dlu));
+  PetscCall(PetscArraycpy(lu->dlu, a->loc, nloc));
+  PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
+  PetscCallBLAS("SCALAPACKgetrf", SCALAPACKgetrf_(&a->M, &a->N, lu->dlu, &one, &one, a->desc, lu->piv, &info));
+  PetscCall(PetscFPTrapPop());
+  PetscCall(InfoReduce(PetscObjectComm((PetscObject)pc), MPI_MAX, &info));
+  lu->doubles++;
+  if (info > 0) PetscCall(PetscFree(lu->dlu));
+  *zero = info;
+  PetscFunctionReturn(0);
+}
+
+/* J (MATSCALAPACK) factored over the ranks: ScaLAPACK's psgetrf on a float copy of this rank's
+   block-cyclic array, J's own descriptor */
+static PetscErrorCode MixedLUDistSetUp(PC pc)
+{
+  PC_MBCMixedLU  *lu = (PC_MBCMixedLU *)pc->data;
+  Mat_ScaLAPACK  *a  = (Mat_ScaLAPACK *)pc->pmat->data;
+  MPI_Comm        comm = PetscObjectComm((PetscObject)pc);
+  const size_t    nloc = (size_t)a->lld * a->locc;
+  const PetscInt *ranges;
+  PetscBLASInt    one = 1, zero = 0, nb, xlld, info = 0;
+  PetscBool       fits = PETSC_TRUE;
+
+  PetscFunctionBegin;
+  PetscCheck(a->M == a->N, comm, PETSC_ERR_ARG_SIZ, "PC %s needs a square matrix, not %d x %d", PCMBCMIXEDLU, (int)a->M, (int)a->N);
+  lu->dist = PETSC_TRUE;
+  lu->n    = a->M;
+  /* a right side: J's rows in blocks of rank 0's count (ScaLAPACK's layout of a MATSCALAPACK's
+     vectors), and a column of the process grid */
+  PetscCall(PetscLayoutGetRanges(pc->pmat->rmap, &ranges));
+  PetscCall(PetscBLASIntCast(ranges[1], &nb));
+  xlld = PetscMax(1, pc->pmat->rmap->n);
+  PetscCallBLAS("SCALAPACKdescinit", SCALAPACKdescinit_(lu->xdesc, &a->M, &one, &nb, &one, &zero, &zero, &a->grid->ictxcol, &xlld, &info));
+  PetscCheckScaLapackInfo("descinit", info);
+  lu->lszx = SCALAPACKnumroc_(&a->M, &a->mb, &a->grid->myrow, &a->rsrc, &a->grid->nprow);
+  xlld     = PetscMax(1, lu->lszx);
+  PetscCallBLAS("SCALAPACKdescinit", SCALAPACKdescinit_(lu->x2desc, &a->M, &one, &a->mb, &one, &zero, &zero, &a->grid->ictxt, &xlld, &info));
+  PetscCheckScaLapackInfo("descinit", info);
+  PetscCall(PetscMalloc3(a->locr + a->mb, &lu->piv, lu->lszx + 1, &lu->sw, 1, &lu->r));
+  PetscCall(PetscMalloc1(lu->lszx + 1, &lu->x2d));
+  PetscCall(MatCreateVecs(pc->pmat, &lu->rv, &lu->sv));
+  PetscCall(MatNorm(pc->pmat, NORM_INFINITY, &lu->jnorm));
+  PetscCall(PetscMalloc1(nloc + 1, &lu->slu));
+  PetscCall(PetscLogEventBegin(MBC_MixedLUFactor, pc, 0, 0, 0));
+  for (size_t i = 0; i < nloc; i++) {
+    const PetscReal v = PetscRealPart(a->loc[i]);
+    if (!(PetscAbsReal(v) <= FLT_MAX)) fits = PETSC_FALSE; /* also NaN */
+    lu->slu[i] = (float)v;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &fits, 1, MPIU_BOOL, MPI_LAND, comm));
+  if (fits) {
+    PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
+    psgetrf_(&a->M, &a->N, lu->slu, &one, &one, a->desc, lu->piv, &info);
+    PetscCall(PetscFPTrapPop());
+    PetscCall(InfoReduce(comm, MPI_MIN, &info)); /* an illegal argument first */
+    PetscCheck(info >= 0, comm, PETSC_ERR_LIB, "ScaLAPACK psgetrf: argument %d illegal", (int)-info);
+    PetscCall(InfoReduce(comm, MPI_MAX, &info));
+  }
+  if (!fits || info > 0) {
+    PetscCall(PetscInfo(pc, "%s single-precision LU of %d rows over the ranks: %s; factored in double\n", PCMBCMIXEDLU, (int)lu->n, fits ? "a zero pivot" : "entries out of range"));
+    PetscCall(MixedLUDistDouble(pc, &info));
+  }
+  PetscCall(PetscLogEventEnd(MBC_MixedLUFactor, pc, 0, 0, 0));
+  PetscCheck(!info, comm, PETSC_ERR_MAT_LU_ZRPVT, "Zero pivot in row %d of the dense LU", (int)info - 1);
+  PetscCall(PetscLogFlops(2.0 / 3.0 * lu->n * lu->n * lu->n / (a->grid->nprow * a->grid->npcol)));
+  PetscFunctionReturn(0);
+}
+
+/* out = J^-1 in by the factor held (single or double), in J's row layout */
+static PetscErrorCode MixedLUDistSolve(PC pc, Vec in, Vec out)
+{
+  PC_MBCMixedLU *lu = (PC_MBCMixedLU *)pc->data;
+  Mat_ScaLAPACK *a  = (Mat_ScaLAPACK *)pc->pmat->data;
+  PetscScalar   *v;
+  PetscBLASInt   one = 1, info = 0;
+
+  PetscFunctionBegin;
+  PetscCall(VecCopy(in, out));
+  PetscCall(VecGetArray(out, &v));
+  PetscCallBLAS("SCALAPACKgemr2d", SCALAPACKgemr2d_(&a->M, &one, v, &one, &one, lu->xdesc, lu->x2d, &one, &one, lu->x2desc, &a->grid->ictxcol));
+  PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
+  if (lu->slu) {
+    for (PetscBLASInt i = 0; i < lu->lszx; i++) lu->sw[i] = (float)PetscRealPart(lu->x2d[i]);
+    psgetrs_("N", &a->M, &one, lu->slu, &one, &one, a->desc, lu->piv, lu->sw, &one, &one, lu->x2desc, &info);
+    for (PetscBLASInt i = 0; i < lu->lszx; i++) lu->x2d[i] = lu->sw[i];
+  } else PetscCallBLAS("SCALAPACKgetrs", SCALAPACKgetrs_("N", &a->M, &one, lu->dlu, &one, &one, a->desc, lu->piv, lu->x2d, &one, &one, lu->x2desc, &info));
+  PetscCall(PetscFPTrapPop());
+  PetscCheckScaLapackInfo("getrs", info);
+  PetscCallBLAS("SCALAPACKgemr2d", SCALAPACKgemr2d_(&a->M, &one, lu->x2d, &one, &one, lu->x2desc, v, &one, &one, lu->xdesc, &a->grid->ictxcol));
+  PetscCall(VecRestoreArray(out, &v));
+  PetscFunctionReturn(0);
+}
+
+/* PCApply over the ranks: as the one-rank refinement, the residual by J's own product */
+static PetscErrorCode MixedLUDistApply(PC pc, Vec b, Vec x)
+{
+  PC_MBCMixedLU *lu = (PC_MBCMixedLU *)pc->data;
+  PetscReal      rprev = PETSC_MAX_REAL, tol = PETSC_MACHINE_EPSILON * PetscSqrtReal((PetscReal)lu->n) * lu->jnorm;
+  PetscBool      done  = PETSC_FALSE;
+  PetscInt       steps = 0;
+  PetscBLASInt   info;
+
+  PetscFunctionBegin;
+  lu->solves++;
+  if (lu->slu) {
+    PetscCall(VecSet(x, 0));
+    PetscCall(VecCopy(b, lu->rv));
+    for (PetscInt k = 0; k < lu->maxit && !done; k++) {
+      PetscReal rn, xn;
+      PetscCall(MixedLUDistSolve(pc, lu->rv, lu->sv));
+      PetscCall(VecAXPY(x, 1.0, lu->sv));
+      PetscCall(MatMult(pc->pmat, x, lu->rv)); /* r = b - J x */
+      PetscCall(VecAYPX(lu->rv, -1.0, b));
+      steps++;
+      PetscCall(VecNorm(lu->rv, NORM_INFINITY, &rn));
+      PetscCall(VecNorm(x, NORM_INFINITY, &xn));
+      if (rn <= tol * xn) done = PETSC_TRUE;
+      else if (!(rn <= 0.5 * rprev)) break; /* stalls (or NaN): cond(J) too large for single precision */
+      rprev = rn;
+    }
+  }
+  lu->steps += steps;
+  if (!done) {
+    if (lu->slu) {
+      PetscCall(PetscInfo(pc, "%s: the refinement of a solve stalled at step %" PetscInt_FMT "; J factored in double\n", PCMBCMIXEDLU, steps));
+      PetscCall(MixedLUDistDouble(pc, &info));
+      if (info) PetscCall(PetscInfo(pc, "%s: zero pivot in row %d of the LU in double (not in single precision)\n", PCMBCMIXEDLU, (int)info - 1));
+    }
+    if (lu->dlu) PetscCall(MixedLUDistSolve(pc, b, x));
+    else {
+      PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
+      PetscCall(VecSet(x, PETSC_INFINITY));
+    }
+  }
+  PetscFunctionReturn(0);
+}
+#endif
 
 static PetscErrorCode PCSetUp_MBCMixedLU(PC pc)
 {
@@ -76,12 +254,22 @@ static PetscErrorCode PCSetUp_MBCMixedLU(PC pc)
   PetscReal         *rowsum;
 
   PetscFunctionBegin;
-  PetscCall(PetscObjectTypeCompare((PetscObject)pc->pmat, MATSEQDENSE, &seq));
-  PetscCheck(seq, PetscObjectComm((PetscObject)pc), PETSC_ERR_SUP, "PC %s factors a MATSEQDENSE (one rank), not a %s", PCMBCMIXEDLU, ((PetscObject)pc->pmat)->type_name);
-  PetscCall(MatGetSize(pc->pmat, &m, &n));
-  PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "PC %s needs a square matrix, not %" PetscInt_FMT " x %" PetscInt_FMT, PCMBCMIXEDLU, m, n);
   PetscCall(PCReset_MBCMixedLU(pc));
   PetscCall(PCSetFailedReason(pc, PC_NOERROR)); /* a new factor: a solve of the last one may have failed */
+#if defined(PETSC_HAVE_SCALAPACK)
+  {
+    PetscBool dist;
+    PetscCall(PetscObjectTypeCompare((PetscObject)pc->pmat, MATSCALAPACK, &dist));
+    if (dist) {
+      PetscCall(MixedLUDistSetUp(pc));
+      PetscFunctionReturn(0);
+    }
+  }
+#endif
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc->pmat, MATSEQDENSE, &seq));
+  PetscCheck(seq, PetscObjectComm((PetscObject)pc), PETSC_ERR_SUP, "PC %s factors a MATSEQDENSE (one rank) or a MATSCALAPACK, not a %s", PCMBCMIXEDLU, ((PetscObject)pc->pmat)->type_name);
+  PetscCall(MatGetSize(pc->pmat, &m, &n));
+  PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "PC %s needs a square matrix, not %" PetscInt_FMT " x %" PetscInt_FMT, PCMBCMIXEDLU, m, n);
   PetscCall(PetscBLASIntCast(n, &lu->n));
   PetscCall(PetscMalloc3(n + 1, &lu->piv, n + 1, &lu->sw, n + 1, &lu->r));
   PetscCall(PetscMalloc1((size_t)n * n + 1, &lu->slu));
@@ -129,6 +317,12 @@ static PetscErrorCode PCApply_MBCMixedLU(PC pc, Vec b, Vec x)
   PetscInt           steps = 0; /* this solve's refinement steps: 4 n^2 flops each */
 
   PetscFunctionBegin;
+#if defined(PETSC_HAVE_SCALAPACK)
+  if (lu->dist) {
+    PetscCall(MixedLUDistApply(pc, b, x));
+    PetscFunctionReturn(0);
+  }
+#endif
   lu->solves++;
   PetscCall(VecGetArrayRead(b, &bv));
   PetscCall(VecGetArrayWrite(x, &xv));

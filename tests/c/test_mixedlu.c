@@ -3,7 +3,8 @@
    well-conditioned matrix through refinement alone; a matrix with cond 1e10 (> 1/eps_single:
    the refinement cannot converge) and one out of single precision's range are factored in double
    and solved as accurately as PCLU; a singular matrix is a zero-pivot error, one singular in double
-   only a failed solve; a sparse one is refused. */
+   only a failed solve; a sparse one is refused. On several ranks the same matrices as a
+   MATSCALAPACK (ScaLAPACK's psgetrf), against ScaLAPACK's double LU. */
 #include <mbcmultiplier.h>
 
 #define N 240
@@ -38,14 +39,45 @@ static PetscErrorCode Conditioned(PetscRandom rnd, PetscReal cond, PetscReal sca
   PetscFunctionReturn(0);
 }
 
-/* a direct solve of J by the PC type */
+/* J (a MATSEQDENSE, the same on every rank) as the PC sees it: itself on one rank, a MATSCALAPACK
+   over the ranks on several */
+static PetscErrorCode Distribute(Mat *J)
+{
+  PetscMPIInt        size;
+  Mat                D;
+  PetscInt           n, rs, re;
+  const PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  if (size == 1) PetscFunctionReturn(0);
+  PetscCall(MatGetSize(*J, &n, NULL));
+  PetscCall(MatCreateDense(PETSC_COMM_WORLD, PETSC_DECIDE, PETSC_DECIDE, n, n, NULL, &D));
+  PetscCall(MatGetOwnershipRange(D, &rs, &re));
+  PetscCall(MatDenseGetArrayRead(*J, &a));
+  for (PetscInt i = rs; i < re; i++)
+    for (PetscInt j = 0; j < n; j++) PetscCall(MatSetValue(D, i, j, a[i + n * j], INSERT_VALUES));
+  PetscCall(MatDenseRestoreArrayRead(*J, &a));
+  PetscCall(MatAssemblyBegin(D, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(D, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatDestroy(J));
+  PetscCall(MatConvert(D, MATSCALAPACK, MAT_INITIAL_MATRIX, J));
+  PetscCall(MatDestroy(&D));
+  PetscFunctionReturn(0);
+}
+
+/* a direct solve of J by the PC type (PCLU: ScaLAPACK's on a MATSCALAPACK) */
 static PetscErrorCode DirectKSP(Mat J, PCType type, KSP *ksp, PC *pc)
 {
+  PetscBool dist;
+
   PetscFunctionBegin;
-  PetscCall(KSPCreate(PETSC_COMM_SELF, ksp));
+  PetscCall(KSPCreate(PetscObjectComm((PetscObject)J), ksp));
   PetscCall(KSPSetType(*ksp, KSPPREONLY));
   PetscCall(KSPGetPC(*ksp, pc));
   PetscCall(PCSetType(*pc, type));
+  PetscCall(PetscObjectTypeCompare((PetscObject)J, MATSCALAPACK, &dist));
+  if (dist) PetscCall(PCFactorSetMatSolverType(*pc, MATSOLVERSCALAPACK));
   PetscCall(KSPSetOperators(*ksp, J, J));
   PetscFunctionReturn(0);
 }
@@ -112,14 +144,14 @@ int main(int argc, char **argv)
   PetscCall(MBCMultiplierInitializePackage());
   PetscCall(PetscRandomCreate(PETSC_COMM_SELF, &rnd));
   PetscCall(PetscRandomSetInterval(rnd, -1, 1));
-  PetscCall(VecCreateSeq(PETSC_COMM_SELF, N, &b));
-  PetscCall(VecDuplicate(b, &x));
-  PetscCall(VecDuplicate(b, &xlu));
   for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
     Mat       J;
     PetscInt  counts[3];
     PetscReal e, elu, dx, nx;
     PetscCall(Conditioned(rnd, cases[c].cond, cases[c].scale, &J));
+    PetscCall(Distribute(&J));
+    PetscCall(MatCreateVecs(J, &x, &b));
+    PetscCall(VecDuplicate(b, &xlu));
     PetscCall(VecSetRandom(b, rnd));
     PetscCall(Solve(J, PCMBCMIXEDLU, b, x, counts));
     PetscCall(Solve(J, PCLU, b, xlu, NULL));
@@ -128,7 +160,7 @@ int main(int argc, char **argv)
     PetscCall(VecAXPY(xlu, -1.0, x));
     PetscCall(VecNorm(xlu, NORM_INFINITY, &dx));
     PetscCall(VecNorm(x, NORM_INFINITY, &nx));
-    PetscCall(PetscPrintf(PETSC_COMM_SELF, "%-13s backward error %.3g (PCLU %.3g) eps sqrt(n), |x - x_LU| / |x| %.3g, %" PetscInt_FMT " refinement steps, %" PetscInt_FMT " factors in double\n", cases[c].what, (double)e, (double)elu, (double)(dx / nx), counts[1], counts[2]));
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%-13s backward error %.3g (PCLU %.3g) eps sqrt(n), |x - x_LU| / |x| %.3g, %" PetscInt_FMT " refinement steps, %" PetscInt_FMT " factors in double\n", cases[c].what, (double)e, (double)elu, (double)(dx / nx), counts[1], counts[2]));
     PetscCheck(e <= 1 && e <= PetscMax(10 * elu, 0.1), PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: backward error %g eps sqrt(n) (PCLU's %g)", cases[c].what, (double)e, (double)elu);
     PetscCheck(counts[2] == cases[c].doubles, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: %" PetscInt_FMT " factors in double, expected %" PetscInt_FMT, cases[c].what, counts[2], cases[c].doubles);
     /* in single precision the first solve alone is at eps_single: refinement happened */
@@ -136,12 +168,16 @@ int main(int argc, char **argv)
     /* the forward errors of two backward-stable solves differ by at most ~cond eps */
     PetscCheck(dx <= 100 * cases[c].cond * PETSC_MACHINE_EPSILON * nx, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: |x - x_LU| / |x| = %g", cases[c].what, (double)(dx / nx));
     PetscCall(MatDestroy(&J));
+    PetscCall(VecDestroy(&b));
+    PetscCall(VecDestroy(&x));
+    PetscCall(VecDestroy(&xlu));
   }
   { /* singular: a zero column is a zero pivot, reported as such */
     Mat            J;
     PetscErrorCode ierr;
     PetscCall(Conditioned(rnd, 10, 1, &J));
     PetscCall(MatZeroRowsColumns(J, 1, (PetscInt[]){7}, 0.0, NULL, NULL));
+    PetscCall(Distribute(&J));
     PetscCall(SetUpError(J, &ierr));
     PetscCheck(ierr == PETSC_ERR_MAT_LU_ZRPVT, PETSC_COMM_SELF, PETSC_ERR_PLIB, "singular matrix: error %d, expected a zero pivot (%d)", (int)ierr, (int)PETSC_ERR_MAT_LU_ZRPVT);
     PetscCall(MatDestroy(&J));
@@ -170,11 +206,14 @@ int main(int argc, char **argv)
     PetscCall(MatDenseRestoreArrayWrite(J, &v));
     PetscCall(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
     PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
-    PetscCall(VecCreateSeq(PETSC_COMM_SELF, 3, &b3));
-    PetscCall(VecDuplicate(b3, &x3));
-    PetscCall(VecSetValue(b3, 0, 1.0, INSERT_VALUES));
-    PetscCall(VecSetValue(b3, 1, -2.0, INSERT_VALUES));
-    PetscCall(VecSetValue(b3, 2, 0.5, INSERT_VALUES));
+    PetscCall(Distribute(&J));
+    PetscCall(MatCreateVecs(J, &x3, &b3));
+    {
+      PetscInt rs, re;
+      const PetscScalar bv[3] = {1.0, -2.0, 0.5};
+      PetscCall(VecGetOwnershipRange(b3, &rs, &re));
+      for (PetscInt i = rs; i < re; i++) PetscCall(VecSetValue(b3, i, bv[i], INSERT_VALUES));
+    }
     PetscCall(VecAssemblyBegin(b3));
     PetscCall(VecAssemblyEnd(b3));
     PetscCall(DirectKSP(J, PCMBCMIXEDLU, &ksp, &pc));
@@ -182,7 +221,7 @@ int main(int argc, char **argv)
     PetscCall(KSPGetConvergedReason(ksp, &reason));
     PetscCall(PCGetFailedReasonRank(pc, &pcr));
     PetscCall(PCMBCMixedLUGetCounts(pc, &counts[0], &counts[1], &counts[2]));
-    PetscCall(PetscPrintf(PETSC_COMM_SELF, "singular in double only: %s, %s, %" PetscInt_FMT " factors in double\n", KSPConvergedReasons[reason], PCFailedReasons[pcr], counts[2]));
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "singular in double only: %s, %s, %" PetscInt_FMT " factors in double\n", KSPConvergedReasons[reason], PCFailedReasons[pcr], counts[2]));
     /* the KSP reports the PC's failure (KSPPREONLY reads the PC's failed reason): the Newton step's fallback reads that */
     PetscCheck(reason == KSP_DIVERGED_PC_FAILED && pcr == PC_FACTOR_NUMERIC_ZEROPIVOT && counts[2] == 1, PETSC_COMM_SELF, PETSC_ERR_PLIB, "singular in double only: %s, PC failed reason %s, %" PetscInt_FMT " factors in double", KSPConvergedReasons[reason], PCFailedReasons[pcr], counts[2]);
     PetscCall(MatShift(J, 1.0)); /* regular: the same PC factors and solves it */
@@ -200,17 +239,16 @@ int main(int argc, char **argv)
   { /* a sparse matrix is refused */
     Mat            A;
     PetscErrorCode ierr;
-    PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, 4, 4, 1, NULL, &A));
-    for (PetscInt i = 0; i < 4; i++) PetscCall(MatSetValue(A, i, i, 1.0, INSERT_VALUES));
+    PetscInt rs, re;
+    PetscCall(MatCreateAIJ(PETSC_COMM_WORLD, PETSC_DECIDE, PETSC_DECIDE, 4, 4, 1, NULL, 1, NULL, &A));
+    PetscCall(MatGetOwnershipRange(A, &rs, &re));
+    for (PetscInt i = rs; i < re; i++) PetscCall(MatSetValue(A, i, i, 1.0, INSERT_VALUES));
     PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
     PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
     PetscCall(SetUpError(A, &ierr));
     PetscCheck(ierr == PETSC_ERR_SUP, PETSC_COMM_SELF, PETSC_ERR_PLIB, "sparse matrix: error %d, expected PETSC_ERR_SUP", (int)ierr);
     PetscCall(MatDestroy(&A));
   }
-  PetscCall(VecDestroy(&b));
-  PetscCall(VecDestroy(&x));
-  PetscCall(VecDestroy(&xlu));
   PetscCall(PetscRandomDestroy(&rnd));
   PetscCall(PetscFinalize());
   return 0;

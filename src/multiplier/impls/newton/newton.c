@@ -1126,9 +1126,9 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   /* the dense LU: on several ranks ScaLAPACK's, 4 x faster at n = 3000 on 2 ranks than every rank
      factoring the whole matrix (PCREDUNDANT), and it holds the matrix once, not per rank */
   nt->densetype = size > 1 && scalapack ? MATSCALAPACK : MATDENSE;
-  /* on one rank single precision's LU refined in double: half the time of LAPACK's double LU,
-     double's accuracy (src/pc/mixedlu.c) */
-  PetscCall(NewtonLUCreate(m, "newton_dense_", size > 1 && !scalapack, size > 1 ? (scalapack ? MATSOLVERSCALAPACK : MATSOLVERPETSC) : NULL, &nt->kdense));
+  /* single precision's LU refined in double (src/pc/mixedlu.c; ScaLAPACK's psgetrf over the
+     ranks): half the time of the double LU, double's accuracy */
+  PetscCall(NewtonLUCreate(m, "newton_dense_", size > 1 && !scalapack, size > 1 && !scalapack ? MATSOLVERPETSC : NULL, &nt->kdense));
   { /* the steps with a matrix-free W: right-preconditioned GMRES, so its residual is J's own; 1e-4
        leaves the outer iteration linear convergence at that rate near the solution */
     PetscCall(PetscSNPrintf(p, sizeof(p), "%snewton_mf_", prefix ? prefix : ""));
