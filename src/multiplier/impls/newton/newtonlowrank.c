@@ -16,6 +16,10 @@
    reference (MBCMultiplierSetRestartState), so that its Z and its steps are the run's own. */
 #include "newton.h"
 #include <petscblaslapack.h>
+#if defined(PETSC_HAVE_SCALAPACK)
+  #include <petsc/private/petscscalapack.h>
+PETSC_EXTERN void pdgetri_(const PetscBLASInt *, PetscScalar *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, PetscScalar *, const PetscBLASInt *, PetscBLASInt *, const PetscBLASInt *, PetscBLASInt *);
+#endif
 
 /* contact i's rows differ from the reference's (its rows are in C) */
 static inline PetscBool NewtonRowsDiffer(const MBC_Newton *nt, PetscInt i)
@@ -258,15 +262,19 @@ static PetscErrorCode InverseLAPACK(Mat *J0, Mat *Z)
   PetscFunctionReturn(0);
 }
 
-/* *Z = J0^-1 over the ranks by ScaLAPACK (its LU, then the solve with the identity), in W's row
-   layout (nl rows here); NULL where singular */
+/* *Z = J0^-1 over the ranks by ScaLAPACK (pdgetrf + pdgetri in place on J0's block-cyclic copy:
+   the LU's solve with the identity took 2 N^3 flops and two more N x N arrays), in W's row layout
+   (nl rows here); NULL where singular */
 static PetscErrorCode InverseScaLAPACK(Mat J0, PetscInt nl, Mat *Z)
 {
+#if defined(PETSC_HAVE_SCALAPACK)
   MPI_Comm       comm = PetscObjectComm((PetscObject)J0);
-  Mat            A, Id, X, t;
+  Mat            A, t;
+  Mat_ScaLAPACK *a;
   PetscInt       N, nstd = PETSC_DECIDE;
-  PetscErrorCode ierr;
-  int            bad;
+  PetscBLASInt   one = 1, info, lwork = -1, liwork = -1, iwq = 0, *ipiv, *iwork;
+  PetscScalar    wq = 0, *work;
+  PetscMPIInt    bad;
 
   PetscFunctionBegin;
   *Z = NULL;
@@ -275,31 +283,34 @@ static PetscErrorCode InverseScaLAPACK(Mat J0, PetscInt nl, Mat *Z)
   PetscCall(DenseRelayout(J0, nstd, &t));
   PetscCall(MatConvert(t, MATSCALAPACK, MAT_INITIAL_MATRIX, &A));
   PetscCall(MatDestroy(&t));
-  PetscCall(MatCreateDense(comm, nstd, nstd, N, N, NULL, &t));
-  PetscCall(MatZeroEntries(t));
-  PetscCall(MatAssemblyBegin(t, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(t, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatShift(t, 1.0));
-  PetscCall(MatConvert(t, MATSCALAPACK, MAT_INITIAL_MATRIX, &Id));
-  PetscCall(MatDestroy(&t));
-  /* ScaLAPACK's LU raises an error on a singular matrix (NewtonFactor) */
-  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-  ierr = MatLUFactor(A, NULL, NULL, NULL);
-  PetscCall(PetscPopErrorHandler());
-  PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT || ierr == PETSC_ERR_LIB, PETSC_COMM_SELF, ierr, "The reference Newton matrix's factorization failed");
-  bad = ierr ? 1 : 0;
+  a = (Mat_ScaLAPACK *)A->data;
+  PetscCall(PetscMalloc1(a->locr + a->mb, &ipiv));
+  PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
+  PetscCallBLAS("SCALAPACKgetrf", SCALAPACKgetrf_(&a->M, &a->N, a->loc, &one, &one, a->desc, ipiv, &info));
+  PetscCall(PetscFPTrapPop());
+  bad = info ? 1 : 0; /* info > 0: a zero pivot */
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_MAX, comm));
   if (!bad) {
-    PetscCall(MatDuplicate(Id, MAT_DO_NOT_COPY_VALUES, &X));
-    PetscCall(MatMatSolve(A, Id, X));
-    PetscCall(MatConvert(X, MATDENSE, MAT_INITIAL_MATRIX, &t));
-    PetscCall(MatDestroy(&X));
+    pdgetri_(&a->N, a->loc, &one, &one, a->desc, ipiv, &wq, &lwork, &iwq, &liwork, &info); /* the workspace's size */
+    PetscCheckScaLapackInfo("getri", info);
+    PetscCall(PetscBLASIntCast((PetscInt)PetscRealPart(wq), &lwork));
+    liwork = PetscMax(iwq, 1);
+    PetscCall(PetscMalloc2(lwork + 1, &work, liwork + 1, &iwork));
+    PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
+    pdgetri_(&a->N, a->loc, &one, &one, a->desc, ipiv, work, &lwork, iwork, &liwork, &info);
+    PetscCall(PetscFPTrapPop());
+    PetscCheckScaLapackInfo("getri", info);
+    PetscCall(PetscFree2(work, iwork));
+    PetscCall(MatConvert(A, MATDENSE, MAT_INITIAL_MATRIX, &t));
     PetscCall(DenseRelayout(t, nl, Z)); /* back in W's row layout */
     PetscCall(MatDestroy(&t));
   }
-  PetscCall(MatDestroy(&Id));
+  PetscCall(PetscFree(ipiv));
   PetscCall(MatDestroy(&A));
   PetscFunctionReturn(0);
+#else
+  SETERRQ(PetscObjectComm((PetscObject)J0), PETSC_ERR_SUP, "The kept inverse over several ranks needs ScaLAPACK");
+#endif
 }
 
 /* Z = J_ref^-1 with the reference ref (one value a row, 1: separated; NULL: the current state's
@@ -414,8 +425,10 @@ typedef struct {
   PetscInt      k;
   PetscInt     *row;   /* global rows, in rank order */
   PetscReal    *pq;    /* LR_ROW a row */
-  PetscScalar  *M;     /* the LU of M = I + U^T Z E_C (column-major) */
-  PetscBLASInt *piv;
+  PetscScalar  *M;     /* M = I + U^T Z E_C (column-major) */
+  Mat           Mm;    /* M as a MATSEQDENSE on that array */
+  KSP           kM;    /* its LU: single precision's refined in double (PCMBCMIXEDLU) */
+  Vec           tb, tx; /* k entries: a right side of M and its solution */
   IS            is;    /* row[] */
   Vec           seq;   /* k entries */
   VecScatter    gather;
@@ -454,18 +467,25 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
 {
   MBC_Newton        *nt = (MBC_Newton *)m->data;
   PetscScalar       *t, *xv;
-  const PetscScalar *z;
-  PetscBLASInt       k, one = 1, info;
+  const PetscScalar *z, *tv;
+  PetscBLASInt       k;
   PetscInt           nl, lda;
 
   PetscFunctionBegin;
   PetscCall(MatMult(nt->Z, b, x));
   PetscCall(PetscBLASIntCast(lr->k, &k));
   if (k) {
+    KSPConvergedReason reason;
     PetscCall(PetscMalloc1(lr->k, &t));
     PetscCall(LowRankApplyU(lr, x, t));
-    PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &k, &one, lr->M, &k, lr->piv, t, &k, &info));
-    PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK getrs: info %d", (int)info);
+    PetscCall(VecPlaceArray(lr->tb, t));
+    PetscCall(KSPSolve(lr->kM, lr->tb, lr->tx));
+    PetscCall(VecResetArray(lr->tb));
+    PetscCall(KSPGetConvergedReason(lr->kM, &reason));
+    PetscCheck(reason >= 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "The kept inverse's %d x %d correction: its LU failed in a solve (%s)", (int)k, (int)k, KSPConvergedReasons[reason]);
+    PetscCall(VecGetArrayRead(lr->tx, &tv));
+    PetscCall(PetscArraycpy(t, tv, lr->k));
+    PetscCall(VecRestoreArrayRead(lr->tx, &tv));
     PetscCall(VecGetLocalSize(x, &nl));
     PetscCall(MatDenseGetLDA(nt->Z, &lda));
     PetscCall(MatDenseGetArrayRead(nt->Z, &z));
@@ -503,12 +523,11 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   MBCFrictionProblem *fp = m->fp;
   PetscScalar        *z;
   const PetscInt      lda = lr->k;
-  PetscBLASInt        kb;
 
   PetscFunctionBegin;
   PetscCall(ZRowsCols(nt->Z, lr->is, &z));
   PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
-  PetscCall(PetscMalloc2(lr->k * lr->k, &lr->M, lr->k, &lr->piv));
+  PetscCall(PetscMalloc1(lr->k * lr->k, &lr->M));
   for (PetscInt c = 0; c < lr->k; c++)
     for (PetscInt r = 0; r < lr->k; r++) {
       const PetscReal *q     = lr->pq + LR_ROW * r;
@@ -530,8 +549,28 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
       lr->M[c * lr->k + r] = v;
     }
   PetscCall(PetscFree(z));
-  PetscCall(PetscBLASIntCast(lr->k, &kb));
-  PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&kb, &kb, lr->M, &kb, lr->piv, info));
+  { /* M's LU in single precision, refined in double: half the time of getrf where k reaches the
+       thousands (the strong phase); the same answers (the PC's solves have double's backward
+       error). Singular in double: the direct solve instead. */
+    PC             pc;
+    PetscErrorCode ierr;
+    PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, lr->k, lr->k, lr->M, &lr->Mm));
+    PetscCall(KSPCreate(PETSC_COMM_SELF, &lr->kM));
+    PetscCall(KSPSetType(lr->kM, KSPPREONLY));
+    PetscCall(KSPGetPC(lr->kM, &pc));
+    PetscCall(PCSetType(pc, PCMBCMIXEDLU));
+    PetscCall(KSPSetOperators(lr->kM, lr->Mm, lr->Mm));
+    PetscCall(KSPSetErrorIfNotConverged(lr->kM, PETSC_FALSE));
+    PetscCall(MatCreateVecs(lr->Mm, &lr->tx, NULL));
+    PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, lr->k, NULL, &lr->tb));
+    PetscCall(PetscLogEventDeactivatePush(MBC_MixedLUFactor)); /* that event counts the direct steps' LUs */
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    ierr = KSPSetUp(lr->kM);
+    PetscCall(PetscPopErrorHandler());
+    PetscCall(PetscLogEventDeactivatePop(MBC_MixedLUFactor));
+    PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT, PETSC_COMM_SELF, ierr, "The kept inverse's correction: its LU failed");
+    PetscCall(PetscBLASIntCast(ierr ? 1 : 0, info));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -717,7 +756,11 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscCall(VecDestroy(&lr.wc));
   PetscCall(MatDestroy(&lr.Wc));
   PetscCall(ISDestroy(&lr.is));
-  PetscCall(PetscFree2(lr.M, lr.piv));
+  PetscCall(KSPDestroy(&lr.kM));
+  PetscCall(MatDestroy(&lr.Mm));
+  PetscCall(VecDestroy(&lr.tb));
+  PetscCall(VecDestroy(&lr.tx));
+  PetscCall(PetscFree(lr.M));
   PetscCall(PetscFree(lr.row));
   PetscCall(PetscFree(lr.pq));
   PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
