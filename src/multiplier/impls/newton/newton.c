@@ -15,6 +15,9 @@
    analysis), alpha joins the unknowns and the step solves the saddle point system
    [A + B W, B G^T; G, 0]. The merit that stops the iteration is FCLIB's. */
 #include "newton.h"
+#if defined(PETSC_HAVE_SCALAPACK)
+  #include <petsc/private/petscscalapack.h>
+#endif
 
 /* Alart-Curnier residual of this rank's contacts at (r, u) into phi; with jac, also the Jacobian
    blocks and the active flags; stick: every contact in contact is taken as sticking (the
@@ -232,6 +235,45 @@ static inline PetscReal FrameT(const NewtonFrame *f, PetscInt e, PetscInt d)
   return f->reduced ? f->T[2 * e + d] : (PetscReal)(e == d);
 }
 
+#if defined(PETSC_HAVE_SCALAPACK)
+/* J (a MATSCALAPACK) from each rank's block of consecutive rows [rstart, rstart + nloc), dense in
+   jl (ld x N, column-major, ld the largest nloc over the ranks): one pdgemr2d a rank's block from
+   a padded row-block layout on the P x 1 grid into J's block-cyclic one. Setting the entries one
+   by one went through PETSc's stash (a hash of every entry, then its messages). */
+static PetscErrorCode DenseRowsToScaLAPACK(Mat J, PetscInt rstart, PetscInt nloc, PetscInt ld, PetscScalar *jl)
+{
+  Mat_ScaLAPACK *a = (Mat_ScaLAPACK *)J->data;
+  MPI_Comm       comm = PetscObjectComm((PetscObject)J);
+  PetscMPIInt    size;
+  PetscInt      *all;
+  PetscBLASInt   desc[9], M, mb, nb, lld, zero = 0, one = 1, info;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscMalloc1(2 * size, &all));
+  {
+    PetscInt mine[2] = {rstart, nloc};
+    PetscCallMPI(MPI_Allgather(mine, 2, MPIU_INT, all, 2, MPIU_INT, comm));
+  }
+  PetscCall(PetscBLASIntCast(size * ld, &M));
+  PetscCall(PetscBLASIntCast(ld, &mb));
+  nb  = PetscMax(a->N, 1);
+  lld = PetscMax(mb, 1);
+  PetscCallBLAS("SCALAPACKdescinit", SCALAPACKdescinit_(desc, &M, &a->N, &mb, &nb, &zero, &zero, &a->grid->ictxcol, &lld, &info));
+  PetscCheckScaLapackInfo("descinit", info);
+  for (PetscMPIInt p = 0; p < size; p++) {
+    PetscBLASInt m, ia, ib;
+    if (!all[2 * p + 1]) continue;
+    PetscCall(PetscBLASIntCast(all[2 * p + 1], &m));
+    PetscCall(PetscBLASIntCast(p * ld + 1, &ia));
+    PetscCall(PetscBLASIntCast(all[2 * p] + 1, &ib));
+    PetscCallBLAS("SCALAPACKgemr2d", SCALAPACKgemr2d_(&m, &a->N, jl, &ia, &one, desc, a->loc, &ib, &one, a->desc, &a->grid->ictxcol));
+  }
+  PetscCall(PetscFree(all));
+  PetscFunctionReturn(0);
+}
+#endif
+
 /* A part of W's local rows in CSR (an AIJ W: on several ranks its diagonal block, columns from
    cstart, and its off-diagonal block, columns through cmap), for the Newton matrix's assembly. */
 typedef struct {
@@ -424,7 +466,8 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       PetscInt    *dnz, *onz, jstart, jend, nmark, *act, wstart, *tcol;
       PetscReal    dmax = 0, nnz = 0, *twt;
       PetscBool    dense = PETSC_FALSE;
-      PetscScalar *vals;
+      PetscScalar *vals, *jl = NULL; /* jl: this rank's rows of a ScaLAPACK J, dense (jld x Nloc) */
+      PetscInt     jld = 0;
       WCSR         wcsr[2] = {{0}}; /* W's CSR parts on this rank: its diagonal and off-diagonal blocks */
       PetscInt     nwcsr   = 0;
       { /* per column of W, its active row (-1: not active), and per active row the (up to two)
@@ -498,6 +541,12 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
           PetscCall(PetscInfo(m, "Newton matrix %" PetscInt_FMT ": %.3g of its entries nonzero, %s, %" PetscInt_FMT " slip rows eliminated\n", Nloc, (double)(nnz / ((PetscReal)Nloc * Nloc)), !dense ? "sparse" : strcmp(nt->densetype, MATDENSE) ? "dense (ScaLAPACK LU)" : "dense (LAPACK LU)", NA + ng - Nloc));
           if (dense && strcmp(nt->densetype, MATDENSE)) { /* ScaLAPACK's own row layout (NewtonLUSolve) */
             PetscCall(MatCreateScaLAPACK(comm, PETSC_DECIDE, PETSC_DECIDE, Nloc, Nloc, 0, 0, &J));
+#if defined(PETSC_HAVE_SCALAPACK)
+            if (!Gs) { /* the rows dense here, then moved (DenseRowsToScaLAPACK); G's rows come from every rank */
+              PetscCallMPI(MPI_Allreduce(&nloc, &jld, 1, MPIU_INT, MPI_MAX, comm));
+              PetscCall(PetscCalloc1((size_t)jld * Nloc + 1, &jl));
+            }
+#endif
           } else if (dense) {
             PetscCall(MatCreateDense(comm, nloc, nloc, Nloc, Nloc, NULL, &J));
           } else {
@@ -580,8 +629,12 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
             } else {
               for (PetscInt e = 0; e < nd; e++) nt->work[3 * nt->mark[rstart + k + e] + d] += Ar[3 * d + e];
               dmax = PetscMax(dmax, PetscAbsReal(nt->work[3 * nt->mark[grow] + d]));
-              for (PetscInt j = 0; j < nmark; j++) vals[j] = nt->work[3 * j + d];
-              PetscCall(MatSetValues(J, 1, &grow, nmark, nt->cols, vals, INSERT_VALUES));
+              if (jl)
+                for (PetscInt j = 0; j < nmark; j++) jl[k + d + (size_t)jld * nt->cols[j]] = nt->work[3 * j + d];
+              else {
+                for (PetscInt j = 0; j < nmark; j++) vals[j] = nt->work[3 * j + d];
+                PetscCall(MatSetValues(J, 1, &grow, nmark, nt->cols, vals, INSERT_VALUES));
+              }
             }
           }
           for (PetscInt j = 0; j < nmark; j++) { /* clear the work rows */
@@ -621,13 +674,22 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
         }
       }
       PetscCall(WCSRRestore(wcsr, nwcsr));
-      PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
-      PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
+      if (!jl) {
+        PetscCall(MatAssemblyBegin(J, MAT_FLUSH_ASSEMBLY));
+        PetscCall(MatAssemblyEnd(J, MAT_FLUSH_ASSEMBLY));
+      }
       /* a shift of the contact rows: stick rows of a rank-deficient W (rigid bodies, redundant
          constraints) are singular; it picks the least-force solution and costs the step only
          shift x cond of accuracy, which the next steps recover */
       PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
-      for (PetscInt k = 0; k < nR; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
+      if (jl) {
+        for (PetscInt k = 0; k < nR; k++) jl[k + (size_t)jld * (rstart + k)] += nt->shift * dmax;
+#if defined(PETSC_HAVE_SCALAPACK)
+        PetscCall(DenseRowsToScaLAPACK(J, rstart, nloc, jld, jl));
+#endif
+        PetscCall(PetscFree(jl));
+      } else
+        for (PetscInt k = 0; k < nR; k++) PetscCall(MatSetValue(J, rstart + k, rstart + k, nt->shift * dmax, ADD_VALUES));
       PetscCall(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
       PetscCall(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
       PetscCall(PetscFree3(dnz, onz, vals));
