@@ -50,21 +50,20 @@ PetscBool MBCTimeContactThroughAcceleration(PetscReal af)
    new multipliers' parts; body->f holds F_n+1, body->fold F_n. fc: H lambda_n (NULL: none). */
 PetscErrorCode MBCSolverStepRHS(MBCBody body, MBCTimeCoefficients c, Vec fc)
 {
-  PetscBool damped = MBCBodyDamped(body);
-
   PetscFunctionBegin;
   PetscCall(VecCopy(body->f, body->rhs));
   if (c.cf != 0) PetscCall(VecAXPY(body->rhs, c.cf, body->fold));
-  /* one product with M and one with K, Rayleigh's cM M y and cK K y folded into them (two
-     products a body a step instead of four), y = (a4 - cf) v + a5 a */
-  if (damped) PetscCall(VecAXPBYPCZ(body->work2, c.a4 - c.cf, c.a5, 0.0, body->v, body->a));
-  PetscCall(VecAXPBYPCZ(body->work, c.a2 * (1 - c.am) / (1 - c.af), (c.a3 * (1 - c.am) - c.am) / (1 - c.af), 0.0, body->v, body->a)); /* ((1 - am)(a2 v + a3 a) - am a) / (1 - af) */
-  if (damped && body->cM != 0) PetscCall(VecAXPY(body->work, body->cM, body->work2));
-  PetscCall(MatMultAdd(body->M, body->work, body->rhs, body->rhs));
-  PetscCall(VecAXPBY(body->work, -(1 + c.cf), 0.0, body->u));
-  if (damped && body->cK != 0) PetscCall(VecAXPY(body->work, body->cK, body->work2));
-  PetscCall(MatMultAdd(body->K, body->work, body->rhs, body->rhs));
-  if (damped && body->Cb) PetscCall(MatMultAdd(body->Cb, body->work2, body->rhs, body->rhs));
+  PetscCall(MatMult(body->K, body->u, body->work));
+  PetscCall(VecAXPY(body->rhs, -(1 + c.cf), body->work));
+  PetscCall(VecAXPBY(body->work2, c.a2 * (1 - c.am) / (1 - c.af), 0.0, body->v)); /* work2 = ((1 - am)(a2 v + a3 a) - am a) / (1 - af) */
+  PetscCall(VecAXPY(body->work2, (c.a3 * (1 - c.am) - c.am) / (1 - c.af), body->a));
+  PetscCall(MatMult(body->M, body->work2, body->work));
+  PetscCall(VecAXPY(body->rhs, 1.0, body->work));
+  if (MBCBodyDamped(body)) {
+    PetscCall(VecAXPBY(body->work2, c.a4 - c.cf, 0.0, body->v));
+    PetscCall(VecAXPY(body->work2, c.a5, body->a));
+    PetscCall(MBCBodyAddDamping(body, 1.0, body->work2, body->rhs));
+  }
   if (fc && c.cf != 0) PetscCall(VecAXPY(body->rhs, c.cf, fc));
   PetscFunctionReturn(0);
 }
