@@ -30,13 +30,12 @@ typedef struct {
   float        *slu; /* J's single-precision factor (NULL once the double one replaced it) */
   PetscScalar  *dlu; /* J's double factor, made where the refinement failed */
   float        *sw;  /* a right side in single precision */
-  PetscScalar  *r;   /* the residual */
+  Vec           rv, sv; /* the residual, a correction */
   /* on several ranks: slu, dlu and piv are this rank's block-cyclic parts (J's descriptor); a
      right side goes from J's row layout (xdesc) to a column of the process grid (x2desc, x2d) */
   PetscBool     dist;
   PetscBLASInt  xdesc[9], x2desc[9], lszx;
   PetscScalar  *x2d;
-  Vec           rv, sv; /* the residual, a correction */
   PetscReal     jnorm;
   PetscInt      maxit;
   PetscInt      solves, steps, doubles; /* solves, refinement steps, factors made in double */
@@ -74,7 +73,7 @@ static PetscErrorCode PCReset_MBCMixedLU(PC pc)
   PetscFunctionBegin;
   PetscCall(PetscFree(lu->slu));
   PetscCall(PetscFree(lu->dlu));
-  PetscCall(PetscFree3(lu->piv, lu->sw, lu->r));
+  PetscCall(PetscFree2(lu->piv, lu->sw));
   PetscCall(PetscFree(lu->x2d));
   PetscCall(VecDestroy(&lu->rv));
   PetscCall(VecDestroy(&lu->sv));
@@ -144,7 +143,7 @@ static PetscErrorCode MixedLUDistSetUp(PC pc)
   xlld     = PetscMax(1, lu->lszx);
   PetscCallBLAS("SCALAPACKdescinit", SCALAPACKdescinit_(lu->x2desc, &a->M, &one, &a->mb, &one, &zero, &zero, &a->grid->ictxt, &xlld, &info));
   PetscCheckScaLapackInfo("descinit", info);
-  PetscCall(PetscMalloc3(a->locr + a->mb, &lu->piv, lu->lszx + 1, &lu->sw, 1, &lu->r));
+  PetscCall(PetscMalloc2(a->locr + a->mb, &lu->piv, lu->lszx + 1, &lu->sw));
   PetscCall(PetscMalloc1(lu->lszx + 1, &lu->x2d));
   PetscCall(MatCreateVecs(pc->pmat, &lu->rv, &lu->sv));
   PetscCall(MatNorm(pc->pmat, NORM_INFINITY, &lu->jnorm));
@@ -199,49 +198,6 @@ static PetscErrorCode MixedLUDistSolve(PC pc, Vec in, Vec out)
   PetscFunctionReturn(0);
 }
 
-/* PCApply over the ranks: as the one-rank refinement, the residual by J's own product */
-static PetscErrorCode MixedLUDistApply(PC pc, Vec b, Vec x)
-{
-  PC_MBCMixedLU *lu = (PC_MBCMixedLU *)pc->data;
-  PetscReal      rprev = PETSC_MAX_REAL, tol = PETSC_MACHINE_EPSILON * PetscSqrtReal((PetscReal)lu->n) * lu->jnorm;
-  PetscBool      done  = PETSC_FALSE;
-  PetscInt       steps = 0;
-  PetscBLASInt   info;
-
-  PetscFunctionBegin;
-  lu->solves++;
-  if (lu->slu) {
-    PetscCall(VecSet(x, 0));
-    PetscCall(VecCopy(b, lu->rv));
-    for (PetscInt k = 0; k < lu->maxit && !done; k++) {
-      PetscReal rn, xn;
-      PetscCall(MixedLUDistSolve(pc, lu->rv, lu->sv));
-      PetscCall(VecAXPY(x, 1.0, lu->sv));
-      PetscCall(MatMult(pc->pmat, x, lu->rv)); /* r = b - J x */
-      PetscCall(VecAYPX(lu->rv, -1.0, b));
-      steps++;
-      PetscCall(VecNorm(lu->rv, NORM_INFINITY, &rn));
-      PetscCall(VecNorm(x, NORM_INFINITY, &xn));
-      if (rn <= tol * xn) done = PETSC_TRUE;
-      else if (!(rn <= 0.5 * rprev)) break; /* stalls (or NaN): cond(J) too large for single precision */
-      rprev = rn;
-    }
-  }
-  lu->steps += steps;
-  if (!done) {
-    if (lu->slu) {
-      PetscCall(PetscInfo(pc, "%s: the refinement of a solve stalled at step %" PetscInt_FMT "; J factored in double\n", PCMBCMIXEDLU, steps));
-      PetscCall(MixedLUDistDouble(pc, &info));
-      if (info) PetscCall(PetscInfo(pc, "%s: zero pivot in row %d of the LU in double (not in single precision)\n", PCMBCMIXEDLU, (int)info - 1));
-    }
-    if (lu->dlu) PetscCall(MixedLUDistSolve(pc, b, x));
-    else {
-      PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
-      PetscCall(VecSet(x, PETSC_INFINITY));
-    }
-  }
-  PetscFunctionReturn(0);
-}
 #endif
 
 static PetscErrorCode PCSetUp_MBCMixedLU(PC pc)
@@ -271,7 +227,8 @@ static PetscErrorCode PCSetUp_MBCMixedLU(PC pc)
   PetscCall(MatGetSize(pc->pmat, &m, &n));
   PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "PC %s needs a square matrix, not %" PetscInt_FMT " x %" PetscInt_FMT, PCMBCMIXEDLU, m, n);
   PetscCall(PetscBLASIntCast(n, &lu->n));
-  PetscCall(PetscMalloc3(n + 1, &lu->piv, n + 1, &lu->sw, n + 1, &lu->r));
+  PetscCall(PetscMalloc2(n + 1, &lu->piv, n + 1, &lu->sw));
+  PetscCall(MatCreateVecs(pc->pmat, &lu->rv, &lu->sv));
   PetscCall(PetscMalloc1((size_t)n * n + 1, &lu->slu));
   PetscCall(PetscLogEventBegin(MBC_MixedLUFactor, pc, 0, 0, 0));
   PetscCall(PetscCalloc1(n + 1, &rowsum));
@@ -304,73 +261,87 @@ static PetscErrorCode PCSetUp_MBCMixedLU(PC pc)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode PCApply_MBCMixedLU(PC pc, Vec b, Vec x)
+/* out = J^-1 in by the factor held (single or double) */
+static PetscErrorCode MixedLUFactorSolve(PC pc, Vec in, Vec out)
 {
   PC_MBCMixedLU     *lu  = (PC_MBCMixedLU *)pc->data;
   const PetscBLASInt one = 1;
-  const PetscScalar *bv, *a;
-  PetscScalar       *xv;
-  PetscInt           lda;
-  PetscBLASInt       info, ldab;
-  PetscReal          rprev = PETSC_MAX_REAL, tol = PETSC_MACHINE_EPSILON * PetscSqrtReal((PetscReal)lu->n) * lu->jnorm;
-  PetscBool          done = PETSC_FALSE;
-  PetscInt           steps = 0; /* this solve's refinement steps: 4 n^2 flops each */
+  PetscScalar       *v;
+  PetscBLASInt       info;
 
   PetscFunctionBegin;
 #if defined(PETSC_HAVE_SCALAPACK)
   if (lu->dist) {
-    PetscCall(MixedLUDistApply(pc, b, x));
+    PetscCall(MixedLUDistSolve(pc, in, out));
     PetscFunctionReturn(0);
   }
 #endif
+  PetscCall(VecCopy(in, out));
+  PetscCall(VecGetArray(out, &v));
+  if (lu->slu) {
+    for (PetscInt i = 0; i < lu->n; i++) lu->sw[i] = (float)PetscRealPart(v[i]);
+    sgetrs_("N", &lu->n, &one, lu->slu, &lu->n, lu->piv, lu->sw, &lu->n, &info);
+    for (PetscInt i = 0; i < lu->n; i++) v[i] = lu->sw[i];
+  } else PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &lu->n, &one, lu->dlu, &lu->n, lu->piv, v, &lu->n, &info));
+  PetscCall(VecRestoreArray(out, &v));
+  PetscFunctionReturn(0);
+}
+
+/* x = J^-1 b: x += LU_s^-1 (b - J x) with the residual in double until dsgesv's test holds; where
+   that stalls, J factored in double solves; singular in double, a failed solve */
+static PetscErrorCode PCApply_MBCMixedLU(PC pc, Vec b, Vec x)
+{
+  PC_MBCMixedLU *lu = (PC_MBCMixedLU *)pc->data;
+  PetscReal      rprev = PETSC_MAX_REAL, tol = PETSC_MACHINE_EPSILON * PetscSqrtReal((PetscReal)lu->n) * lu->jnorm;
+  PetscBool      done  = PETSC_FALSE;
+  PetscInt       steps = 0; /* this solve's refinement steps */
+  PetscBLASInt   info;
+  PetscMPIInt    size;
+
+  PetscFunctionBegin;
   lu->solves++;
-  PetscCall(VecGetArrayRead(b, &bv));
-  PetscCall(VecGetArrayWrite(x, &xv));
   PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
   if (lu->slu) {
-    const PetscScalar mone = -1, pone = 1;
-    PetscCall(MatDenseGetArrayRead(pc->pmat, &a));
-    PetscCall(MatDenseGetLDA(pc->pmat, &lda));
-    PetscCall(PetscBLASIntCast(lda, &ldab));
-    PetscCall(PetscArrayzero(xv, lu->n));
-    PetscCall(PetscArraycpy(lu->r, bv, lu->n));
+    PetscCall(VecSet(x, 0));
+    PetscCall(VecCopy(b, lu->rv));
     for (PetscInt k = 0; k < lu->maxit && !done; k++) {
-      PetscReal rn = 0, xn = 0;
-      for (PetscInt i = 0; i < lu->n; i++) lu->sw[i] = (float)PetscRealPart(lu->r[i]);
-      sgetrs_("N", &lu->n, &one, lu->slu, &lu->n, lu->piv, lu->sw, &lu->n, &info);
-      for (PetscInt i = 0; i < lu->n; i++) xv[i] += lu->sw[i];
-      PetscCall(PetscArraycpy(lu->r, bv, lu->n)); /* r = b - J x */
-      BLASgemv_("N", &lu->n, &lu->n, &mone, a, &ldab, xv, &one, &pone, lu->r, &one);
+      PetscReal rn, xn;
+      PetscCall(MixedLUFactorSolve(pc, lu->rv, lu->sv));
+      PetscCall(VecAXPY(x, 1.0, lu->sv));
+      PetscCall(MatMult(pc->pmat, x, lu->rv)); /* r = b - J x */
+      PetscCall(VecAYPX(lu->rv, -1.0, b));
       steps++;
-      for (PetscInt i = 0; i < lu->n; i++) rn = PetscMax(rn, PetscAbsScalar(lu->r[i])), xn = PetscMax(xn, PetscAbsScalar(xv[i]));
+      PetscCall(VecNorm(lu->rv, NORM_INFINITY, &rn));
+      PetscCall(VecNorm(x, NORM_INFINITY, &xn));
       if (rn <= tol * xn) done = PETSC_TRUE;
       else if (!(rn <= 0.5 * rprev)) break; /* stalls (or NaN): cond(J) too large for single precision */
       rprev = rn;
     }
-    PetscCall(MatDenseRestoreArrayRead(pc->pmat, &a));
   }
   PetscCall(PetscFPTrapPop());
   lu->steps += steps;
   if (!done) {
     if (lu->slu) {
       PetscCall(PetscInfo(pc, "%s: the refinement of a solve stalled at step %" PetscInt_FMT "; J factored in double\n", PCMBCMIXEDLU, steps));
-      PetscCall(MixedLUDouble(pc, &info));
+#if defined(PETSC_HAVE_SCALAPACK)
+      if (lu->dist) PetscCall(MixedLUDistDouble(pc, &info));
+      else
+#endif
+        PetscCall(MixedLUDouble(pc, &info));
       if (info) PetscCall(PetscInfo(pc, "%s: zero pivot in row %d of the LU in double (not in single precision)\n", PCMBCMIXEDLU, (int)info - 1));
     }
     if (lu->dlu) {
-      PetscCall(PetscArraycpy(xv, bv, lu->n));
       PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
-      PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &lu->n, &one, lu->dlu, &lu->n, lu->piv, xv, &lu->n, &info));
+      PetscCall(MixedLUFactorSolve(pc, b, x));
       PetscCall(PetscFPTrapPop());
     } else { /* singular in double although not in single: a failed solve, as a singular J is at
                 set-up (the Newton step falls back), not an error that ends the run */
       PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
-      for (PetscInt i = 0; i < lu->n; i++) xv[i] = PETSC_INFINITY;
+      PetscCall(VecSet(x, PETSC_INFINITY));
     }
   }
-  PetscCall(VecRestoreArrayWrite(x, &xv));
-  PetscCall(VecRestoreArrayRead(b, &bv));
-  PetscCall(PetscLogFlops(4.0 * lu->n * lu->n * steps + (done ? 0.0 : 2.0 * lu->n * lu->n)));
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)pc), &size));
+  PetscCall(PetscLogFlops(2.0 * lu->n * lu->n * (steps + (done ? 0 : 1)) / size)); /* the triangular solves (MatMult logs its own) */
   PetscFunctionReturn(0);
 }
 
