@@ -47,7 +47,6 @@ def test_matfree_sample_is_the_same_on_any_number_of_ranks(tmp_path):
     lines = {}
     for n in (1, 4):
         r = solve(h5, "-mbc_output", str(tmp_path / f"r{n}"), "-mbc_d_route", "matfree", "-info", ":sys", nproc=n)
-        # from "Matrix-free D:" on: mpirun may splice another rank's partial line in front of it
         lines[n] = sorted({m.group(0) for m in re.finditer(r"Matrix-free D: .*", r.stdout)})
     assert lines[1] and lines[1] == lines[4], lines
     u0, f0 = final(str(tmp_path / "r1.h5"))
