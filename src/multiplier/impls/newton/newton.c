@@ -1070,7 +1070,7 @@ static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
   PetscCall(PetscFree5(nt->rho, nt->frozen, nt->A, nt->B, nt->active));
   PetscCall(PetscFree3(nt->sticks, nt->refopen, nt->nu));
   PetscCall(MatDestroy(&nt->Z));
-  PetscCall(PetscFree2(nt->WZ, nt->oidx));
+  PetscCall(PetscFree3(nt->WZ, nt->oidx, nt->wzcol));
   nt->zbuilt  = PETSC_FALSE;
   nt->zdirect = 0;
   PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));

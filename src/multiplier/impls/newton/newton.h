@@ -48,6 +48,7 @@ typedef struct {
   Mat        Z;           /* the reference Newton matrix's inverse; NULL: none */
   PetscScalar *WZ;        /* (W Z)_O: on the reference-separated rows O, nO x N on every rank (column-major) */
   PetscInt     nO, *oidx; /* |O|; per global row, its place in O (-1: not in O) */
+  PetscInt    *wzcol;     /* per global row, its column of WZ (the order S, D of Z's blocks) */
   PetscReal  zsigma, zrho; /* its shift and the augmentations' scale it was built with */
   PetscInt   lowranks;    /* steps of the last solve taken through Z */
   PetscInt   zdirect, zdirectpending; /* direct steps since W or Z (Z is built once they cost as much); a restart's */

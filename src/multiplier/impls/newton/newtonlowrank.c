@@ -170,27 +170,52 @@ static PetscErrorCode ZRowsCols(Mat Z, IS rows, PetscScalar **zkk)
   PetscFunctionReturn(0);
 }
 
-/* (W Z)_O, the rows of W Z on the contacts separated in the reference, on every rank: M's rows of
-   the contacts closed since need (W Z)_{pC}, and a product W_{p:} Z_{:C} at every step cost more
-   than the step (k ~ 1 500 of 3 384 rows in the 49k dam's strong shaking). W_O's columns of this
-   rank's rows of Z, then a sum over the ranks. */
-static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
+/* J_ref by blocks: the rows D where it is diagonal (separated in the reference: 1; frozen:
+   1 + sigma) and the others S (rho W + sigma I). In the order (D, S)
+     J_ref = [D_DD 0; A_SD A_SS],  Z = J_ref^-1 = [D_DD^-1 0; -A_SS^-1 A_SD D_DD^-1  A_SS^-1],
+   so Z costs the inverse of A_SS (2 |S|^3) and a product (2 |S|^2 |D|) instead of 2 N^3: in the
+   strong shaking a third of the rows and more are separated in the reference. */
+typedef struct {
+  PetscInt     nlS, nlD, NS, ND;
+  PetscInt    *sloc, *dloc; /* this rank's rows of S and D (local indices) */
+  PetscInt    *gS, *gD;     /* the global rows of S and D, in that order (rank by rank) */
+  PetscMPIInt *cntD, *dspD; /* D's rows per rank */
+  PetscReal   *dval;        /* J_ref's diagonal on D, in gD's order */
+  Mat          Zss, Zsd;    /* A_SS^-1 and -A_SS^-1 A_SD D_DD^-1, rows S in W's row layout */
+} ReferenceBlocks;
+
+static PetscErrorCode ReferenceBlocksDestroy(ReferenceBlocks *rb)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree2(rb->sloc, rb->dloc));
+  PetscCall(PetscFree2(rb->gS, rb->gD));
+  PetscCall(PetscFree3(rb->cntD, rb->dspD, rb->dval));
+  PetscCall(MatDestroy(&rb->Zss));
+  PetscCall(MatDestroy(&rb->Zsd));
+  PetscFunctionReturn(0);
+}
+
+/* (W Z)_O, the rows of W Z on the contacts separated in the reference (O within D), on every
+   rank: M's rows of the contacts closed since need (W Z)_{pC}, and a product W_{p:} Z_{:C} at
+   every step cost more than the step (k ~ 1 500 of 3 384 rows in the 49k dam's strong shaking).
+   From Z's blocks, W_O Z = [W_OS Z_SS, W_OS Z_SD + W_OD D_DD^-1]: this rank's rows of S and D,
+   then a sum over the ranks; its columns in the order (S, D) (nt->wzcol). */
+static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m, const ReferenceBlocks *rb)
 {
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
-  PetscInt            N, rs, re, nl, nloc = 0, *orow, lda, ldo;
-  PetscMPIInt        *cnt, *dsp;
+  PetscInt            N, rs, re, nloc = 0, *orow, ldo;
+  PetscMPIInt        *cnt, *dsp, rank;
   IS                  isO;
   Mat                 wod;
-  const PetscScalar  *z, *w;
-  PetscBLASInt        bO, bN, bnl, blda, bldo;
-  PetscScalar         one = 1, zero = 0;
+  const PetscScalar  *w;
+  PetscScalar        *ws = NULL;
 
   PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCall(MatGetSize(fp->W, &N, NULL));
   PetscCall(MatGetOwnershipRange(fp->W, &rs, &re));
-  nl = re - rs;
   PetscCall(PetscMalloc1(fp->off[fp->nc] + 1, &orow));
   for (PetscInt i = 0; i < fp->nc; i++)
     if (nt->refopen[i])
@@ -198,9 +223,11 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
   {
     PetscInt *all;
     PetscCall(MBCNewtonRowsAllGather(comm, nloc, orow, &nt->nO, &all, &cnt, &dsp));
-    PetscCall(PetscMalloc2((size_t)nt->nO * N + 1, &nt->WZ, N + 1, &nt->oidx));
+    PetscCall(PetscMalloc3((size_t)nt->nO * N + 1, &nt->WZ, N + 1, &nt->oidx, N + 1, &nt->wzcol));
     for (PetscInt r = 0; r < N; r++) nt->oidx[r] = -1;
     for (PetscInt o = 0; o < nt->nO; o++) nt->oidx[all[o]] = o;
+    for (PetscInt j = 0; j < rb->NS; j++) nt->wzcol[rb->gS[j]] = j;
+    for (PetscInt j = 0; j < rb->ND; j++) nt->wzcol[rb->gD[j]] = rb->NS + j;
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nt->nO, all, PETSC_OWN_POINTER, &isO));
   }
   PetscCall(PetscFree2(cnt, dsp));
@@ -209,20 +236,39 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m)
     PetscCall(ISDestroy(&isO));
     PetscFunctionReturn(0);
   }
+  PetscCall(PetscArrayzero(nt->WZ, (size_t)nt->nO * N));
   PetscCall(WRowsDense(fp->W, isO, &wod));
   PetscCall(MatDenseGetArrayRead(wod, &w));
   PetscCall(MatDenseGetLDA(wod, &ldo));
-  PetscCall(MatDenseGetArrayRead(nt->Z, &z));
-  PetscCall(MatDenseGetLDA(nt->Z, &lda));
-  PetscCall(PetscBLASIntCast(nt->nO, &bO));
-  PetscCall(PetscBLASIntCast(N, &bN));
-  PetscCall(PetscBLASIntCast(nl, &bnl));
-  PetscCall(PetscBLASIntCast(lda, &blda));
-  PetscCall(PetscBLASIntCast(ldo, &bldo));
-  if (nl) PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bO, &bN, &bnl, &one, w + (size_t)rs * ldo, &bldo, z, &blda, &zero, nt->WZ, &bO));
-  else
-    for (size_t i = 0; i < (size_t)nt->nO * N; i++) nt->WZ[i] = 0;
-  PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
+  if (rb->nlS) { /* W_OS on this rank's rows of S, times their rows of Z_SS and Z_SD */
+    const Mat    zb[2]  = {rb->Zss, rb->Zsd};
+    const size_t col[2] = {0, (size_t)rb->NS * nt->nO};
+    PetscBLASInt bO, bk, bn, bldz;
+    PetscScalar  one = 1, zero = 0;
+    PetscCall(PetscMalloc1((size_t)nt->nO * rb->nlS, &ws));
+    for (PetscInt s = 0; s < rb->nlS; s++) PetscCall(PetscArraycpy(ws + (size_t)s * nt->nO, w + (size_t)(rs + rb->sloc[s]) * ldo, nt->nO));
+    PetscCall(PetscBLASIntCast(nt->nO, &bO));
+    PetscCall(PetscBLASIntCast(rb->nlS, &bk));
+    for (PetscInt b = 0; b < 2; b++) {
+      const PetscScalar *z;
+      PetscInt           lda, n;
+      if (!zb[b]) continue;
+      PetscCall(MatGetSize(zb[b], NULL, &n));
+      PetscCall(MatDenseGetLDA(zb[b], &lda));
+      PetscCall(PetscBLASIntCast(n, &bn));
+      PetscCall(PetscBLASIntCast(lda, &bldz));
+      PetscCall(MatDenseGetArrayRead(zb[b], &z));
+      PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bO, &bn, &bk, &one, ws, &bO, z, &bldz, &zero, nt->WZ + col[b], &bO));
+      PetscCall(MatDenseRestoreArrayRead(zb[b], &z));
+    }
+    PetscCall(PetscFree(ws));
+  }
+  for (PetscInt j = 0; j < rb->nlD; j++) { /* W_OD D_DD^-1 on this rank's rows of D */
+    const PetscInt     g  = rb->dspD[rank] + j;
+    const PetscScalar *wc = w + (size_t)(rs + rb->dloc[j]) * ldo;
+    PetscScalar       *c  = nt->WZ + (size_t)(rb->NS + g) * nt->nO;
+    for (PetscInt o = 0; o < nt->nO; o++) c[o] += wc[o] / rb->dval[g];
+  }
   PetscCall(MatDenseRestoreArrayRead(wod, &w));
   PetscCall(MatDestroy(&wod));
   PetscCall(SumOverRanks(comm, nt->WZ, (PetscInt64)nt->nO * N));
@@ -313,25 +359,214 @@ static PetscErrorCode InverseScaLAPACK(Mat J0, PetscInt nl, Mat *Z)
 #endif
 }
 
+/* Zsd = -Zss B, B = A_SD D_DD^-1 (asd), both with the rows S in W's layout: B's rows gathered on
+   every rank (|S| |D| entries, as B^T by columns), then this rank's rows by one GEMM. PETSc's
+   MPIDense product ran on one rank (4.4 s against 0.27 on one rank, the 49k dam). */
+static PetscErrorCode ZsdProduct(ReferenceBlocks *rb, Mat asd)
+{
+  MPI_Comm           comm = PetscObjectComm((PetscObject)asd);
+  const PetscScalar *a, *zs;
+  PetscScalar       *bt, *bl, *zd, mone = -1, zero = 0;
+  PetscInt           lda, ldz, ldd;
+  PetscMPIInt        size, *cnt, *dsp, nl;
+  PetscBLASInt       m, n, k, bldz, bldd;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscMalloc2(size, &cnt, size + 1, &dsp));
+  PetscCall(PetscMPIIntCast(rb->nlS * rb->ND, &nl));
+  PetscCallMPI(MPI_Allgather(&nl, 1, MPI_INT, cnt, 1, MPI_INT, comm));
+  dsp[0] = 0;
+  for (PetscMPIInt p = 0; p < size; p++) PetscCall(PetscMPIIntCast((PetscInt64)dsp[p] + cnt[p], &dsp[p + 1]));
+  PetscCall(PetscMalloc2((size_t)rb->NS * rb->ND + 1, &bt, (size_t)rb->nlS * rb->ND + 1, &bl));
+  PetscCall(MatDenseGetLDA(asd, &lda));
+  PetscCall(MatDenseGetArrayRead(asd, &a));
+  for (PetscInt s = 0; s < rb->nlS; s++)
+    for (PetscInt j = 0; j < rb->ND; j++) bl[(size_t)s * rb->ND + j] = a[(size_t)j * lda + s];
+  PetscCall(MatDenseRestoreArrayRead(asd, &a));
+  PetscCallMPI(MPI_Allgatherv(bl, nl, MPIU_SCALAR, bt, cnt, dsp, MPIU_SCALAR, comm));
+  PetscCall(MatCreateDense(comm, rb->nlS, PETSC_DECIDE, rb->NS, rb->ND, NULL, &rb->Zsd));
+  if (rb->nlS) {
+    PetscCall(MatDenseGetLDA(rb->Zss, &ldz));
+    PetscCall(MatDenseGetLDA(rb->Zsd, &ldd));
+    PetscCall(PetscBLASIntCast(rb->nlS, &m));
+    PetscCall(PetscBLASIntCast(rb->ND, &n));
+    PetscCall(PetscBLASIntCast(rb->NS, &k));
+    PetscCall(PetscBLASIntCast(ldz, &bldz));
+    PetscCall(PetscBLASIntCast(ldd, &bldd));
+    PetscCall(MatDenseGetArrayRead(rb->Zss, &zs));
+    PetscCall(MatDenseGetArrayWrite(rb->Zsd, &zd));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "T", &m, &n, &k, &mone, zs, &bldz, bt, &n, &zero, zd, &bldd));
+    PetscCall(MatDenseRestoreArrayWrite(rb->Zsd, &zd));
+    PetscCall(MatDenseRestoreArrayRead(rb->Zss, &zs));
+  }
+  PetscCall(MatAssemblyBegin(rb->Zsd, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(rb->Zsd, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree2(bt, bl));
+  PetscCall(PetscFree2(cnt, dsp));
+  PetscFunctionReturn(0);
+}
+
+/* the blocks of J_ref (ReferenceBlocks): its rows split into D and S; A_SS^-1 (Zss) by LAPACK
+   (one rank) or ScaLAPACK, and Zsd = -Zss A_SD D_DD^-1; n1 and z1, the 1-norms of J_ref and of Z
+   (their columns' sums from the blocks'). Zss NULL where A_SS is singular. */
+static PetscErrorCode ReferenceBlocksBuild(MBCMultiplier m, PetscBool scal, ReferenceBlocks *rb, PetscReal *n1, PetscReal *z1)
+{
+  MBC_Newton         *nt   = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp   = m->fp;
+  MPI_Comm            comm = PetscObjectComm((PetscObject)m);
+  PetscInt            rs, re, nl, *grow, *all;
+  PetscReal          *srho, *dl, *cs = NULL, *cd = NULL;
+  PetscMPIInt        *cnt, *dsp;
+  IS                  isS, isD;
+  Mat                 ass, asd = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetOwnershipRange(fp->W, &rs, &re));
+  nl = re - rs;
+  PetscCall(PetscMalloc2(nl + 1, &rb->sloc, nl + 1, &rb->dloc));
+  PetscCall(PetscMalloc3(nl + 1, &grow, nl + 1, &srho, nl + 1, &dl));
+  rb->nlS = rb->nlD = 0;
+  for (PetscInt i = 0; i < fp->nc; i++)
+    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) {
+      if (nt->refopen[i] || nt->frozen[d]) {
+        dl[rb->nlD]        = nt->refopen[i] ? 1.0 : 1.0 + nt->zsigma;
+        rb->dloc[rb->nlD++] = d;
+      } else {
+        srho[rb->nlS]       = nt->rho[2 * i + (d > fp->off[i])];
+        rb->sloc[rb->nlS++] = d;
+      }
+    }
+  for (PetscInt s = 0; s < rb->nlS; s++) grow[s] = rs + rb->sloc[s];
+  PetscCall(MBCNewtonRowsAllGather(comm, rb->nlS, grow, &rb->NS, &rb->gS, &cnt, &dsp));
+  PetscCall(ISCreateGeneral(comm, rb->nlS, grow, PETSC_COPY_VALUES, &isS));
+  PetscCall(PetscFree2(cnt, dsp));
+  for (PetscInt j = 0; j < rb->nlD; j++) grow[j] = rs + rb->dloc[j];
+  PetscCall(MBCNewtonRowsAllGather(comm, rb->nlD, grow, &rb->ND, &all, &rb->cntD, &rb->dspD));
+  PetscCall(ISCreateGeneral(comm, rb->nlD, grow, PETSC_COPY_VALUES, &isD));
+  { /* rb->gD and rb->dval in one allocation pair with gS, cntD/dspD with dval */
+    PetscInt    *gS = rb->gS;
+    PetscMPIInt *c = rb->cntD, *o = rb->dspD, size;
+    PetscCallMPI(MPI_Comm_size(comm, &size));
+    PetscCall(PetscMalloc2(rb->NS + 1, &rb->gS, rb->ND + 1, &rb->gD));
+    PetscCall(PetscArraycpy(rb->gS, gS, rb->NS));
+    PetscCall(PetscArraycpy(rb->gD, all, rb->ND));
+    PetscCall(PetscFree(gS));
+    PetscCall(PetscFree(all));
+    PetscCall(PetscMalloc3(size, &rb->cntD, size + 1, &rb->dspD, rb->ND + 1, &rb->dval));
+    PetscCall(PetscArraycpy(rb->cntD, c, size));
+    PetscCall(PetscArraycpy(rb->dspD, o, size + 1));
+    PetscCall(PetscFree2(c, o));
+    PetscCallMPI(MPI_Allgatherv(dl, (PetscMPIInt)rb->nlD, MPIU_REAL, rb->dval, rb->cntD, rb->dspD, MPIU_REAL, comm));
+  }
+  *n1 = *z1 = 0;
+  for (PetscInt j = 0; j < rb->ND; j++) *n1 = PetscMax(*n1, rb->dval[j]), *z1 = PetscMax(*z1, 1 / rb->dval[j]);
+  if (rb->NS) {
+    Vec r, c;
+    PetscCall(MatCreateSubMatrix(fp->W, isS, isS, MAT_INITIAL_MATRIX, &ass));
+    PetscCall(MatConvert(ass, MATDENSE, MAT_INPLACE_MATRIX, &ass));
+    {
+      PetscScalar *rv;
+      PetscCall(MatCreateVecs(ass, NULL, &r));
+      PetscCall(VecGetArray(r, &rv));
+      for (PetscInt s = 0; s < rb->nlS; s++) rv[s] = srho[s];
+      PetscCall(VecRestoreArray(r, &rv));
+    }
+    PetscCall(MatDiagonalScale(ass, r, NULL));
+    PetscCall(MatShift(ass, nt->zsigma));
+    PetscCall(PetscMalloc2(rb->NS, &cs, rb->ND + 1, &cd));
+    PetscCall(MatGetColumnNorms(ass, NORM_1, cs));
+    for (PetscInt j = 0; j < rb->NS; j++) *n1 = PetscMax(*n1, cs[j]);
+    if (rb->ND) {
+      PetscScalar *cv;
+      PetscCall(MatCreateSubMatrix(fp->W, isS, isD, MAT_INITIAL_MATRIX, &asd));
+      PetscCall(MatConvert(asd, MATDENSE, MAT_INPLACE_MATRIX, &asd));
+      PetscCall(MatDiagonalScale(asd, r, NULL));
+      PetscCall(MatGetColumnNorms(asd, NORM_1, cd));
+      for (PetscInt j = 0; j < rb->ND; j++) *n1 = PetscMax(*n1, rb->dval[j] + cd[j]);
+      PetscCall(MatCreateVecs(asd, &c, NULL));
+      PetscCall(VecGetArray(c, &cv));
+      for (PetscInt j = 0; j < rb->nlD; j++) cv[j] = 1 / dl[j];
+      PetscCall(VecRestoreArray(c, &cv));
+      PetscCall(MatDiagonalScale(asd, NULL, c));
+      PetscCall(VecDestroy(&c));
+    }
+    PetscCall(VecDestroy(&r));
+    if (scal) PetscCall(InverseScaLAPACK(ass, rb->nlS, &rb->Zss));
+    else PetscCall(InverseLAPACK(&ass, &rb->Zss)); /* in place: ass NULL where it succeeded */
+    PetscCall(MatDestroy(&ass));
+    if (rb->Zss) {
+      PetscCall(MatGetColumnNorms(rb->Zss, NORM_1, cs));
+      for (PetscInt j = 0; j < rb->NS; j++) *z1 = PetscMax(*z1, cs[j]);
+      if (asd) {
+        PetscCall(ZsdProduct(rb, asd));
+        PetscCall(MatGetColumnNorms(rb->Zsd, NORM_1, cd));
+        for (PetscInt j = 0; j < rb->ND; j++) *z1 = PetscMax(*z1, 1 / rb->dval[j] + cd[j]);
+      }
+    }
+    PetscCall(MatDestroy(&asd));
+    PetscCall(PetscFree2(cs, cd));
+  }
+  PetscCall(ISDestroy(&isS));
+  PetscCall(ISDestroy(&isD));
+  PetscCall(PetscFree3(grow, srho, dl));
+  PetscFunctionReturn(0);
+}
+
+/* Z (N x N, dense in W's row layout) from its blocks: Z_SS, Z_SD, the diagonal D_DD^-1 */
+static PetscErrorCode ReferenceInverseAssemble(Mat W, const ReferenceBlocks *rb, Mat *Z)
+{
+  MPI_Comm    comm = PetscObjectComm((PetscObject)W);
+  PetscInt    N, rs, re, lda;
+  PetscScalar *z;
+  PetscMPIInt rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(MatGetSize(W, &N, NULL));
+  PetscCall(MatGetOwnershipRange(W, &rs, &re));
+  PetscCall(MatCreateDense(comm, re - rs, re - rs, N, N, NULL, Z));
+  PetscCall(MatDenseGetLDA(*Z, &lda));
+  PetscCall(MatDenseGetArrayWrite(*Z, &z)); /* zeroed by its preallocation */
+  for (PetscInt b = 0; b < 2; b++) {
+    const Mat          zb = b ? rb->Zsd : rb->Zss;
+    const PetscInt    *g  = b ? rb->gD : rb->gS;
+    const PetscScalar *v;
+    PetscInt           n, ldv;
+    if (!zb) continue;
+    PetscCall(MatGetSize(zb, NULL, &n));
+    PetscCall(MatDenseGetLDA(zb, &ldv));
+    PetscCall(MatDenseGetArrayRead(zb, &v));
+    for (PetscInt j = 0; j < n; j++) {
+      PetscScalar       *zc = z + (size_t)g[j] * lda;
+      const PetscScalar *vc = v + (size_t)j * ldv;
+      for (PetscInt s = 0; s < rb->nlS; s++) zc[rb->sloc[s]] = vc[s];
+    }
+    PetscCall(MatDenseRestoreArrayRead(zb, &v));
+  }
+  for (PetscInt j = 0; j < rb->nlD; j++) z[(size_t)(rs + rb->dloc[j]) * lda + rb->dloc[j]] = 1 / rb->dval[rb->dspD[rank] + j];
+  PetscCall(MatDenseRestoreArrayWrite(*Z, &z));
+  PetscCall(MatAssemblyBegin(*Z, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*Z, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
 /* Z = J_ref^-1 with the reference ref (one value a row, 1: separated; NULL: the current state's
-   separated contacts), dense in W's row layout, by LAPACK (one rank) or ScaLAPACK; NULL where J_ref is
-   singular or too badly conditioned for its inverse to carry the step (cond_1 > 1e10). */
+   separated contacts), dense in W's row layout, from its blocks (ReferenceBlocks); NULL where J_ref
+   is singular or too badly conditioned for its inverse to carry the step (cond_1 > 1e10). */
 static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m, const PetscScalar ref[])
 {
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
-  Mat                 J0;
-  Vec                 rho;
-  PetscScalar        *rv;
-  PetscInt            rs, re, nl, N, nopen = 0;
-  PetscReal           dmax = 0, n1, z1;
+  ReferenceBlocks     rb   = {0};
+  PetscInt            N, nopen = 0;
+  PetscReal           dmax = 0, n1 = 0, z1 = 0;
   PetscBool           scal = (PetscBool)strcmp(nt->densetype, MATDENSE);
   PetscMPIInt         size;
-  int                 bad = 0;
 
   PetscFunctionBegin;
-  PetscCall(PetscFree2(nt->WZ, nt->oidx));
+  PetscCall(PetscFree3(nt->WZ, nt->oidx, nt->wzcol));
   nt->nO      = 0;
   nt->zbuilt  = PETSC_TRUE;
   nt->zrho    = nt->rho_used;
@@ -340,9 +575,7 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m, const PetscScalar ref[
   PetscCallMPI(MPI_Comm_size(comm, &size));
   if (size > 1 && !scal) PetscFunctionReturn(0); /* no distributed LU to invert with */
   PetscCall(PetscLogEventBegin(MBC_NewtonInverse, m, 0, 0, 0));
-  PetscCall(MatGetOwnershipRange(fp->W, &rs, &re));
   PetscCall(MatGetSize(fp->W, &N, NULL));
-  nl = re - rs;
   for (PetscInt i = 0; i < fp->nc; i++) {
     const PetscInt dim = fp->off[i + 1] - fp->off[i];
     nopen += nt->refopen[i];
@@ -352,36 +585,16 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m, const PetscScalar ref[
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nopen, 1, MPIU_INT, MPI_SUM, comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &dmax, 1, MPIU_REAL, MPIU_MAX, comm));
   nt->zsigma = nt->shift * PetscMax(dmax, 1.0);
-  PetscCall(MatConvert(fp->W, MATDENSE, MAT_INITIAL_MATRIX, &J0));
-  PetscCall(MatCreateVecs(fp->W, &rho, NULL));
-  PetscCall(VecGetArray(rho, &rv));
-  for (PetscInt i = 0; i < fp->nc; i++)
-    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++) rv[d] = (nt->frozen[d] || nt->refopen[i]) ? 0 : nt->rho[2 * i + (d > fp->off[i])];
-  PetscCall(VecRestoreArray(rho, &rv));
-  PetscCall(MatDiagonalScale(J0, rho, NULL));
-  PetscCall(VecDestroy(&rho));
-  PetscCall(MatShift(J0, nt->zsigma));
-  for (PetscInt i = 0; i < fp->nc; i++)
-    for (PetscInt d = fp->off[i]; d < fp->off[i + 1]; d++)
-      if (nt->refopen[i] || nt->frozen[d]) PetscCall(MatSetValue(J0, rs + d, rs + d, nt->refopen[i] ? 1.0 : 1.0 + nt->zsigma, INSERT_VALUES));
-  PetscCall(MatAssemblyBegin(J0, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(J0, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatNorm(J0, NORM_1, &n1));
-  if (scal) PetscCall(InverseScaLAPACK(J0, nl, &nt->Z));
-  else PetscCall(InverseLAPACK(&J0, &nt->Z));
-  if (nt->Z) {
-    PetscCall(MatNorm(nt->Z, NORM_1, &z1));
-    if (!(n1 * z1 <= 1e10)) bad = 1;
-    else {
-      PetscInt zl;
-      PetscCall(MatGetLocalSize(nt->Z, &zl, NULL));
-      PetscCheck(zl == nl, PETSC_COMM_SELF, PETSC_ERR_PLIB, "The kept inverse's rows %" PetscInt_FMT " are not W's %" PetscInt_FMT, zl, nl);
+  PetscCall(ReferenceBlocksBuild(m, scal, &rb, &n1, &z1));
+  if (rb.Zss || !rb.NS) {
+    const PetscBool bad = (PetscBool)!(n1 * z1 <= 1e10);
+    PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT " (%" PetscInt_FMT " contacts separated): inverted (its %" PetscInt_FMT " rows not diagonal), cond_1 %g%s\n", N, nopen, rb.NS, (double)(n1 * z1), bad ? ": too large, the direct solve instead" : ""));
+    if (!bad) {
+      PetscCall(ReferenceInverseAssemble(fp->W, &rb, &nt->Z));
+      PetscCall(NewtonLowRankWZ(m, &rb));
     }
-    PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT " (%" PetscInt_FMT " contacts separated): inverted, cond_1 %g%s\n", N, nopen, (double)(n1 * z1), bad ? ": too large, the direct solve instead" : ""));
-    if (bad) PetscCall(MatDestroy(&nt->Z));
-    else PetscCall(NewtonLowRankWZ(m));
   } else PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT ": singular, the direct solve instead\n", N));
-  PetscCall(MatDestroy(&J0));
+  PetscCall(ReferenceBlocksDestroy(&rb));
   PetscCall(PetscLogEventEnd(MBC_NewtonInverse, m, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -542,7 +755,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
         if (lr->pq[LR_ROW * p + 8] > 0.5) {
           const PetscInt o = nt->oidx[lr->row[p]];
           PetscCheck(o >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Row %" PetscInt_FMT " separated in the reference is not among (W Z)_O's", lr->row[p]);
-          wzpc = nt->WZ[(size_t)lr->row[c] * nt->nO + o];
+          wzpc = nt->WZ[(size_t)nt->wzcol[lr->row[c]] * nt->nO + o];
         } else if (lr->pq[LR_ROW * p + 9] > 0) wzpc = ((p == c ? 1 : 0) - nt->zsigma * z[c * lda + p]) / lr->pq[LR_ROW * p + 9]; /* rho_p (W Z)_p + sigma Z_p = e_p */
         v += beta * wzpc;
       }
