@@ -1069,8 +1069,7 @@ static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
   PetscCall(PetscFree(nt->diag));
   PetscCall(PetscFree5(nt->rho, nt->frozen, nt->A, nt->B, nt->active));
   PetscCall(PetscFree3(nt->sticks, nt->refopen, nt->nu));
-  PetscCall(MatDestroy(&nt->Z));
-  PetscCall(PetscFree3(nt->WZ, nt->oidx, nt->wzcol));
+  PetscCall(MBCNewtonLowRankDestroyReference(nt));
   nt->zbuilt  = PETSC_FALSE;
   nt->zdirect = 0;
   PetscCall(PetscFree3(nt->work, nt->mark, nt->cols));

@@ -45,7 +45,12 @@ typedef struct {
   Vec        refpending;  /* a restart's reference (W's layout), for the next Z if built for refW */
   Mat        refW;
   PetscBool  zbuilt;      /* Z tried for this W */
-  Mat        Z;           /* the reference Newton matrix's inverse; NULL: none */
+  Mat        Z;           /* the reference Newton matrix's inverse on its rows S that are not diagonal:
+                             |S| x N dense, the rows S in W's layout, W's column layout; NULL: none */
+  Vec        zx;          /* Z's rows S times a vector */
+  PetscInt  *zrow;        /* per local row: its row of Z (in S), -1 in D (J_ref diagonal there) */
+  PetscInt  *zsloc;       /* Z's local rows: their local rows of W */
+  PetscScalar *zdinv;     /* per local row: Z's diagonal in D (1 / J_ref's), 0 in S */
   PetscScalar *WZ;        /* (W Z)_O: on the reference-separated rows O, nO x N on every rank (column-major) */
   PetscInt     nO, *oidx; /* |O|; per global row, its place in O (-1: not in O) */
   PetscInt    *wzcol;     /* per global row, its column of WZ (the order S, D of Z's blocks) */
@@ -66,4 +71,5 @@ PETSC_INTERN PetscErrorCode MBCNewtonKrylovSolve(MBCMultiplier, IS, PetscInt, Ve
    where it pays (W assembled, no equilibrium constraints, few rows differing from the reference)
    and meets its residual check: *done. Compose: the restart state (the reference). */
 PETSC_INTERN PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCNewtonLowRankDestroyReference(MBC_Newton *);
 PETSC_INTERN PetscErrorCode MBCNewtonLowRankCompose(MBCMultiplier);

@@ -144,29 +144,43 @@ static PetscErrorCode WRowsDense(Mat W, IS rows, Mat *D)
 }
 
 /* Z's entries on the rows and columns `rows` (global, the same on every rank), k x k column-major
-   on every rank: each rank copies its own rows of Z (stored by columns, every column on every
-   rank), a sum over the ranks completes them; MatCreateSubMatrices on the MPI dense Z took 4 s of
-   the 49k dam's 90 earthquake steps on two ranks. */
-static PetscErrorCode ZRowsCols(Mat Z, IS rows, PetscScalar **zkk)
+   on every rank: each rank copies its own rows of Z (its rows S stored by columns, every column on
+   every rank; its diagonal on D), a sum over the ranks completes them; MatCreateSubMatrices on the
+   MPI dense Z took 4 s of the 49k dam's 90 earthquake steps on two ranks. */
+static PetscErrorCode ZRowsCols(const MBC_Newton *nt, IS rows, PetscScalar **zkk)
 {
   const PetscInt    *idx;
   const PetscScalar *z;
   PetscInt           k, lda, rs, re;
 
   PetscFunctionBegin;
-  PetscCall(MatGetOwnershipRange(Z, &rs, &re));
+  PetscCall(MatGetOwnershipRangeColumn(nt->Z, &rs, &re)); /* W's rows */
   PetscCall(ISGetLocalSize(rows, &k));
   PetscCall(ISGetIndices(rows, &idx));
   PetscCall(PetscCalloc1((size_t)k * k + 1, zkk));
-  PetscCall(MatDenseGetLDA(Z, &lda));
-  PetscCall(MatDenseGetArrayRead(Z, &z));
+  PetscCall(MatDenseGetLDA(nt->Z, &lda));
+  PetscCall(MatDenseGetArrayRead(nt->Z, &z));
   for (PetscInt r = 0; r < k; r++) {
+    PetscInt l = idx[r] - rs;
     if (idx[r] < rs || idx[r] >= re) continue;
-    for (PetscInt c = 0; c < k; c++) (*zkk)[(size_t)c * k + r] = z[(size_t)idx[c] * lda + idx[r] - rs];
+    if (nt->zrow[l] < 0) (*zkk)[(size_t)r * k + r] = nt->zdinv[l];
+    else
+      for (PetscInt c = 0; c < k; c++) (*zkk)[(size_t)c * k + r] = z[(size_t)idx[c] * lda + nt->zrow[l]];
   }
-  PetscCall(MatDenseRestoreArrayRead(Z, &z));
+  PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
   PetscCall(ISRestoreIndices(rows, &idx));
-  PetscCall(SumOverRanks(PetscObjectComm((PetscObject)Z), *zkk, (PetscInt64)k * k));
+  PetscCall(SumOverRanks(PetscObjectComm((PetscObject)nt->Z), *zkk, (PetscInt64)k * k));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCNewtonLowRankDestroyReference(MBC_Newton *nt)
+{
+  PetscFunctionBegin;
+  PetscCall(MatDestroy(&nt->Z));
+  PetscCall(VecDestroy(&nt->zx));
+  PetscCall(PetscFree3(nt->zrow, nt->zsloc, nt->zdinv));
+  PetscCall(PetscFree3(nt->WZ, nt->oidx, nt->wzcol));
+  nt->nO = 0;
   PetscFunctionReturn(0);
 }
 
@@ -513,21 +527,22 @@ static PetscErrorCode ReferenceBlocksBuild(MBCMultiplier m, PetscBool scal, Refe
   PetscFunctionReturn(0);
 }
 
-/* Z (N x N, dense in W's row layout) from its blocks: Z_SS, Z_SD, the diagonal D_DD^-1 */
-static PetscErrorCode ReferenceInverseAssemble(Mat W, const ReferenceBlocks *rb, Mat *Z)
+/* the kept inverse from its blocks: Z's rows S (|S| x N, columns in W's numbering) from Z_SS and
+   Z_SD, the diagonal D_DD^-1, and the maps between W's local rows and Z's */
+static PetscErrorCode ReferenceInverseAssemble(MBC_Newton *nt, Mat W, const ReferenceBlocks *rb)
 {
-  MPI_Comm    comm = PetscObjectComm((PetscObject)W);
-  PetscInt    N, rs, re, lda;
+  MPI_Comm     comm = PetscObjectComm((PetscObject)W);
+  PetscInt     N, rs, re, lda;
   PetscScalar *z;
-  PetscMPIInt rank;
+  PetscMPIInt  rank;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCall(MatGetSize(W, &N, NULL));
   PetscCall(MatGetOwnershipRange(W, &rs, &re));
-  PetscCall(MatCreateDense(comm, re - rs, re - rs, N, N, NULL, Z));
-  PetscCall(MatDenseGetLDA(*Z, &lda));
-  PetscCall(MatDenseGetArrayWrite(*Z, &z)); /* zeroed by its preallocation */
+  PetscCall(MatCreateDense(comm, rb->nlS, re - rs, rb->NS, N, NULL, &nt->Z));
+  PetscCall(MatDenseGetLDA(nt->Z, &lda));
+  PetscCall(MatDenseGetArrayWrite(nt->Z, &z));
   for (PetscInt b = 0; b < 2; b++) {
     const Mat          zb = b ? rb->Zsd : rb->Zss;
     const PetscInt    *g  = b ? rb->gD : rb->gS;
@@ -537,17 +552,16 @@ static PetscErrorCode ReferenceInverseAssemble(Mat W, const ReferenceBlocks *rb,
     PetscCall(MatGetSize(zb, NULL, &n));
     PetscCall(MatDenseGetLDA(zb, &ldv));
     PetscCall(MatDenseGetArrayRead(zb, &v));
-    for (PetscInt j = 0; j < n; j++) {
-      PetscScalar       *zc = z + (size_t)g[j] * lda;
-      const PetscScalar *vc = v + (size_t)j * ldv;
-      for (PetscInt s = 0; s < rb->nlS; s++) zc[rb->sloc[s]] = vc[s];
-    }
+    for (PetscInt j = 0; j < n; j++) PetscCall(PetscArraycpy(z + (size_t)g[j] * lda, v + (size_t)j * ldv, rb->nlS));
     PetscCall(MatDenseRestoreArrayRead(zb, &v));
   }
-  for (PetscInt j = 0; j < rb->nlD; j++) z[(size_t)(rs + rb->dloc[j]) * lda + rb->dloc[j]] = 1 / rb->dval[rb->dspD[rank] + j];
-  PetscCall(MatDenseRestoreArrayWrite(*Z, &z));
-  PetscCall(MatAssemblyBegin(*Z, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(*Z, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatDenseRestoreArrayWrite(nt->Z, &z));
+  PetscCall(MatAssemblyBegin(nt->Z, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(nt->Z, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatCreateVecs(nt->Z, NULL, &nt->zx));
+  PetscCall(PetscMalloc3(re - rs + 1, &nt->zrow, rb->nlS + 1, &nt->zsloc, re - rs + 1, &nt->zdinv));
+  for (PetscInt s = 0; s < rb->nlS; s++) nt->zrow[rb->sloc[s]] = s, nt->zdinv[rb->sloc[s]] = 0, nt->zsloc[s] = rb->sloc[s];
+  for (PetscInt j = 0; j < rb->nlD; j++) nt->zrow[rb->dloc[j]] = -1, nt->zdinv[rb->dloc[j]] = 1 / rb->dval[rb->dspD[rank] + j];
   PetscFunctionReturn(0);
 }
 
@@ -566,8 +580,7 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m, const PetscScalar ref[
   PetscMPIInt         size;
 
   PetscFunctionBegin;
-  PetscCall(PetscFree3(nt->WZ, nt->oidx, nt->wzcol));
-  nt->nO      = 0;
+  PetscCall(MBCNewtonLowRankDestroyReference(nt));
   nt->zbuilt  = PETSC_TRUE;
   nt->zrho    = nt->rho_used;
   nt->zdirect = 0;
@@ -590,7 +603,7 @@ static PetscErrorCode NewtonLowRankSetUp(MBCMultiplier m, const PetscScalar ref[
     const PetscBool bad = (PetscBool)!(n1 * z1 <= 1e10);
     PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT " (%" PetscInt_FMT " contacts separated): inverted (its %" PetscInt_FMT " rows not diagonal), cond_1 %g%s\n", N, nopen, rb.NS, (double)(n1 * z1), bad ? ": too large, the direct solve instead" : ""));
     if (!bad) {
-      PetscCall(ReferenceInverseAssemble(fp->W, &rb, &nt->Z));
+      PetscCall(ReferenceInverseAssemble(nt, fp->W, &rb));
       PetscCall(NewtonLowRankWZ(m, &rb));
     }
   } else PetscCall(PetscInfo(m, "Reference Newton matrix %" PetscInt_FMT ": singular, the direct solve instead\n", N));
@@ -682,10 +695,24 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
   PetscScalar       *t, *xv;
   const PetscScalar *z, *tv;
   PetscBLASInt       k;
-  PetscInt           nl, lda;
+  PetscInt           nl, lda, nS, rs;
 
   PetscFunctionBegin;
-  PetscCall(MatMult(nt->Z, b, x));
+  { /* x = Z b: Z's rows S, the diagonal on D */
+    const PetscScalar *bv, *sv;
+    PetscScalar       *xv;
+    PetscCall(MatMult(nt->Z, b, nt->zx));
+    PetscCall(VecGetLocalSize(nt->zx, &nS));
+    PetscCall(VecGetLocalSize(x, &nl));
+    PetscCall(VecGetArrayRead(b, &bv));
+    PetscCall(VecGetArrayRead(nt->zx, &sv));
+    PetscCall(VecGetArray(x, &xv));
+    for (PetscInt i = 0; i < nl; i++) xv[i] = nt->zdinv[i] * bv[i];
+    for (PetscInt s = 0; s < nS; s++) xv[nt->zsloc[s]] = sv[s];
+    PetscCall(VecRestoreArray(x, &xv));
+    PetscCall(VecRestoreArrayRead(nt->zx, &sv));
+    PetscCall(VecRestoreArrayRead(b, &bv));
+  }
   PetscCall(PetscBLASIntCast(lr->k, &k));
   if (k) {
     KSPConvergedReason reason;
@@ -699,13 +726,16 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
     PetscCall(VecGetArrayRead(lr->tx, &tv));
     PetscCall(PetscArraycpy(t, tv, lr->k));
     PetscCall(VecRestoreArrayRead(lr->tx, &tv));
-    PetscCall(VecGetLocalSize(x, &nl));
     PetscCall(MatDenseGetLDA(nt->Z, &lda));
     PetscCall(MatDenseGetArrayRead(nt->Z, &z));
+    PetscCall(MatGetLocalSize(nt->Z, &nS, NULL));
+    PetscCall(MatGetOwnershipRangeColumn(nt->Z, &rs, NULL));
     PetscCall(VecGetArray(x, &xv));
-    for (PetscInt r = 0; r < lr->k; r++) {
+    for (PetscInt r = 0; r < lr->k; r++) { /* Z's column row[r]: on S, and its diagonal on D */
       const PetscScalar *zc = z + lr->row[r] * lda;
-      for (PetscInt i = 0; i < nl; i++) xv[i] -= zc[i] * t[r];
+      const PetscInt     l  = lr->row[r] - rs;
+      for (PetscInt s = 0; s < nS; s++) xv[nt->zsloc[s]] -= zc[s] * t[r];
+      if (l >= 0 && l < nl && nt->zrow[l] < 0) xv[l] -= nt->zdinv[l] * t[r];
     }
     PetscCall(VecRestoreArray(x, &xv));
     PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
@@ -738,7 +768,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   const PetscInt      lda = lr->k;
 
   PetscFunctionBegin;
-  PetscCall(ZRowsCols(nt->Z, lr->is, &z));
+  PetscCall(ZRowsCols(nt, lr->is, &z));
   PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
   PetscCall(PetscMalloc1(lr->k * lr->k, &lr->M));
   for (PetscInt c = 0; c < lr->k; c++)
@@ -878,7 +908,6 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   if (kA[0] > nt->lowrank_max * kA[1] && kA[2] <= 0.5 * nt->lowrank_max * kA[1] && kA[1] && nt->zdirect >= NewtonInverseCost(N, kA[1])) {
     /* the state has drifted from the reference, and a new one would serve: by the same rule */
     PetscCall(PetscInfo(m, "Newton step: %" PetscInt_FMT " rows differ from the kept inverse's after %" PetscInt_FMT " direct steps: a new reference\n", kA[0], nt->zdirect));
-    PetscCall(MatDestroy(&nt->Z));
     PetscCall(NewtonLowRankSetUp(m, NULL));
     PetscCall(NewtonLowRankCount(m, kA));
     if (!nt->Z) {
