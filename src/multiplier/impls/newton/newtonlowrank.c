@@ -10,7 +10,9 @@
      (U^T x)_r = alpha_r . x_c + beta_r . (W x)_c      (c: the rows of r's contact)
    and Sherman-Morrison-Woodbury gives J^-1 b = Z b - Z E_C M^-1 U^T Z b, M = I + U^T Z E_C: a
    pass over Z, its k = |C| columns, W's k rows and an LU of size k instead of one of the active
-   rows ((W Z) on the rows separated in the reference is kept with Z for M). The
+   rows ((W Z) on the rows separated in the reference is kept with Z for M). J_ref is diagonal on
+   the rows separated in the reference and the frozen ones, so Z is the inverse of the other rows'
+   block and a product (ReferenceBlocks), kept on those rows only. The
    step is checked by its residual against J and refined like the direct solve's; where it fails,
    or k is a large part of the active rows, the direct solve runs. A restart restores the
    reference (MBCMultiplierSetRestartState), so that its Z and its steps are the run's own. */
