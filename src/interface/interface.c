@@ -97,6 +97,15 @@ PetscErrorCode MBCInterfaceSetDRoute(MBCInterface ifc, PetscInt route, PetscReal
   PetscFunctionReturn(0);
 }
 
+/* Contact points' rows split evenly over the ranks (-mbc_contact_rows_even), in the order of the
+   ranks that compute most of each row */
+PetscErrorCode MBCInterfaceSetRowsEven(MBCInterface ifc, PetscBool even)
+{
+  PetscFunctionBegin;
+  ifc->rows_even = even;
+  PetscFunctionReturn(0);
+}
+
 /* Points per patch of the matrix-free Newton steps' coarse space (-mbc_d_coarse_points; 0: none)
    and the most memory its W Phi may take (-mbc_d_coarse_max_mb). */
 PetscErrorCode MBCInterfaceSetCoarse(MBCInterface ifc, PetscInt points, PetscReal max_mb)
@@ -266,7 +275,9 @@ static PetscInt PointBodies(const MBCCouple *cp, PetscInt j, PetscInt bodies[])
    foundation instead of its monolith: the foundation's D_b (7.5 M entries) no longer crosses
    ranks in W's assembly, and the run takes 21.6 -> 18.9 s (docs/performance.md 3f). A body's
    points split evenly over its ranks, in couple order; points stably sorted by rank; the same on
-   every rank. */
+   every rank. With rows_even that order is then cut into equal shares: the multiplier solve's
+   row-wise work (W's and Z's products, their GEMMs) is the rows' owners', and on the 49k dam's 2
+   ranks every point lived with the monoliths (rank 1), rank 0 waiting. */
 static PetscErrorCode InterfaceRankOrder(MBCInterface ifc, const PetscInt dims[])
 {
   MBCContact  c  = ifc->contact;
@@ -295,6 +306,15 @@ static PetscErrorCode InterfaceRankOrder(MBCInterface ifc, const PetscInt dims[]
   for (PetscInt k = 0; k < nc; k++) {
     const PetscInt b = home[k];
     owner[k] = ifc->body_first_rank[b] + (seen[b]++ * ifc->body_nranks[b]) / count[b];
+  }
+  if (ifc->rows_even && P > 1) { /* that order cut into equal shares (-mbc_contact_rows_even) */
+    PetscInt q = 0, *even;
+    PetscCall(PetscMalloc1(nc + 1, &even));
+    for (PetscMPIInt r = 0; r < P; r++)
+      for (PetscInt k = 0; k < nc; k++)
+        if (owner[k] == r) even[k] = (PetscInt)(((PetscInt64)q++ * P) / nc);
+    PetscCall(PetscArraycpy(owner, even, nc));
+    PetscCall(PetscFree(even));
   }
   PetscCall(PetscMalloc4(nc + 1, &ifc->perm, nc + 1, &ifc->order, nc + 1, &ifc->coff, nc + 1, &ifc->poff));
   ifc->coff[0] = 0;

@@ -21,6 +21,7 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->dt_min           = -1;
   s->dblock           = 256;
   s->droute           = MBC_D_ROUTE_AUTO; /* auto: matrix-free, Schur or solves by size (docs/performance.md) */
+  s->rows_even        = PETSC_TRUE;
   s->schur_max_mb     = 8192; /* S^-1 and MUMPS's factorization with the Schur set: 4.3 GB at the 400k-DOF dam's foundation */
   s->dense_max_mb     = 4096; /* up to ~15 000 multipliers (docs/performance.md) */
   s->coarse_points    = 16; /* the 200k static dam: 218 products became 155, 5 s of solves for 17 s of products saved (docs/performance.md) */
@@ -91,6 +92,7 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
     PetscCheck(!set_stab || (s->static_stabilize >= 0 && !PetscIsInfOrNanReal(s->static_stabilize)), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_static_stabilize %g: must be >= 0 and finite (0: the exact rigid-body modes, the default)", (double)s->static_stabilize);
   }
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
+  PetscCall(PetscOptionsBool("-mbc_contact_rows_even", "The contact points' rows of W (and the multiplier problem's) split evenly over the ranks, in the order of the ranks that compute most of each row, instead of each on that rank: the multiplier solve's row-wise work (products with W and the kept inverse) is the rows' owners'", "MBCSolverSetFromOptions", s->rows_even, &s->rows_even, NULL));
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   {
     const char *routes[] = {"multirhs", "schur", "auto", "matfree"};
@@ -255,6 +257,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCInterfaceCreate(s->comm, scene, s->contact, s->nbodies, s->bodies, s->body_first_rank, s->body_nranks, ((PetscObject)s)->prefix, &s->iface));
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
     PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb, s->solves_max));
+    PetscCall(MBCInterfaceSetRowsEven(s->iface, s->rows_even));
     PetscCall(MBCInterfaceSetCoarse(s->iface, s->coarse_points, s->coarse_max_mb));
     PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }

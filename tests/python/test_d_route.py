@@ -183,21 +183,27 @@ def test_factors_go_out_of_core_where_memory_is_short(tmp_path, monkeypatch, npr
     assert not list(ooc.iterdir())
 
 
-def test_contact_rows_live_with_the_body_that_computes_most_of_them(tmp_path):
+@pytest.mark.parametrize("even", [False, True])
+def test_contact_rows_live_with_the_body_that_computes_most_of_them(tmp_path, even):
     """Two ranks: the foundation on one, the three monoliths on the other. Every point of the base
     couple touches the foundation (whose D_b spans all of them) and one monolith (a third of
     them), so its row of W lives on the foundation's rank, where that D_b is computed; before,
     every point lived on its master's (a monolith's) rank and the foundation's D_b crossed to it
-    in W's assembly (the 198k dam on 2 ranks: 21.6 -> 18.9 s, docs/performance.md 3f). The
-    answer is one rank's."""
+    in W's assembly (the 198k dam on 2 ranks: 21.6 -> 18.9 s, docs/performance.md 3f). By default
+    (-mbc_contact_rows_even) that order is cut into equal shares, so that the multiplier solve's
+    row-wise work is split too: one rank then holds its own points and a share of the other's.
+    The answer is one rank's either way."""
     h5 = dam.build(tmp_path, **STATIC)
     solve(h5, "-mbc_output", str(tmp_path / "one"))
-    r = solve(h5, "-mbc_output", str(tmp_path / "two"), "-info", nproc=2)
+    r = solve(h5, "-mbc_output", str(tmp_path / "two"), "-info", *([] if even else ["-mbc_contact_rows_even", "0"]), nproc=2)
     found = re.search(r"\[(\d)\] <sys> BodySchurInverse\(\): Body foundation: D through", r.stdout)
     counts = dict(re.findall(r"\[(\d)\] <sys> InterfaceRankOrder\(\): (\d+) of \d+ contact points on this rank", r.stdout))
     assert found and len(counts) == 2, r.stdout[-3000:]
-    total = re.search(r"\d+ of (\d+) contact points on this rank", r.stdout).group(1)
-    assert counts[found.group(1)] == total and int(total) > 0
+    total = int(re.search(r"\d+ of (\d+) contact points on this rank", r.stdout).group(1))
+    if even:
+        assert sorted(int(c) for c in counts.values()) == [total // 2, total - total // 2], counts
+    else:
+        assert int(counts[found.group(1)]) == total > 0
     u0, f0 = final(str(tmp_path / "one.h5"))
     u1, f1 = final(str(tmp_path / "two.h5"))
     assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()

@@ -52,6 +52,7 @@ struct _n_MBCInterface {
   PetscReal *rall, *uall; /* couple order, every rank: r (scaled) and u = H^T du of the last solve */
   PetscInt   dblock;      /* -mbc_contact_block: columns of A^-1 H per multi-right-hand-side solve */
   PetscInt   droute;      /* -mbc_d_route: MBCDRoute */
+  PetscBool  rows_even;   /* -mbc_contact_rows_even: the points' rows split evenly over the ranks */
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb: auto takes the Schur route for a body whose S^-1 (and the inverse's entries asked at once) fit in this */
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb: auto takes the matrix-free D where the dense one does not fit in this */
   PetscReal  solves_max;   /* -mbc_d_solves_max: auto takes the matrix-free D where building the dense one takes more solves */
@@ -98,6 +99,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceCreate(MPI_Comm, MBCScene, MBCContact, P
 PETSC_INTERN PetscErrorCode MBCInterfaceSetTimeStepping(MBCInterface, MBCAnalysisType, PetscReal, PetscBool);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetBlockSize(MBCInterface, PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetDRoute(MBCInterface, PetscInt, PetscReal, PetscReal, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetRowsEven(MBCInterface, PetscBool);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetFclibWrite(MBCInterface, const char[], PetscInt);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetPairs(MBCInterface, PetscInt *, PetscInt **, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetUp(MBCInterface, PetscInt, PetscInt[]);

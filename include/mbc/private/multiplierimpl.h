@@ -55,7 +55,7 @@ struct _p_MBCMultiplier {
 };
 
 /* Shared by the types: the cone, the natural map, the exact one-contact solve. */
-PETSC_INTERN PetscLogEvent  MBC_NewtonInverse, MBC_NewtonLowRank; /* the Newton type's kept inverse: its build, its steps */
+PETSC_INTERN PetscLogEvent  MBC_NewtonInverse, MBC_NewtonLowRank, MBC_NewtonLowRankFactor; /* the Newton type's kept inverse: its build, its steps, a step's correction M and its LU */
 PETSC_INTERN void           MBCProjectCone(const PetscReal[3], PetscReal, PetscReal[3]);
 PETSC_INTERN PetscReal      MBCContactNaturalMap2(const PetscReal[3], const PetscReal[3], PetscReal);
 PETSC_EXTERN PetscErrorCode MBCContactLocalSolve(const PetscReal[9], const PetscReal[3], PetscReal, PetscReal[3]);

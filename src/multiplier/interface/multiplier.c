@@ -6,7 +6,7 @@
 
 PetscClassId      MBC_MULTIPLIER_CLASSID;
 PetscFunctionList MBCMultiplierList;
-PetscLogEvent     MBC_MultiplierSolve, MBC_MultiplierSetUp, MBC_NewtonInverse, MBC_NewtonLowRank;
+PetscLogEvent     MBC_MultiplierSolve, MBC_MultiplierSetUp, MBC_NewtonInverse, MBC_NewtonLowRank, MBC_NewtonLowRankFactor;
 static PetscBool  MBCMultiplierPackageInitialized = PETSC_FALSE;
 
 const char *const MBCMultiplierConvergedReasons[] = {"DIVERGED_INFEASIBLE", "DIVERGED_LINE_SEARCH", "", "DIVERGED_NANORINF", "DIVERGED_ITS", "", "", "ITERATING", "", "CONVERGED_RTOL", "MBCMultiplierConvergedReason", "MBC_MULTIPLIER_", NULL};
@@ -33,6 +33,7 @@ PetscErrorCode MBCMultiplierInitializePackage(void)
   PetscCall(PetscLogEventRegister("MBCMultiplierSetUp", MBC_MULTIPLIER_CLASSID, &MBC_MultiplierSetUp));
   PetscCall(PetscLogEventRegister("MBCMultiplierSolve", MBC_MULTIPLIER_CLASSID, &MBC_MultiplierSolve));
   PetscCall(PetscLogEventRegister("MBCNewtonInverse", MBC_MULTIPLIER_CLASSID, &MBC_NewtonInverse));
+  PetscCall(PetscLogEventRegister("MBCNewtonLRFactor", MBC_MULTIPLIER_CLASSID, &MBC_NewtonLowRankFactor));
   PetscCall(PetscLogEventRegister("MBCNewtonLowRank", MBC_MULTIPLIER_CLASSID, &MBC_NewtonLowRank));
   PetscCall(PetscLogEventRegister("MBCMixedLUFactor", MBC_MULTIPLIER_CLASSID, &MBC_MixedLUFactor));
   PetscCall(PCRegister(PCMBCMIXEDLU, PCCreate_MBCMixedLU));

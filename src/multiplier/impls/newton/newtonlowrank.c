@@ -770,6 +770,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   const PetscInt      lda = lr->k;
 
   PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_NewtonLowRankFactor, m, 0, 0, 0));
   PetscCall(ZRowsCols(nt, lr->is, &z));
   PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
   PetscCall(PetscMalloc1(lr->k * lr->k, &lr->M));
@@ -816,6 +817,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
     PetscCheck(!ierr || ierr == PETSC_ERR_MAT_LU_ZRPVT, PETSC_COMM_SELF, ierr, "The kept inverse's correction: its LU failed");
     PetscCall(PetscBLASIntCast(ierr ? 1 : 0, info));
   }
+  PetscCall(PetscLogEventEnd(MBC_NewtonLowRankFactor, m, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 
