@@ -105,17 +105,19 @@ def shaken_dam(tmp_path):
                      monoliths=3, components="xyz")
 
 
-@pytest.mark.parametrize("nproc", [1, 2])
-def test_shaken_dam_same_answer_as_the_direct_solve(tmp_path, nproc):
+@pytest.mark.parametrize("nproc, dist", [(1, False), (2, False), (2, True), (4, True)])
+def test_shaken_dam_same_answer_as_the_direct_solve(tmp_path, nproc, dist):
     """The shaken dam's joints open, close and slip: the kept inverse's steps correct rows closed
     since the reference (their (W Z) rows come from the product kept with Z) and give the direct
     solve's displacements and forces to 1e-10. Both take the same Newton steps, so every solve
     takes as many iterations either way: the kept inverse's step is checked against products with
     W, so an assembled Newton matrix that is not the Jacobian (it is read from W's CSR arrays a
     contact at a time) would slow the direct solves' convergence: one 5 % off fails it on 1 and 2
-    ranks."""
+    ranks. dist: the correction M factored over the ranks (ScaLAPACK) whatever its size (by
+    default from k = 1 000 on)."""
     h5 = shaken_dam(tmp_path)
-    on = solve(h5, "-mbc_output", str(tmp_path / "on"), "-info", ":mbcmultiplier", "-mbc_multiplier_converged_reason", nproc=nproc)
+    extra = ["-mbc_newton_lowrank_dist_min", "0"] if dist else []
+    on = solve(h5, "-mbc_output", str(tmp_path / "on"), "-info", ":mbcmultiplier", "-mbc_multiplier_converged_reason", *extra, nproc=nproc)
     off = solve(h5, "-mbc_output", str(tmp_path / "off"), "-mbc_newton_lowrank", "0", "-mbc_multiplier_converged_reason", nproc=nproc)
     its = [re.findall(r"multiplier solve \(newton\) \S+ in (\d+) iterations", run.stdout) for run in (on, off)]
     assert len(its[0]) >= 20 and its[0] == its[1], its

@@ -770,6 +770,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsBool("-newton_slip_eliminate", "Eliminate each slipping contact's row along its slip direction from the direct Newton step (an exact reduction: two rows, not three)", "MBCMultiplierSetFromOptions", nt->slip_eliminate, &nt->slip_eliminate, NULL));
   PetscCall(PetscOptionsBool("-newton_lowrank", "While W holds, take Newton steps through the kept inverse of a reference state's Newton matrix, corrected on the rows that differ", "MBCMultiplierSetFromOptions", nt->lowrank, &nt->lowrank, NULL));
   PetscCall(PetscOptionsReal("-newton_lowrank_max", "... unless the rows that differ exceed this fraction of the active ones", "MBCMultiplierSetFromOptions", nt->lowrank_max, &nt->lowrank_max, NULL));
+  PetscCall(PetscOptionsInt("-newton_lowrank_dist_min", "On several ranks, the kept inverse's correction (k x k) factored over the ranks (ScaLAPACK) from this k on, else on every rank", "MBCMultiplierSetFromOptions", nt->lowrank_dist_min, &nt->lowrank_dist_min, NULL));
   PetscCall(PetscOptionsReal("-newton_shift", "Diagonal shift of the Newton matrix relative to its largest diagonal entry", "MBCMultiplierSetFromOptions", nt->shift, &nt->shift, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->rho_scale > 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_rho %g must be positive", (double)nt->rho_scale);
@@ -777,6 +778,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
   PetscCheck(nt->dense_fill >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_dense_fill %g must be >= 0", (double)nt->dense_fill);
   PetscCheck(nt->lowrank_max >= 0 && nt->lowrank_max <= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_lowrank_max %g must lie in [0, 1]", (double)nt->lowrank_max);
+  PetscCheck(nt->lowrank_dist_min >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_lowrank_dist_min %" PetscInt_FMT " must be >= 0", nt->lowrank_dist_min);
   PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
   PetscCall(KSPSetFromOptions(nt->ksp));
   PetscCall(KSPSetFromOptions(nt->kdense));
@@ -1173,6 +1175,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->slip_eliminate = PETSC_TRUE;
   nt->lowrank      = PETSC_TRUE;
   nt->lowrank_max  = 0.6;
+  nt->lowrank_dist_min = 1000; /* M's LU (k^3) then dominates the step, and every rank factoring it alone costs more than the direct step's LU over the ranks where k nears the active rows */
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;
   PetscCall(PetscObjectGetOptionsPrefix((PetscObject)m, &prefix));

@@ -40,6 +40,7 @@ typedef struct {
   /* the steps through a kept inverse (newtonlowrank.c) */
   PetscBool  lowrank;     /* -mbc_newton_lowrank */
   PetscReal  lowrank_max; /* rows differing from the reference beyond this fraction of the active ones: the direct solve */
+  PetscInt   lowrank_dist_min; /* the correction M factored over the ranks from this size on */
   PetscBool *sticks;      /* per contact: active and sticking at the current iterate */
   PetscBool *refopen;     /* per contact: separated in Z's reference (identity rows), else sticking */
   Vec        refpending;  /* a restart's reference (W's layout), for the next Z if built for refW */

@@ -656,7 +656,8 @@ typedef struct {
   PetscScalar  *M;     /* M = I + U^T Z E_C (column-major) */
   Mat           Mm;    /* M as a MATSEQDENSE on that array */
   KSP           kM;    /* its LU: single precision's refined in double (PCMBCMIXEDLU) */
-  Vec           tb, tx; /* k entries: a right side of M and its solution */
+  Vec           tb, tx; /* k entries: a right side of M and its solution (M's layout where dist) */
+  PetscBool     dist;  /* M factored over the ranks (ScaLAPACK), else on every rank */
   IS            is;    /* row[] */
   Vec           seq;   /* k entries */
   VecScatter    gather;
@@ -720,14 +721,37 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
     KSPConvergedReason reason;
     PetscCall(PetscMalloc1(lr->k, &t));
     PetscCall(LowRankApplyU(lr, x, t));
-    PetscCall(VecPlaceArray(lr->tb, t));
-    PetscCall(KSPSolve(lr->kM, lr->tb, lr->tx));
-    PetscCall(VecResetArray(lr->tb));
+    if (lr->dist) { /* t's share in, the solution gathered on every rank */
+      const PetscInt *ranges;
+      PetscMPIInt     size, *cnt, *dsp;
+      PetscScalar    *bv;
+      PetscInt        rs, re;
+      PetscCall(VecGetOwnershipRange(lr->tb, &rs, &re));
+      PetscCall(VecGetArrayWrite(lr->tb, &bv));
+      PetscCall(PetscArraycpy(bv, t + rs, re - rs));
+      PetscCall(VecRestoreArrayWrite(lr->tb, &bv));
+      PetscCall(KSPSolve(lr->kM, lr->tb, lr->tx));
+      PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)lr->tx), &size));
+      PetscCall(VecGetOwnershipRanges(lr->tx, &ranges));
+      PetscCall(PetscMalloc2(size, &cnt, size, &dsp));
+      for (PetscMPIInt p = 0; p < size; p++) {
+        PetscCall(PetscMPIIntCast(ranges[p + 1] - ranges[p], &cnt[p]));
+        PetscCall(PetscMPIIntCast(ranges[p], &dsp[p]));
+      }
+      PetscCall(VecGetArrayRead(lr->tx, &tv));
+      PetscCallMPI(MPI_Allgatherv(tv, (PetscMPIInt)(re - rs), MPIU_SCALAR, t, cnt, dsp, MPIU_SCALAR, PetscObjectComm((PetscObject)lr->tx)));
+      PetscCall(VecRestoreArrayRead(lr->tx, &tv));
+      PetscCall(PetscFree2(cnt, dsp));
+    } else {
+      PetscCall(VecPlaceArray(lr->tb, t));
+      PetscCall(KSPSolve(lr->kM, lr->tb, lr->tx));
+      PetscCall(VecResetArray(lr->tb));
+      PetscCall(VecGetArrayRead(lr->tx, &tv));
+      PetscCall(PetscArraycpy(t, tv, lr->k));
+      PetscCall(VecRestoreArrayRead(lr->tx, &tv));
+    }
     PetscCall(KSPGetConvergedReason(lr->kM, &reason));
     PetscCheck(reason >= 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "The kept inverse's %d x %d correction: its LU failed in a solve (%s)", (int)k, (int)k, KSPConvergedReasons[reason]);
-    PetscCall(VecGetArrayRead(lr->tx, &tv));
-    PetscCall(PetscArraycpy(t, tv, lr->k));
-    PetscCall(VecRestoreArrayRead(lr->tx, &tv));
     PetscCall(MatDenseGetLDA(nt->Z, &lda));
     PetscCall(MatDenseGetArrayRead(nt->Z, &z));
     PetscCall(MatGetLocalSize(nt->Z, &nS, NULL));
@@ -758,6 +782,37 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
   }
   PetscFunctionReturn(0);
 }
+
+#if defined(PETSC_HAVE_SCALAPACK)
+/* *A: the k x k column-major array a, the same on every rank, as a MATSCALAPACK on comm (each rank
+   takes its block-cyclic entries) */
+static PetscErrorCode ReplicatedToScaLAPACK(MPI_Comm comm, PetscInt k, const PetscScalar a[], Mat *A)
+{
+  Mat_ScaLAPACK      *s;
+  Mat_ScaLAPACK_Grid *g;
+
+  PetscFunctionBegin;
+  PetscCall(MatCreateScaLAPACK(comm, PETSC_DECIDE, PETSC_DECIDE, k, k, 0, 0, A)); /* its own row layout */
+  s = (Mat_ScaLAPACK *)(*A)->data;
+  g = s->grid;
+  for (PetscBLASInt lj = 0; lj < s->locc; lj++) {
+    const PetscInt gj = ((PetscInt)(lj / s->nb) * g->npcol + (g->mycol - s->csrc + g->npcol) % g->npcol) * s->nb + lj % s->nb;
+    for (PetscBLASInt li = 0; li < s->locr; li++) {
+      const PetscInt gi = ((PetscInt)(li / s->mb) * g->nprow + (g->myrow - s->rsrc + g->nprow) % g->nprow) * s->mb + li % s->mb;
+      s->loc[li + (size_t)lj * s->lld] = a[(size_t)gj * k + gi];
+    }
+  }
+  PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+#else
+static PetscErrorCode ReplicatedToScaLAPACK(MPI_Comm comm, PetscInt k, const PetscScalar a[], Mat *A)
+{
+  PetscFunctionBegin;
+  SETERRQ(comm, PETSC_ERR_SUP, "Needs ScaLAPACK");
+}
+#endif
 
 /* M = I + U^T Z E_C, factored on every rank: Z_CC gathered; (W Z)_CC from J_ref Z = I on the
    rows of contacts sticking in the reference, from (W Z)_O (NewtonLowRankWZ) on the others'
@@ -800,15 +855,26 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
        error). Singular in double: the direct solve instead. */
     PC             pc;
     PetscErrorCode ierr;
-    PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, lr->k, lr->k, lr->M, &lr->Mm));
-    PetscCall(KSPCreate(PETSC_COMM_SELF, &lr->kM));
+    PetscMPIInt    size;
+    PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)m), &size));
+#if defined(PETSC_HAVE_SCALAPACK)
+    lr->dist = (PetscBool)(size > 1 && lr->k >= nt->lowrank_dist_min && strcmp(nt->densetype, MATDENSE));
+#endif
+    if (lr->dist) {
+      PetscCall(ReplicatedToScaLAPACK(PetscObjectComm((PetscObject)m), lr->k, lr->M, &lr->Mm));
+      PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), &lr->kM));
+      PetscCall(MatCreateVecs(lr->Mm, &lr->tx, &lr->tb));
+    } else {
+      PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, lr->k, lr->k, lr->M, &lr->Mm));
+      PetscCall(KSPCreate(PETSC_COMM_SELF, &lr->kM));
+      PetscCall(MatCreateVecs(lr->Mm, &lr->tx, NULL));
+      PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, lr->k, NULL, &lr->tb));
+    }
     PetscCall(KSPSetType(lr->kM, KSPPREONLY));
     PetscCall(KSPGetPC(lr->kM, &pc));
     PetscCall(PCSetType(pc, PCMBCMIXEDLU));
     PetscCall(KSPSetOperators(lr->kM, lr->Mm, lr->Mm));
     PetscCall(KSPSetErrorIfNotConverged(lr->kM, PETSC_FALSE));
-    PetscCall(MatCreateVecs(lr->Mm, &lr->tx, NULL));
-    PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, lr->k, NULL, &lr->tb));
     PetscCall(PetscLogEventDeactivatePush(MBC_MixedLUFactor)); /* that event counts the direct steps' LUs */
     PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
     ierr = KSPSetUp(lr->kM);
