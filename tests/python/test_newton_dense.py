@@ -89,3 +89,39 @@ def test_zero_pivot_is_a_failed_step(tmp_path, nproc):
     assert "DIVERGED_PC_FAILED; falling back to dr = -phi" in r.stdout
     m = re.search(r"newton CONVERGED_RTOL in \d+ iterations, .* FCLIB merit ([0-9.e+-]+)", r.stdout)
     assert m and float(m.group(1)) < 1e-8, r.stdout[-2000:]
+
+
+PRODUCTS = re.compile(r"W (\d+) x \d+, ([0-9.e+-]+) full: its products through (a dense copy|W)")
+
+
+@pytest.mark.parametrize("nproc", [1, 2, 4])
+def test_products_through_a_dense_copy_of_w(tmp_path, nproc):
+    """The Newton solve's products with W (the step's W dr, u = W r + q, the kept inverse's
+    residual checks) go through a dense copy of W where at least -mbc_newton_w_dense_fill (0.5)
+    of its entries are nonzero. The staged dam shaken with its joints: W is built for the static
+    stage and again for the earthquake's K + a0 M, and the copy must follow it (a copy of the
+    static W kept into the earthquake moves the answers by far more than 1e-10). Both storages
+    take the same Newton steps, so every solve takes as many iterations, and the answers agree to
+    the products' rounding (1e-10, as the kept inverse against the direct solve)."""
+    h5 = dam.build(tmp_path, "staged", dt=0.02, eq_duration=0.2, record_from=3.0, joints=True, h=15.0,
+                   monoliths=3, components="xyz")
+    runs = {}
+    for name, extra in (("dense", []), ("aij", ["-mbc_newton_w_dense_fill", "2"])):
+        runs[name] = solve(h5, "-mbc_output", str(tmp_path / name), "-info", ":mbcmultiplier", "-mbc_multiplier_converged_reason", *extra, nproc=nproc)
+    copies = {k: PRODUCTS.findall(r.stdout) for k, r in runs.items()}
+    assert len(copies["dense"]) == 2 and all(how == "a dense copy" and float(f) >= 0.5 for _, f, how in copies["dense"]), copies  # the static W, then the earthquake's
+    assert len(copies["aij"]) == 0, copies  # the option keeps W: no copy considered
+    its = [re.findall(r"multiplier solve \(newton\) \S+ in (\d+) iterations", r.stdout) for r in runs.values()]
+    assert len(its[0]) >= 10 and its[0] == its[1], its
+    names = ["foundation", "m1", "m2", "m3"]
+    ua, ub = (np.concatenate([read_body(str(tmp_path / f"{k}.h5"), b, step=-1)["displacement"].ravel() for b in names]) for k in runs)
+    ca, cb = (read_contact(str(tmp_path / f"{k}.h5"), step=-1) for k in runs)
+    assert np.array_equal(ca["state"], cb["state"])
+    assert np.abs(ua - ub).max() <= 1e-10 * np.abs(ub).max()
+    assert np.abs(ca["force"] - cb["force"]).max() <= 1e-10 * np.abs(cb["force"]).max()
+
+
+def test_w_dense_fill_option_is_checked(tmp_path):
+    h5 = dam.build(tmp_path, **STATIC, joints=False)
+    r = solve(h5, "-mbc_newton_w_dense_fill", "-0.5", check=False)
+    assert r.returncode != 0 and "-mbc_newton_w_dense_fill -0.5 must be >= 0" in r.stderr, r.stderr

@@ -400,7 +400,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
       }
     PetscCall(VecRestoreArray(nt->dr, &dv));
   }
-  PetscCall(MatMult(fp->W, nt->dr, nt->wdr));
+  PetscCall(MatMult(nt->Wprod, nt->dr, nt->wdr));
   nloc = nR + (rank == size - 1 ? ng : 0);
   Nloc = NR + ng;
   if (!Nloc) { /* every contact separated */
@@ -767,6 +767,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCall(PetscOptionsBool("-newton_predictor", "From r = 0, take the all-stick solution as the first iterate", "MBCMultiplierSetFromOptions", nt->predictor, &nt->predictor, NULL));
   PetscCall(PetscOptionsInt("-newton_watchdog", "Iterations without halving the best merit before the solve goes back to the best iterate and sweeps (without sweeps: other rho)", "MBCMultiplierSetFromOptions", nt->watchdog, &nt->watchdog, NULL));
   PetscCall(PetscOptionsReal("-newton_dense_fill", "Fraction of nonzero entries from which the Newton matrix is stored and factored dense (LAPACK); > 1: never", "MBCMultiplierSetFromOptions", nt->dense_fill, &nt->dense_fill, NULL));
+  PetscCall(PetscOptionsReal("-newton_w_dense_fill", "Fraction of W's entries nonzero from which the solve's products with W go through a dense copy of it (BLAS); > 1: never", "MBCMultiplierSetFromOptions", nt->w_dense_fill, &nt->w_dense_fill, NULL));
   PetscCall(PetscOptionsBool("-newton_slip_eliminate", "Eliminate each slipping contact's row along its slip direction from the direct Newton step (an exact reduction: two rows, not three)", "MBCMultiplierSetFromOptions", nt->slip_eliminate, &nt->slip_eliminate, NULL));
   PetscCall(PetscOptionsBool("-newton_lowrank", "While W holds, take Newton steps through the kept inverse of a reference state's Newton matrix, corrected on the rows that differ", "MBCMultiplierSetFromOptions", nt->lowrank, &nt->lowrank, NULL));
   PetscCall(PetscOptionsReal("-newton_lowrank_max", "... unless the rows that differ exceed this fraction of the active ones", "MBCMultiplierSetFromOptions", nt->lowrank_max, &nt->lowrank_max, NULL));
@@ -777,6 +778,7 @@ static PetscErrorCode MBCMultiplierSetFromOptions_Newton(MBCMultiplier m, PetscO
   PetscCheck(nt->pgs_warm >= 0 && nt->pgs_fallback >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_pgs_warm and -mbc_newton_pgs_fallback must be >= 0");
   PetscCheck(nt->ls_max >= 1 && nt->nonmonotone >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_ls_max and -mbc_newton_nonmonotone must be at least 1");
   PetscCheck(nt->dense_fill >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_dense_fill %g must be >= 0", (double)nt->dense_fill);
+  PetscCheck(nt->w_dense_fill >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_w_dense_fill %g must be >= 0", (double)nt->w_dense_fill);
   PetscCheck(nt->lowrank_max >= 0 && nt->lowrank_max <= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_lowrank_max %g must lie in [0, 1]", (double)nt->lowrank_max);
   PetscCheck(nt->lowrank_dist_min >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_lowrank_dist_min %" PetscInt_FMT " must be >= 0", nt->lowrank_dist_min);
   PetscCheck(nt->shift >= 0 && nt->shift < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "-mbc_newton_shift %g must lie in [0, 1)", (double)nt->shift);
@@ -821,6 +823,50 @@ static void NewtonAugmentations(MBCMultiplier m, PetscReal scale)
 }
 
 /* Per W: the diagonal blocks, the augmentations, the directions without flexibility. */
+/* nt->Wprod: W for the solve's products (a few a Newton iteration: the step's W dr, u = W r + q). An
+   assembled W fuller than -mbc_newton_w_dense_fill is copied dense: dgemv streams 8 bytes an
+   entry at the memory's speed, MatMult_SeqAIJ_Inode 12 bytes at a third of it (the 49k dam's W,
+   68 % full: the products were 35 % of its earthquake stage). */
+static PetscErrorCode NewtonProductOperator(MBCMultiplier m)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+  PetscBool           aij;
+  MatInfo             info;
+  PetscInt            n;
+  PetscReal           fill;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectBaseTypeCompareAny((PetscObject)fp->W, &aij, MATSEQAIJ, MATMPIAIJ, ""));
+  if (!aij || nt->w_dense_fill > 1) {
+    PetscCall(PetscObjectReference((PetscObject)fp->W));
+    nt->Wprod = fp->W;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(MatGetSize(fp->W, &n, NULL));
+  PetscCall(MatGetInfo(fp->W, MAT_GLOBAL_SUM, &info));
+  fill = n ? info.nz_used / ((PetscReal)n * n) : 0;
+  if (fill >= nt->w_dense_fill) PetscCall(MatConvert(fp->W, MATDENSE, MAT_INITIAL_MATRIX, &nt->Wprod));
+  else {
+    PetscCall(PetscObjectReference((PetscObject)fp->W));
+    nt->Wprod = fp->W;
+  }
+  PetscCall(PetscInfo(m, "W %" PetscInt_FMT " x %" PetscInt_FMT ", %.3g full: its products through %s\n", n, n, (double)fill, nt->Wprod == fp->W ? "W" : "a dense copy"));
+  PetscFunctionReturn(0);
+}
+
+/* u = W r + q (+ G^T alpha), W's products through nt->Wprod */
+PetscErrorCode MBCNewtonVelocity(MBCMultiplier m, Vec r, Vec u)
+{
+  MBC_Newton         *nt = (MBC_Newton *)m->data;
+  MBCFrictionProblem *fp = m->fp;
+
+  PetscFunctionBegin;
+  PetscCall(MatMultAdd(nt->Wprod, r, fp->q, u));
+  if (fp->G) PetscCall(MatMultTransposeAdd(fp->G, fp->alpha, u, u));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
@@ -861,6 +907,7 @@ static PetscErrorCode MBCMultiplierSetUp_Newton(MBCMultiplier m)
     for (PetscInt d = 0; d < dim; d++) nt->frozen[o + d] = (PetscBool)!(nt->diag[9 * i + (dim + 1) * d] > 1e-12 * dmax);
   }
   NewtonAugmentations(m, NewtonRhoScale(m));
+  PetscCall(NewtonProductOperator(m));
   PetscCall(MatCreateVecs(fp->W, &nt->phi, NULL));
   PetscCall(VecDuplicate(nt->phi, &nt->dr));
   PetscCall(VecDuplicate(nt->phi, &nt->wdr));
@@ -914,7 +961,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
   PetscCall(VecDuplicate(r, &rbest));
   if (fp->G) PetscCall(VecDuplicate(fp->alpha, &abest));
   PetscCall(NewtonSweeps(m, nt->pgs_warm, r, u));
-  PetscCall(MBCFrictionVelocity(fp, r, u));
+  PetscCall(MBCNewtonVelocity(m, r, u));
   PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
   {
     PetscReal rn;
@@ -927,12 +974,12 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       PetscCall(NewtonStep(m, r, PETSC_FALSE));
       PetscCall(VecAXPY(r, 1.0, nt->dr));
       if (fp->G) PetscCall(VecAXPY(fp->alpha, 1.0, nt->dalpha));
-      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCNewtonVelocity(m, r, u));
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       if (PetscIsInfOrNanReal(m->merit)) { /* a failed predictor: start from 0 as without it */
         PetscCall(VecZeroEntries(r));
         if (fp->G) PetscCall(VecZeroEntries(fp->alpha));
-        PetscCall(MBCFrictionVelocity(fp, r, u));
+        PetscCall(MBCNewtonVelocity(m, r, u));
         PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       }
       PetscCall(ISDestroy(&nt->isbuilt)); /* its factor is no Newton matrix */
@@ -947,7 +994,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     PetscReal ref = hist[0], t = 1, psit = psi;
     PetscInt  ls;
     if (!ufresh && m->merit < m->rtol) { /* converged on the accumulated u: confirmed on u afresh */
-      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCNewtonVelocity(m, r, u));
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_FALSE, &psi, &slips));
       ufresh = PETSC_TRUE;
@@ -959,7 +1006,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     else if (fails >= 5) m->reason = MBC_MULTIPLIER_DIVERGED_LINE_SEARCH;
     if (m->reason != MBC_MULTIPLIER_ITERATING) break;
     PetscCall(NewtonStep(m, r, slips));
-    if (!nt->wdr_of_dr) PetscCall(MatMult(fp->W, nt->dr, nt->wdr)); /* wdr = W dr (+ G^T dalpha) */
+    if (!nt->wdr_of_dr) PetscCall(MatMult(nt->Wprod, nt->dr, nt->wdr)); /* wdr = W dr (+ G^T dalpha) */
     if (fp->G) PetscCall(MatMultTransposeAdd(fp->G, nt->dalpha, nt->wdr, nt->wdr));
     for (PetscInt k = 1; k < nt->nonmonotone; k++) ref = PetscMax(ref, hist[k]);
     for (ls = 0; ls < nt->ls_max; ls++, t *= 0.5) { /* Armijo on 1/2|phi|^2: its slope along a Newton step is -|phi|^2 */
@@ -981,7 +1028,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     } else { /* Gauss-Seidel sweeps instead (u afresh after them) */
       nt->lsfail++;
       PetscCall(NewtonSweeps(m, nt->pgs_fallback, r, u));
-      if (!nt->pgs_fallback) PetscCall(MBCFrictionVelocity(fp, r, u));
+      if (!nt->pgs_fallback) PetscCall(MBCNewtonVelocity(m, r, u));
       ufresh = PETSC_TRUE;
     }
     PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
@@ -1011,7 +1058,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
         PetscCall(ISDestroy(&nt->isbuilt)); /* its Newton matrix had the old rho */
         if (m->monitor) PetscCall(PetscPrintf(PetscObjectComm((PetscObject)m), "  newton watchdog: back to the best iterate (merit %g), rho %g / diag(W)\n", (double)best, (double)nt->rho_used));
       } else PetscCall(NewtonSweeps(m, restarts * nt->pgs_fallback, r, u));
-      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCNewtonVelocity(m, r, u));
       PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
       ufresh = PETSC_TRUE;
       stall = 0;
@@ -1023,7 +1070,7 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
     if (m->monitor) PetscCall(PetscSNPrintf(line, sizeof(line), " (%s step %g)", ls < nt->ls_max ? "Newton" : (!NewtonCanSweep(m) ? "shortest" : "Gauss-Seidel after a failed"), (double)t));
   }
   if (!ufresh) { /* a solve stopped unconverged on the accumulated u */
-    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCNewtonVelocity(m, r, u));
     PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
   }
   if (m->reason > 0) { /* the iterate into the cones (Newton's iterates are not in them), kept if it
@@ -1043,18 +1090,18 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
       }
     }
     PetscCall(VecRestoreArray(r, &rv));
-    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCNewtonVelocity(m, r, u));
     PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
     if (!(m->merit < m->rtol)) {
       PetscCall(VecCopy(rbest, r));
-      PetscCall(MBCFrictionVelocity(fp, r, u));
+      PetscCall(MBCNewtonVelocity(m, r, u));
       m->merit = before;
     }
   }
   if (m->reason < 0 && (best < m->merit || PetscIsInfOrNanReal(m->merit))) { /* not converged: return the best iterate (never a NaN one: NaN < x is false) */
     PetscCall(VecCopy(rbest, r));
     if (abest) PetscCall(VecCopy(abest, fp->alpha));
-    PetscCall(MBCFrictionVelocity(fp, r, u));
+    PetscCall(MBCNewtonVelocity(m, r, u));
     PetscCall(MBCFrictionMerit(fp, r, u, &m->merit));
   }
   PetscCall(VecDestroy(&rbest));
@@ -1068,6 +1115,7 @@ static PetscErrorCode MBCMultiplierReset_Newton(MBCMultiplier m)
   MBC_Newton *nt = (MBC_Newton *)m->data;
 
   PetscFunctionBegin;
+  PetscCall(MatDestroy(&nt->Wprod));
   PetscCall(PetscFree(nt->diag));
   PetscCall(PetscFree5(nt->rho, nt->frozen, nt->A, nt->B, nt->active));
   PetscCall(PetscFree3(nt->sticks, nt->refopen, nt->nu));
@@ -1172,6 +1220,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->predictor    = PETSC_TRUE;
   nt->shift        = 1e-12;
   nt->dense_fill   = 0.5;
+  nt->w_dense_fill = 0.5; /* the dense copy's memory 8 N^2 against AIJ's 12 f N^2: at f = 0.5 its products were 4x faster (dgemv against MatMult_SeqAIJ_Inode, N = 3 384, one thread) */
   nt->slip_eliminate = PETSC_TRUE;
   nt->lowrank      = PETSC_TRUE;
   nt->lowrank_max  = 0.6;

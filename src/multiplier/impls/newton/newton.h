@@ -15,6 +15,7 @@ typedef struct {
   PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
   PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
   PetscReal     dense_fill;   /* a Newton matrix with at least this fraction of its entries nonzero is factored dense */
+  PetscReal     w_dense_fill; /* W with at least this fraction of its entries nonzero: its products through a dense copy */
   PetscBool     slip_eliminate; /* each slipping contact's row along its slip direction eliminated (two rows, not three) */
   MBCMultiplier pgs;
   KSP           ksp;          /* the sparse LU (MUMPS; on several ranks under PCREDUNDANT) */
@@ -22,6 +23,7 @@ typedef struct {
   MatType       densetype;    /* its matrix: MATDENSE, or MATSCALAPACK on several ranks */
   KSP           klu;          /* the one holding the kept factor */
   /* per W */
+  Mat        Wprod;      /* W for the solve's products: its dense copy (-mbc_newton_w_dense_fill), or W (a reference) */
   PetscReal *diag, *rho; /* 9, 2 per contact */
   PetscReal  rho_used;   /* the scale rho holds now (NewtonRhoScale but after a watchdog restart) */
   PetscBool *frozen;     /* per local row: a direction without flexibility */
@@ -62,6 +64,9 @@ typedef struct {
 
 /* every rank's rows[0..nl) gathered on every rank, in rank order: *all (n of them, PetscFree) and
    the counts and displacements of the gather (PetscFree2(*cnt, *dsp)) */
+/* u = W r + q (+ G^T alpha) through nt->Wprod */
+PETSC_INTERN PetscErrorCode MBCNewtonVelocity(MBCMultiplier, Vec, Vec);
+
 PETSC_INTERN PetscErrorCode MBCNewtonRowsAllGather(MPI_Comm, PetscInt, const PetscInt[], PetscInt *, PetscInt **, PetscMPIInt **, PetscMPIInt **);
 
 /* The Newton system on the active rows isA (nA on this rank, then the ng rigid modes on the last

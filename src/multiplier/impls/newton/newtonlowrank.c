@@ -623,7 +623,7 @@ static PetscErrorCode NewtonLowRankResidual(MBCMultiplier m, Vec x, Vec b, Vec r
   PetscScalar        *rv;
 
   PetscFunctionBegin;
-  PetscCall(MatMult(fp->W, x, nt->wdr));
+  PetscCall(MatMult(nt->Wprod, x, nt->wdr));
   PetscCall(VecGetArrayRead(x, &xv));
   PetscCall(VecGetArrayRead(b, &bv));
   PetscCall(VecGetArrayRead(nt->wdr, &yv));
