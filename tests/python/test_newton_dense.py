@@ -97,7 +97,7 @@ PRODUCTS = re.compile(r"W (\d+) x \d+, ([0-9.e+-]+) full: its products through (
 @pytest.mark.parametrize("nproc", [1, 2, 4])
 def test_products_through_a_dense_copy_of_w(tmp_path, nproc):
     """The Newton solve's products with W (the step's W dr, u = W r + q, the kept inverse's
-    residual checks) go through a dense copy of W where at least -mbc_newton_w_dense_fill (0.5)
+    residual checks, (W v)_C in its correction) go through a dense copy of W where at least -mbc_newton_w_dense_fill (0.5)
     of its entries are nonzero. The staged dam shaken with its joints: W is built for the static
     stage and again for the earthquake's K + a0 M, and the copy must follow it (a copy of the
     static W kept into the earthquake moves the answers by far more than 1e-10). Both storages
@@ -111,6 +111,8 @@ def test_products_through_a_dense_copy_of_w(tmp_path, nproc):
     copies = {k: PRODUCTS.findall(r.stdout) for k, r in runs.items()}
     assert len(copies["dense"]) == 2 and all(how == "a dense copy" and float(f) >= 0.5 for _, f, how in copies["dense"]), copies  # the static W, then the earthquake's
     assert len(copies["aij"]) == 0, copies  # the option keeps W: no copy considered
+    kept = [len(re.findall(r"Newton step by the kept inverse: \d+ rows differ .* after 0 refinements\n", r.stdout)) for r in runs.values()]
+    assert min(kept) >= 5 and kept[0] == kept[1], kept  # its (W v)_C from the copy's columns, else from W's rows C
     its = [re.findall(r"multiplier solve \(newton\) \S+ in (\d+) iterations", r.stdout) for r in runs.values()]
     assert len(its[0]) >= 10 and its[0] == its[1], its
     names = ["foundation", "m1", "m2", "m3"]

@@ -661,20 +661,50 @@ typedef struct {
   IS            is;    /* row[] */
   Vec           seq;   /* k entries */
   VecScatter    gather;
-  Mat           Wc;    /* W's rows C (dense, k x N, on every rank): (W x)_C without a pass over W */
+  Mat           Wc;    /* W's rows C (dense, k x N, on every rank): (W x)_C without a pass over W; NULL
+                          where W has a dense copy (WColumnsDot) */
   Vec           all, wc; /* x on every rank; (W x)_C */
   VecScatter    toall;
 } LowRank;
 
+/* (W v)_C from W's dense copy: W is symmetric, so its rows C are its columns C, which each rank
+   holds for its own rows (contiguous): k dot products and one sum over the ranks, without W's
+   rows C gathered on every rank (a k x N copy a step) nor v */
+static PetscErrorCode WColumnsDot(Mat Wd, const LowRank *lr, Vec v, Vec wc)
+{
+  const PetscScalar *a, *x;
+  PetscScalar       *t;
+  PetscInt           lda, nl;
+  PetscBLASInt       n, one = 1;
+
+  PetscFunctionBegin;
+  PetscCall(MatDenseGetLDA(Wd, &lda));
+  PetscCall(MatDenseGetArrayRead(Wd, &a));
+  PetscCall(VecGetLocalSize(v, &nl));
+  PetscCall(PetscBLASIntCast(nl, &n));
+  PetscCall(VecGetArrayRead(v, &x));
+  PetscCall(VecGetArrayWrite(wc, &t));
+  for (PetscInt r = 0; r < lr->k; r++) t[r] = n ? BLASdot_(&n, a + (size_t)lr->row[r] * lda, &one, x, &one) : 0;
+  PetscCall(SumOverRanks(PetscObjectComm((PetscObject)Wd), t, lr->k));
+  PetscCall(VecRestoreArrayWrite(wc, &t));
+  PetscCall(VecRestoreArrayRead(v, &x));
+  PetscCall(MatDenseRestoreArrayRead(Wd, &a));
+  PetscCall(PetscLogFlops(2.0 * lr->k * nl));
+  PetscFunctionReturn(0);
+}
+
 /* t = U^T v on the rows C, from v and (W v)_C, both on every rank */
-static PetscErrorCode LowRankApplyU(LowRank *lr, Vec v, PetscScalar t[])
+static PetscErrorCode LowRankApplyU(Mat Wprod, LowRank *lr, Vec v, PetscScalar t[])
 {
   const PetscScalar *a;
 
   PetscFunctionBegin;
-  PetscCall(VecScatterBegin(lr->toall, v, lr->all, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(lr->toall, v, lr->all, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(MatMult(lr->Wc, lr->all, lr->wc));
+  if (!lr->Wc) PetscCall(WColumnsDot(Wprod, lr, v, lr->wc));
+  else {
+    PetscCall(VecScatterBegin(lr->toall, v, lr->all, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(lr->toall, v, lr->all, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(MatMult(lr->Wc, lr->all, lr->wc));
+  }
   PetscCall(VecScatterBegin(lr->gather, v, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(lr->gather, v, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
   for (PetscInt r = 0; r < lr->k; r++) t[r] = 0;
@@ -720,7 +750,7 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
   if (k) {
     KSPConvergedReason reason;
     PetscCall(PetscMalloc1(lr->k, &t));
-    PetscCall(LowRankApplyU(lr, x, t));
+    PetscCall(LowRankApplyU(nt->Wprod, lr, x, t));
     if (lr->dist) { /* t's share in, the solution gathered on every rank */
       const PetscInt *ranges;
       PetscMPIInt     size, *cnt, *dsp;
@@ -816,7 +846,7 @@ static PetscErrorCode ReplicatedToScaLAPACK(MPI_Comm comm, PetscInt k, const Pet
 
 /* M = I + U^T Z E_C, factored on every rank: Z_CC gathered; (W Z)_CC from J_ref Z = I on the
    rows of contacts sticking in the reference, from (W Z)_O (NewtonLowRankWZ) on the others'
-   (closed since). Also W's rows C (WRowsDense), for U^T. */
+   (closed since). Also W's rows C (WRowsDense) for U^T, where W has no dense copy. */
 static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLASInt *info)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
@@ -827,7 +857,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_NewtonLowRankFactor, m, 0, 0, 0));
   PetscCall(ZRowsCols(nt, lr->is, &z));
-  PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
+  if (nt->Wprod == fp->W) PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
   PetscCall(PetscMalloc1(lr->k * lr->k, &lr->M));
   for (PetscInt c = 0; c < lr->k; c++)
     for (PetscInt r = 0; r < lr->k; r++) {
@@ -1027,7 +1057,7 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, lr.k, lr.row, PETSC_USE_POINTER, &lr.is));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, lr.k, &lr.seq));
     PetscCall(VecScatterCreate(b, lr.is, lr.seq, NULL, &lr.gather));
-    PetscCall(VecScatterCreateToAll(b, &lr.toall, &lr.all));
+    if (nt->Wprod == fp->W) PetscCall(VecScatterCreateToAll(b, &lr.toall, &lr.all));
     PetscCall(VecDuplicate(lr.seq, &lr.wc));
     PetscCall(NewtonLowRankFactor(m, &lr, &info)); /* every rank factors the same M: the same info */
   }
