@@ -221,12 +221,12 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m, const ReferenceBlocks *rb
   MBC_Newton         *nt   = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp   = m->fp;
   MPI_Comm            comm = PetscObjectComm((PetscObject)m);
-  PetscInt            N, rs, re, nloc = 0, *orow, ldo;
+  PetscInt            N, rs, re, nloc = 0, *orow, ldo, c0;
   PetscMPIInt        *cnt, *dsp, rank;
   IS                  isO;
-  Mat                 wod;
+  Mat                 wod = NULL;
   const PetscScalar  *w;
-  PetscScalar        *ws = NULL;
+  PetscScalar        *ws = NULL, *wl = NULL; /* wl: W_O on this rank's columns, from W's dense copy */
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
@@ -253,16 +253,35 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m, const ReferenceBlocks *rb
     PetscFunctionReturn(0);
   }
   PetscCall(PetscArrayzero(nt->WZ, (size_t)nt->nO * N));
-  PetscCall(WRowsDense(fp->W, isO, &wod));
-  PetscCall(MatDenseGetArrayRead(wod, &w));
-  PetscCall(MatDenseGetLDA(wod, &ldo));
+  if (nt->Wprod != fp->W) { /* W_O on this rank's columns from the dense copy's rows O there (W
+                               symmetric), not W's rows O gathered on every rank (|O| x N, summed) */
+    const PetscScalar *a;
+    const PetscInt    *oi;
+    PetscInt           lda;
+    PetscCall(PetscMalloc1((size_t)nt->nO * (re - rs) + 1, &wl));
+    PetscCall(MatDenseGetLDA(nt->Wprod, &lda));
+    PetscCall(MatDenseGetArrayRead(nt->Wprod, &a));
+    PetscCall(ISGetIndices(isO, &oi));
+    for (PetscInt o = 0; o < nt->nO; o++)
+      for (PetscInt l = 0; l < re - rs; l++) wl[(size_t)l * nt->nO + o] = a[(size_t)oi[o] * lda + l];
+    PetscCall(ISRestoreIndices(isO, &oi));
+    PetscCall(MatDenseRestoreArrayRead(nt->Wprod, &a));
+    w   = wl;
+    ldo = nt->nO;
+    c0  = 0;
+  } else {
+    PetscCall(WRowsDense(fp->W, isO, &wod));
+    PetscCall(MatDenseGetArrayRead(wod, &w));
+    PetscCall(MatDenseGetLDA(wod, &ldo));
+    c0 = rs; /* its columns are W's */
+  }
   if (rb->nlS) { /* W_OS on this rank's rows of S, times their rows of Z_SS and Z_SD */
     const Mat    zb[2]  = {rb->Zss, rb->Zsd};
     const size_t col[2] = {0, (size_t)rb->NS * nt->nO};
     PetscBLASInt bO, bk, bn, bldz;
     PetscScalar  one = 1, zero = 0;
     PetscCall(PetscMalloc1((size_t)nt->nO * rb->nlS, &ws));
-    for (PetscInt s = 0; s < rb->nlS; s++) PetscCall(PetscArraycpy(ws + (size_t)s * nt->nO, w + (size_t)(rs + rb->sloc[s]) * ldo, nt->nO));
+    for (PetscInt s = 0; s < rb->nlS; s++) PetscCall(PetscArraycpy(ws + (size_t)s * nt->nO, w + (size_t)(c0 + rb->sloc[s]) * ldo, nt->nO));
     PetscCall(PetscBLASIntCast(nt->nO, &bO));
     PetscCall(PetscBLASIntCast(rb->nlS, &bk));
     for (PetscInt b = 0; b < 2; b++) {
@@ -281,12 +300,13 @@ static PetscErrorCode NewtonLowRankWZ(MBCMultiplier m, const ReferenceBlocks *rb
   }
   for (PetscInt j = 0; j < rb->nlD; j++) { /* W_OD D_DD^-1 on this rank's rows of D */
     const PetscInt     g  = rb->dspD[rank] + j;
-    const PetscScalar *wc = w + (size_t)(rs + rb->dloc[j]) * ldo;
+    const PetscScalar *wc = w + (size_t)(c0 + rb->dloc[j]) * ldo;
     PetscScalar       *c  = nt->WZ + (size_t)(rb->NS + g) * nt->nO;
     for (PetscInt o = 0; o < nt->nO; o++) c[o] += wc[o] / rb->dval[g];
   }
-  PetscCall(MatDenseRestoreArrayRead(wod, &w));
+  if (wod) PetscCall(MatDenseRestoreArrayRead(wod, &w));
   PetscCall(MatDestroy(&wod));
+  PetscCall(PetscFree(wl));
   PetscCall(SumOverRanks(comm, nt->WZ, (PetscInt64)nt->nO * N));
   PetscCall(ISDestroy(&isO));
   PetscFunctionReturn(0);
