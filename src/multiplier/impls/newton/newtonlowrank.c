@@ -153,7 +153,7 @@ static PetscErrorCode ZRowsCols(const MBC_Newton *nt, IS rows, PetscScalar **zkk
 {
   const PetscInt    *idx;
   const PetscScalar *z;
-  PetscInt           k, lda, rs, re;
+  PetscInt           k, lda, rs, re, *zr;
 
   PetscFunctionBegin;
   PetscCall(MatGetOwnershipRangeColumn(nt->Z, &rs, &re)); /* W's rows */
@@ -162,13 +162,19 @@ static PetscErrorCode ZRowsCols(const MBC_Newton *nt, IS rows, PetscScalar **zkk
   PetscCall(PetscCalloc1((size_t)k * k + 1, zkk));
   PetscCall(MatDenseGetLDA(nt->Z, &lda));
   PetscCall(MatDenseGetArrayRead(nt->Z, &z));
-  for (PetscInt r = 0; r < k; r++) {
-    PetscInt l = idx[r] - rs;
-    if (idx[r] < rs || idx[r] >= re) continue;
-    if (nt->zrow[l] < 0) (*zkk)[(size_t)r * k + r] = nt->zdinv[l];
-    else
-      for (PetscInt c = 0; c < k; c++) (*zkk)[(size_t)c * k + r] = z[(size_t)idx[c] * lda + nt->zrow[l]];
+  PetscCall(PetscMalloc1(k + 1, &zr));
+  for (PetscInt r = 0; r < k; r++) { /* row r's row of Z; -1: not this rank's, -2: in D (the diagonal) */
+    const PetscInt l = idx[r] - rs;
+    zr[r]            = idx[r] < rs || idx[r] >= re ? -1 : (nt->zrow[l] < 0 ? -2 : nt->zrow[l]);
+    if (zr[r] == -2) (*zkk)[(size_t)r * k + r] = nt->zdinv[l];
   }
+  for (PetscInt c = 0; c < k; c++) { /* by Z's columns, each read where it is stored */
+    const PetscScalar *zc = z + (size_t)idx[c] * lda;
+    PetscScalar       *o  = *zkk + (size_t)c * k;
+    for (PetscInt r = 0; r < k; r++)
+      if (zr[r] >= 0) o[r] = zc[zr[r]];
+  }
+  PetscCall(PetscFree(zr));
   PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
   PetscCall(ISRestoreIndices(rows, &idx));
   PetscCall(SumOverRanks(PetscObjectComm((PetscObject)nt->Z), *zkk, (PetscInt64)k * k));
