@@ -35,6 +35,7 @@ PETSC_EXTERN PetscErrorCode MBCFileOpenWrite(const char[], FILE **);
 
 /* Stopping short (src/sys/stop.c): signals checked between steps, errors on all ranks or some. */
 PETSC_EXTERN PetscErrorCode MBCStopInitialize(MPI_Comm);
+PETSC_EXTERN PetscErrorCode MBCMemoryAvailable(MPI_Comm, PetscReal *); /* MB: this rank's share of its node's available memory (0: unknown) */
 PETSC_EXTERN PetscErrorCode MBCStopFinalize(void);
 PETSC_EXTERN int            MBCStopGetSignal(void);
 PETSC_EXTERN PetscErrorCode MBCStopSignalled(MPI_Comm, int *);

@@ -157,28 +157,18 @@ static PetscBool IsOptionValue(const char *tok)
   return (PetscBool)(tok && (tok[0] != '-' || isdigit((unsigned char)tok[1]) || tok[1] == '.'));
 }
 
-/* *mb: this rank's share of its node's available memory (MemAvailable of /proc/meminfo over the
-   ranks on the node) plus what it holds now; 0 (no check) where the kernel does not say. Collective. */
+/* *mb: this rank's share of its node's available memory plus what it holds now; 0 (no check)
+   where the kernel does not say. Collective. */
 static PetscErrorCode SolverRankMemory(MPI_Comm comm, PetscReal *mb)
 {
-  MPI_Comm       node;
-  PetscMPIInt    nlocal;
   PetscLogDouble rss;
-  double         kb = 0;
-  char           line[256];
-  FILE          *fp = fopen("/proc/meminfo", "r");
+  PetscReal      share;
 
   PetscFunctionBegin;
-  while (fp && fgets(line, sizeof(line), fp))
-    if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
-  if (fp) fclose(fp);
-  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-  PetscCallMPI(MPI_Comm_size(node, &nlocal));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &kb, 1, MPI_DOUBLE, MPI_MIN, node)); /* read at once, one figure */
-  PetscCallMPI(MPI_Comm_free(&node));
+  PetscCall(MBCMemoryAvailable(comm, &share));
   PetscCall(PetscMemoryGetCurrentUsage(&rss));
-  *mb = kb > 0 ? kb / 1024.0 / nlocal + rss / 1048576.0 : 0;
-  PetscCall(PetscInfo(NULL, "-mbc_memory_mb %g: this rank's share of its node's available memory (%g MB over %d ranks)\n", (double)*mb, kb / 1024.0, (int)nlocal));
+  *mb = share > 0 ? share + rss / 1048576.0 : 0;
+  PetscCall(PetscInfo(NULL, "-mbc_memory_mb %g: this rank's share of its node's available memory (%g MB)\n", (double)*mb, (double)share));
   PetscFunctionReturn(0);
 }
 

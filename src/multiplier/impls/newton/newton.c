@@ -15,6 +15,7 @@
    analysis), alpha joins the unknowns and the step solves the saddle point system
    [A + B W, B G^T; G, 0]. The merit that stops the iteration is FCLIB's. */
 #include "newton.h"
+#include <mbcontact.h>
 #if defined(PETSC_HAVE_SCALAPACK)
   #include <petsc/private/petscscalapack.h>
 #endif
@@ -856,10 +857,10 @@ static PetscErrorCode NewtonProductOperator(MBCMultiplier m)
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
   MBCFrictionProblem *fp = m->fp;
-  PetscBool           aij;
+  PetscBool           aij, copy;
   MatInfo             info;
-  PetscInt            n;
-  PetscReal           fill;
+  PetscInt            n, mloc;
+  PetscReal           fill, avail = 0, mb;
 
   PetscFunctionBegin;
   PetscCall(PetscObjectBaseTypeCompareAny((PetscObject)fp->W, &aij, MATSEQAIJ, MATMPIAIJ, ""));
@@ -869,14 +870,24 @@ static PetscErrorCode NewtonProductOperator(MBCMultiplier m)
     PetscFunctionReturn(0);
   }
   PetscCall(MatGetSize(fp->W, &n, NULL));
+  PetscCall(MatGetLocalSize(fp->W, &mloc, NULL));
   PetscCall(MatGetInfo(fp->W, MAT_GLOBAL_SUM, &info));
   fill = n ? info.nz_used / ((PetscReal)n * n) : 0;
-  if (fill >= nt->w_dense_fill) PetscCall(WDenseCopy(fp->W, &nt->Wprod));
+  copy = (PetscBool)(fill >= nt->w_dense_fill);
+  if (copy) { /* an optimization that must not take the memory the solve's factors need next (the
+                 Newton matrix, the kept inverse: of the copy's size again): at most a quarter of
+                 what this rank may still take */
+    PetscCall(MBCMemoryAvailable(PetscObjectComm((PetscObject)m), &avail));
+    mb   = 8.0 * mloc * n / 1048576.0;
+    copy = (PetscBool)(avail == 0 || mb <= 0.25 * avail);
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &copy, 1, MPIU_BOOL, MPI_LAND, PetscObjectComm((PetscObject)m)));
+  }
+  if (copy) PetscCall(WDenseCopy(fp->W, &nt->Wprod));
   else {
     PetscCall(PetscObjectReference((PetscObject)fp->W));
     nt->Wprod = fp->W;
   }
-  PetscCall(PetscInfo(m, "W %" PetscInt_FMT " x %" PetscInt_FMT ", %.3g full: its products through %s\n", n, n, (double)fill, nt->Wprod == fp->W ? "W" : "a dense copy"));
+  PetscCall(PetscInfo(m, "W %" PetscInt_FMT " x %" PetscInt_FMT ", %.3g full: its products through %s\n", n, n, (double)fill, copy ? "a dense copy" : (fill >= nt->w_dense_fill ? "W (its dense copy would take more than a quarter of the memory this rank may still take)" : "W")));
   PetscFunctionReturn(0);
 }
 
