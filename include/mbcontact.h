@@ -33,9 +33,11 @@ PETSC_EXTERN PetscLogEvent MBC_SceneLoad, MBC_BodyLoad, MBC_BodyAssemble, MBC_Bo
 PETSC_EXTERN PetscErrorCode MBCInitializePackage(void);
 PETSC_EXTERN PetscErrorCode MBCFileOpenWrite(const char[], FILE **);
 
+/* MB this rank may still take: its share of its node's available memory, 0 where unknown (src/sys/memory.c). Collective. */
+PETSC_EXTERN PetscErrorCode MBCMemoryAvailable(MPI_Comm, PetscReal *);
+
 /* Stopping short (src/sys/stop.c): signals checked between steps, errors on all ranks or some. */
 PETSC_EXTERN PetscErrorCode MBCStopInitialize(MPI_Comm);
-PETSC_EXTERN PetscErrorCode MBCMemoryAvailable(MPI_Comm, PetscReal *); /* MB: this rank's share of its node's available memory (0: unknown) */
 PETSC_EXTERN PetscErrorCode MBCStopFinalize(void);
 PETSC_EXTERN int            MBCStopGetSignal(void);
 PETSC_EXTERN PetscErrorCode MBCStopSignalled(MPI_Comm, int *);

@@ -62,11 +62,11 @@ typedef struct {
   PetscInt   zdirect, zdirectpending; /* direct steps since W or Z (Z is built once they cost as much); a restart's */
 } MBC_Newton;
 
-/* every rank's rows[0..nl) gathered on every rank, in rank order: *all (n of them, PetscFree) and
-   the counts and displacements of the gather (PetscFree2(*cnt, *dsp)) */
 /* u = W r + q (+ G^T alpha) through nt->Wprod */
 PETSC_INTERN PetscErrorCode MBCNewtonVelocity(MBCMultiplier, Vec, Vec);
 
+/* every rank's rows[0..nl) gathered on every rank, in rank order: *all (n of them, PetscFree) and
+   the counts and displacements of the gather (PetscFree2(*cnt, *dsp)) */
 PETSC_INTERN PetscErrorCode MBCNewtonRowsAllGather(MPI_Comm, PetscInt, const PetscInt[], PetscInt *, PetscInt **, PetscMPIInt **, PetscMPIInt **);
 
 /* The Newton system on the active rows isA (nA on this rank, then the ng rigid modes on the last
