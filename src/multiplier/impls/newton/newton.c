@@ -838,6 +838,7 @@ static PetscErrorCode WDenseCopy(Mat W, Mat *D)
   PetscCall(MatDenseGetLDA(*D, &lda));
   PetscCall(MatDenseGetArrayWrite(*D, &d)); /* zeroed by its preallocation */
   PetscCall(WCSRGet(W, w, &n));
+  PetscCheck(n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W's dense copy: W is not SeqAIJ or MPIAIJ");
   for (PetscInt p = 0; p < n; p++)
     for (PetscInt i = 0; i < mloc; i++)
       for (PetscInt e = w[p].i[i]; e < w[p].i[i + 1]; e++) d[(size_t)(w[p].cmap ? w[p].cmap[w[p].j[e]] : w[p].cstart + w[p].j[e]) * lda + i] = w[p].a[e];
@@ -862,7 +863,7 @@ static PetscErrorCode NewtonProductOperator(MBCMultiplier m)
   PetscReal           fill, avail = 0, mb;
 
   PetscFunctionBegin;
-  PetscCall(PetscObjectBaseTypeCompareAny((PetscObject)fp->W, &aij, MATSEQAIJ, MATMPIAIJ, ""));
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)fp->W, &aij, MATSEQAIJ, MATMPIAIJ, "")); /* the types whose CSR arrays WCSRGet reads */
   if (!aij || nt->w_dense_fill > 1) {
     PetscCall(PetscObjectReference((PetscObject)fp->W));
     nt->Wprod = fp->W;
