@@ -24,6 +24,8 @@ typedef struct {
   KSP           klu;          /* the one holding the kept factor */
   /* per W */
   Mat        Wprod;      /* W for the solve's products: its dense copy (-mbc_newton_w_dense_fill), or W (a reference) */
+  VecScatter wtoall;     /* on several ranks with the copy: a vector gathered on every rank, into wxall */
+  Vec        wxall;
   PetscReal *diag, *rho; /* 9, 2 per contact */
   PetscReal  rho_used;   /* the scale rho holds now (NewtonRhoScale but after a watchdog restart) */
   PetscBool *frozen;     /* per local row: a direction without flexibility */
@@ -64,6 +66,8 @@ typedef struct {
 
 /* u = W r + q (+ G^T alpha) through nt->Wprod */
 PETSC_INTERN PetscErrorCode MBCNewtonVelocity(MBCMultiplier, Vec, Vec);
+/* y = W x, or y += W x (add), through nt->Wprod */
+PETSC_INTERN PetscErrorCode MBCNewtonWMult(MBC_Newton *, Vec, PetscBool, Vec);
 
 /* every rank's rows[0..nl) gathered on every rank, in rank order: *all (n of them, PetscFree) and
    the counts and displacements of the gather (PetscFree2(*cnt, *dsp)) */

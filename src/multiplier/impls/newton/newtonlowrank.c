@@ -649,7 +649,7 @@ static PetscErrorCode NewtonLowRankResidual(MBCMultiplier m, Vec x, Vec b, Vec r
   PetscScalar        *rv;
 
   PetscFunctionBegin;
-  PetscCall(MatMult(nt->Wprod, x, nt->wdr));
+  PetscCall(MBCNewtonWMult(nt, x, PETSC_FALSE, nt->wdr));
   PetscCall(VecGetArrayRead(x, &xv));
   PetscCall(VecGetArrayRead(b, &bv));
   PetscCall(VecGetArrayRead(nt->wdr, &yv));
