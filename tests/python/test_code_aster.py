@@ -1,0 +1,131 @@
+"""Code_Aster's contact regression cases as their .comm files write them (issue 38), each against
+the reference values of its TEST_RESU / TEST_FONCTION (VALE_REFE, within its PRECISION) and
+against the exact solution where there is one. The .comm files are read from Code_Aster's public
+sources (astest/ssnv128a.comm, astest/sdnl111a.comm); their .mmed meshes are stored there as Git
+LFS objects that the mirrors do not carry, so each mesh is rebuilt here from the geometry the
+.comm and the .datg (Gibi) script give: ssnv128a.datg's contact line of 1, 3, 2, 3 and 23
+elements, sdnl111's two 1 m bars (the length the analytic reference implies: the wave returns at
+2 L / c = 4e-4 s). Plane (D_PLAN) and beam (POU_D_T) models become one layer of hex8 with the
+out-of-plane (or transverse) displacements held. A second or a few each."""
+import numpy as np
+import pytest
+
+from conftest import prep, result, solve
+from mbcontact import meshgen
+from mbcontact.results import point_history, read_body
+
+import meshio
+
+
+def rename_sides(path, prefix):
+    m = meshio.read(str(path))
+    m.field_data = {(k if k == prefix else f"{prefix}_{k}"): v for k, v in m.field_data.items()}
+    meshio.write(str(path), m, file_format="gmsh22", binary=False)
+
+
+# ---------------------------------------------------------------- SSNV128
+SIDE, THICK = 0.04, 0.001  # the plate's side (COTE); one layer through z (plane strain)
+# ssnv128a.datg: LCONTA = PPA d 1 PPB d 3 PPC d 2 PPD d 3 PPE d 23 PPS; 10 elements up
+CONTACT_LINE = ((0.0, 0.00125, 1), (0.00125, 0.005, 3), (0.005, 0.0075, 2), (0.0075, 0.01125, 3), (0.01125, SIDE, 23))
+# TEST_RESU: DX at PPA .. PPE at INST 1 (VALE_REFE, SOURCE_EXTERNE, PRECISION 5 %)
+SSNV128_REF = {0.0: 2.86e-5, 0.00125: 2.72e-5, 0.005: 2.28e-5, 0.0075: 1.98e-5, 0.01125: 1.5e-5}
+
+
+def ssnv128_scene(tmp_path):
+    xs = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in CONTACT_LINE] + [[SIDE]])
+    meshgen.box(str(tmp_path / "plaque.msh"), (0, 0, 0), (SIDE, SIDE, THICK), n=(len(xs) - 1, 10, 1), volume_name="plaque")
+    m = meshio.read(str(tmp_path / "plaque.msh"))
+    m.points[:, 0] = np.interp(m.points[:, 0], np.linspace(0, SIDE, len(xs)), xs)  # the uniform columns onto the .datg's
+    meshio.write(str(tmp_path / "plaque.msh"), m, file_format="gmsh22", binary=False)
+    rename_sides(tmp_path / "plaque.msh", "plaque")
+    meshgen.box(str(tmp_path / "bati.msh"), (-0.004, -0.004, 0), (SIDE + 0.004, 0, THICK), n=(4, 1, 1), volume_name="bati")
+    rename_sides(tmp_path / "bati.msh", "bati")
+    ramp = {"table": [[0, 0], [1, 1]]}  # RAMPE over L_INST's 5 equal steps
+    return prep(tmp_path, {
+        "meshes": {"p": "plaque.msh", "b": "bati.msh"},
+        "bodies": {"plaque": {"mesh": "p", "regions": "plaque", "material": {"E": 1.3e11, "nu": 0.2}},
+                   "bati": {"mesh": "b", "regions": "bati", "rigid": True}},  # LBATI: DX = DY = 0
+        "node_sets": {"PPS": {"box": {"lo": [SIDE, 0, 0], "hi": [SIDE, 0, THICK]}, "bodies": ["plaque"]}},
+        # GROUP_MA_ESCL = LCONTA: Code_Aster's slave nodes are the contact points, mbcontact's master side
+        "couples": [{"master": "plaque_ymin", "slave": "bati_ymax", "mu": 1.0}],
+        "dirichlet": [{"body": "bati", "components": "all"},
+                      {"nodes": "PPS", "components": ["x", "y"]},
+                      {"surface": "plaque_xmax", "components": ["x"]},  # LBLOCX
+                      {"surface": "plaque_zmin", "components": ["z"]}, {"surface": "plaque_zmax", "components": ["z"]}],
+        "loads": [{"kind": "pressure", "surface": "plaque_ymax", "value": 5e7, "time": ramp},   # LPRESV
+                  {"kind": "pressure", "surface": "plaque_xmin", "value": 1.5e8, "time": ramp}],  # LPRESH
+        "analysis": {"type": "static", "dt": 0.2, "final_time": 1.0},
+    }, name="ssnv128")
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_ssnv128_plate_with_friction_on_a_rigid_base(tmp_path, nproc):
+    """SSNV128A: a 40 mm plate (E 130 GPa, nu 0.2, plane strain) pressed on a rigid base (here a
+    rigid body, held) by 50 MPa on top and pushed sideways by 150 MPa, Coulomb mu = 1, the loads
+    ramped in 5 static steps (friction is path dependent). DX along the contact line at PPA ..
+    PPE within 1 % of the .comm's VALE_REFE at PPA .. PPD and 3 % at PPE (its PRECISION is 5 %;
+    measured -0.44, -0.40, -0.25, -0.35, +2.4 %; Code_Aster's own VALE_CALC +0.17 .. +4.1 %)."""
+    h5 = ssnv128_scene(tmp_path)
+    solve(h5, nproc=nproc)
+    b = read_body(result(h5, ".h5"), "plaque")
+    x, u = b["vertices"], b["displacement"]
+    for x0, ref in SSNV128_REF.items():
+        on = (np.abs(x[:, 0] - x0) < 1e-9) & (np.abs(x[:, 1]) < 1e-9)
+        assert on.sum() == 2  # both z faces: plane strain
+        err = u[on, 0] / ref - 1
+        print(f"x = {x0}: DX {u[on, 0].mean():.4e}, reference {ref:.3e}: {err.mean():+.2%}")
+        assert np.all(np.abs(err) < (0.03 if x0 > 0.01 else 0.01))
+        assert np.ptp(u[on, 0]) < 1e-6 * ref
+
+
+# ---------------------------------------------------------------- SDNL111
+E_BAR, RHO_BAR, H_BAR, L_BAR, V0 = 2e11, 7800.0, 0.02, 1.0, 1.0
+C_BAR = np.sqrt(E_BAR / RHO_BAR)  # 5064 m/s
+# TEST_FONCTION on DX(NO1): (time, VALE_REFE, PRECISION relative, or absolute where the reference is 0)
+SDNL111_REF = ((2e-4, -1e-4, 0.01), (4e-4, -2e-4, 0.035), (6e-4, -1e-4, 0.05), (8e-4, 0.0, 1e-5), (1e-3, 2e-4, 0.035))
+
+
+def sdnl111_exact(t):
+    """DX of bar 1's struck end: -v0/2 until the waves return from the free and the fixed ends at
+    2 L / c, +v0/2 until 4 L / c, then bar 1 leaves at +v0."""
+    t1, t2 = 2 * L_BAR / C_BAR, 4 * L_BAR / C_BAR
+    return np.where(t < t1, -0.5 * V0 * t, np.where(t < t2, -0.5 * V0 * (2 * t1 - t), V0 * (t - t2)))
+
+
+def test_sdnl111_two_bars_impact(tmp_path):
+    """SDNL111A as written: two steel bars (E 200 GPa, nu 0, rho 7800, 20 mm square, 1 m), bar 1
+    (POUTRE1) at -1 m/s (`initial`) against bar 2 (POUTRE2), whose far end NO4 is held, touching at
+    t = 0 (DIST_1 + DIST_2 is the shock's reach, not a gap: the .comm's own values, -1.0078e-4 at
+    2e-4 s, have contact from the start); transverse motion held (POU_D_T with DY = DZ = 0), the
+    .comm's step 1e-6 s to 1.02e-3 s, 100 hex8 per bar (c dt / dx = 0.51), Newmark. DX(NO1) within
+    1 % of 2e-4 m of the exact 1D wave solution at the five instants of TEST_FONCTION (measured
+    0.6 %: the 1e-3 s value, after the bars part), and within the .comm's PRECISION of its
+    VALE_REFE at 2e-4, 4e-4 and 8e-4 s (measured 0.0, -2.6 %, 8.9e-6 m). At 6e-4 and 1e-3 s the
+    VALE_REFE (-1e-4, 2e-4) are those of c = 5000 m/s (2 L / c = 4e-4 s): the exact -0.950e-4
+    and 2.101e-4 for c = 5064 m/s are themselves 5.0 % off them, beyond the PRECISION (5 %,
+    3.5 %; Code_Aster's own values are 4.4 and 3.1 % off), so there the exact solution is the
+    reference (measured -5.02 % and +4.4 % off VALE_REFE)."""
+    meshgen.boxes(str(tmp_path / "bars.msh"), [dict(lo=(-L_BAR, 0, 0), hi=(0, H_BAR, H_BAR), n=(100, 1, 1), name="poutre2"),
+                                               dict(lo=(0, 0, 0), hi=(L_BAR, H_BAR, H_BAR), n=(100, 1, 1), name="poutre1")])
+    h5 = prep(tmp_path, {
+        "meshes": {"m": "bars.msh"},
+        "bodies": {b: {"mesh": "m", "regions": b, "material": {"E": E_BAR, "nu": 0.0, "density": RHO_BAR}} for b in ("poutre1", "poutre2")},
+        "couples": [{"master": "poutre1_xmin", "slave": "poutre2_xmax"}],  # DIS_CHOC between NO1 and NO3
+        "dirichlet": [{"body": "poutre1", "components": ["y", "z"]}, {"body": "poutre2", "components": ["y", "z"]},
+                      {"surface": "poutre2_xmin", "components": ["x"]}],  # NO4
+        "initial": [{"body": "poutre1", "velocity": [-V0, 0, 0]}],  # VITIPHYS
+        "analysis": {"type": "dynamic", "dt": 1e-6, "final_time": 1.02e-3},
+        "output": {"every": 1000000, "points": {"NO1": {"x": [0, 0, 0], "body": "poutre1"}}},
+    }, name="sdnl111")
+    solve(h5)
+    p = point_history(result(h5, "_points.csv"), "NO1")
+    for t, ref, precision in SDNL111_REF:
+        u, exact = np.interp(t, p["t"], p["u"][:, 0]), float(sdnl111_exact(t))
+        print(f"t = {t:g}: DX(NO1) {u:.4e}, exact {exact:.4e}, VALE_REFE {ref:.1e}")
+        assert abs(u - exact) < 0.01 * 2e-4
+        if ref == 0:
+            assert abs(u) < precision
+        elif t in (6e-4, 1e-3):  # the reference's c = 5000 m/s, not the bars': the exact solution is off it too
+            assert abs(exact / ref - 1) > precision
+        else:
+            assert abs(u / ref - 1) < precision
