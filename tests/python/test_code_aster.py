@@ -1,4 +1,5 @@
-"""Code_Aster's contact regression cases as their .comm files write them (issue 38), each against
+"""Code_Aster's contact regression cases as their .comm files write them (issue 38): SSNV128A,
+SDNL111A, SSNV104A, SDNV104E, each against
 the reference values of its TEST_RESU / TEST_FONCTION (VALE_REFE, within its PRECISION) and
 against the exact solution where there is one. The .comm files are read from Code_Aster's public
 sources (astest/ssnv128a.comm, astest/sdnl111a.comm); their .mmed meshes are stored there as Git
@@ -238,3 +239,69 @@ def test_ssnv104_hertz_spheres_on_a_mixed_mesh(tmp_path):
     print(f"p(G1) {p_pole:.1f} ({p_pole / P0_REF - 1:+.2%} of {P0_REF}), a Hertz {a:.2f}, loaded radius "
           f"{r[c['pressure'] > 0].max():.2f}, load {force:.4g} ({force / hertz - 1:+.2%} of Hertz's)")
     assert abs(p_pole / P0_REF - 1) < 0.05
+
+
+# ---------------------------------------------------------------- SDNV104
+M_PAD, K_SPRINGS, F_LAT, N_TOP, MU_PAD = 7000.0, 2 * 12e3, 2e5, 7e4, 0.3
+# TEST_RESU: DX(A) at (INST, VALE_REFE); PRECISION 5 % (ANALYTIQUE)
+SDNV104_REF = ((1.7, 14.91), (3.4, 3.5))
+
+
+def oscillator(t_end, ramp=0.07, dt=1e-5):
+    """The friction oscillator's own equation, m x'' + k x = F(t) - mu N(t) sign(v) (sticking while
+    |F - k x| <= mu N), both loads ramped over `ramp`, by the midpoint rule at a step far below the
+    period: DX(t) on a grid of dt."""
+    n = int(round(t_end / dt)) + 1
+    x, v, out = 0.0, 0.0, np.empty(n)
+    for i in range(n):
+        out[i] = x
+        s = min(i * dt / ramp, 1.0)
+        f, fr = s * F_LAT - K_SPRINGS * x, s * MU_PAD * N_TOP
+        if v == 0.0 and abs(f) <= fr:
+            continue
+        a = (f - np.sign(v if v != 0.0 else f) * fr) / M_PAD
+        v_new = v + a * dt
+        if v != 0.0 and np.sign(v_new) != np.sign(v):  # it stops within the step
+            v_new = 0.0
+        x += 0.5 * (v + v_new) * dt
+        v = v_new
+    return np.arange(n) * dt, out
+
+
+def test_sdnv104_friction_oscillator_with_springs(tmp_path):
+    """SDNV104E: a steel pad (E 210 GPa, nu 0, rho 7000, plane strain) on a base held in place
+    (here a rigid body), pressed by 70 kPa on top, pushed sideways by 200 kPa, both ramped over
+    0.07 s, held back by two discrete springs of 12 kN/m (RESLAT, K_T_D_L), Coulomb mu = 0.3, HHT
+    (alpha -0.3, the .comm's SCHEMA='HHT'), the .comm's step 0.01 s to 3.5 s. Its mesh is an LFS
+    object the mirrors lack and its .comm gives no size: the pad is 1 m x 1 m (1 m thick), the size
+    for which the analytic references hold (2 (F - mu N) / k = 14.92 m at T / 2 = pi sqrt(m / k) =
+    1.70 s, 2 (F + mu N) / k - 14.92 = 3.50 m at T; with m = 7000 kg, k = 24 kN/m). The springs
+    act on the pad's right face (10 nodes, 2.4 kN/m each). DX(A) within the .comm's PRECISION (5 %)
+    of VALE_REFE (measured -0.08 % and +0.39 %; Code_Aster's own -0.2 % and +1.4 %) and within
+    0.5 % of the 1-DOF oscillator's own solution with the ramp (measured 0.00 % and +0.02 %: the pad
+    is rigid next to the springs, and HHT's damping at dt = T / 340 is far below that)."""
+    meshgen.box(str(tmp_path / "patin.msh"), (0, 0, 0), (1, 1, 1), n=(4, 4, 1), volume_name="patin")
+    rename_sides(tmp_path / "patin.msh", "patin")
+    meshgen.box(str(tmp_path / "bati.msh"), (-1, -0.5, 0), (20, 0, 1), n=(21, 1, 1), volume_name="bati")
+    rename_sides(tmp_path / "bati.msh", "bati")
+    ramp = {"table": [[0, 0], [0.07, 1], [10, 1]]}
+    h5 = prep(tmp_path, {
+        "meshes": {"p": "patin.msh", "b": "bati.msh"},
+        "bodies": {"patin": {"mesh": "p", "regions": "patin", "material": {"E": 2.1e11, "nu": 0.0, "density": 7000.0}},
+                   "bati": {"mesh": "b", "regions": "bati", "rigid": True}},
+        "couples": [{"master": "patin_ymin", "slave": "bati_ymax", "mu": MU_PAD}],  # LESC on LMAI
+        "dirichlet": [{"body": "bati", "components": "all"}, {"body": "patin", "components": ["z"]}],
+        "springs": [{"nodes": "patin_xmax", "stiffness": [K_SPRINGS / 10, 0, 0]}],
+        "loads": [{"kind": "pressure", "surface": "patin_ymax", "value": N_TOP, "time": ramp},   # FSUP
+                  {"kind": "pressure", "surface": "patin_xmin", "value": F_LAT, "time": ramp}],  # FLAT
+        "analysis": {"type": "dynamic", "dt": 0.01, "final_time": 3.5, "scheme": "hht", "alpha": -0.3},
+        "output": {"every": 1000000, "points": {"A": {"x": [0, 1, 0], "body": "patin"}}},
+    }, name="sdnv104")
+    solve(h5)
+    p = point_history(result(h5, "_points.csv"), "A")
+    t_exact, x_exact = oscillator(3.5)
+    for t, ref in SDNV104_REF:
+        u, exact = np.interp(t, p["t"], p["u"][:, 0]), np.interp(t, t_exact, x_exact)
+        print(f"t = {t}: DX(A) {u:.4f}, VALE_REFE {ref} ({u / ref - 1:+.2%}), 1-DOF {exact:.4f} ({u / exact - 1:+.2%})")
+        assert abs(u / ref - 1) < 0.05
+        assert abs(u / exact - 1) < 0.005
