@@ -1,13 +1,14 @@
 """Code_Aster's contact regression cases as their .comm files write them (issue 38): SSNV128A,
-SDNL111A, SSNV104A, SDNV104E, each against
-the reference values of its TEST_RESU / TEST_FONCTION (VALE_REFE, within its PRECISION) and
-against the exact solution where there is one. The .comm files are read from Code_Aster's public
-sources (astest/ssnv128a.comm, astest/sdnl111a.comm); their .mmed meshes are stored there as Git
-LFS objects that the mirrors do not carry, so each mesh is rebuilt here from the geometry the
-.comm and the .datg (Gibi) script give: ssnv128a.datg's contact line of 1, 3, 2, 3 and 23
-elements, sdnl111's two 1 m bars (the length the analytic reference implies: the wave returns at
-2 L / c = 4e-4 s). Plane (D_PLAN) and beam (POU_D_T) models become one layer of hex8 with the
-out-of-plane (or transverse) displacements held. A second or a few each."""
+SDNL111A, SSNV104A, SDNV104E, each against the reference values of its TEST_RESU / TEST_FONCTION
+(VALE_REFE, within its PRECISION) and against the exact solution where there is one. The .comm
+and .datg files were read from Code_Aster's public sources (astest/ in the GitHub mirror
+ehmoussi/code_aster); nothing of them is copied here but their numbers. Their .mmed meshes are
+stored there as Git LFS objects that the mirror does not carry, so each mesh is rebuilt from the
+geometry the .comm and .datg (Gibi) scripts give: ssnv128a.datg's contact line of 1, 3, 2, 3 and
+23 elements, ssnv104a.datg's revolved triangles (prisms, pyramids and tetrahedra), sdnl111's 1 m
+bars and sdnv104's 1 m pad (the sizes their analytic references imply; docs/validation.md).
+Plane (D_PLAN) and beam (POU_D_T) models become one layer of hex8 with the out-of-plane (or
+transverse) displacements held. Seconds each."""
 import meshio
 import numpy as np
 import pytest
