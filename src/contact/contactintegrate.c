@@ -321,7 +321,7 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
   for (PetscInt f = 0; f < m->nfaces; f++) {
     const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
     const PetscInt  nv = m->fnv[f];
-    const PetscBool quad = (PetscBool)(mq && m->fqnode && m->fqnode[6 * f] >= 0);
+    const PetscBool quad = (PetscBool)(m->fqnode && m->fqnode[6 * f] >= 0);
     PetscBool       any  = PETSC_FALSE;
     MBCFacePlane    P;
     PetscReal       amaster, rf, mw[MBC_MAX_FACE_NODES][MBC_MAX_WEIGHT_NODES] = {{0}};
@@ -427,14 +427,13 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
             (void)MBCSurfaceFaceWeights(s, g, cp.w, ns, Ws);
             if (quad) (void)MBCSurfaceFaceWeights(m, f, N, mn, Wm);
             if (quad || ngw == 6) { /* the gap between the quadratic faces' points the weights give: H^T du moves it exactly */
-              PetscReal e[3];
+              PetscReal dx[3];
               for (PetscInt d = 0; d < 3; d++) {
-                e[d] = 0;
-                for (PetscInt j = 0; j < nmw; j++) e[d] += Wm[j] * m->x[3 * mn[j] + d];
-                if (!quad) e[d] = x[d];
-                for (PetscInt j = 0; j < ngw; j++) e[d] -= Ws[j] * s->x[3 * ns[j] + d];
+                dx[d] = quad ? 0 : x[d];
+                for (PetscInt j = 0; j < nmw; j++) dx[d] += Wm[j] * m->x[3 * mn[j] + d];
+                for (PetscInt j = 0; j < ngw; j++) dx[d] -= Ws[j] * s->x[3 * ns[j] + d];
               }
-              cp.gap = MBCDot(e, cp.n);
+              cp.gap = MBCDot(dx, cp.n);
             }
             for (PetscInt i = 0; i < nv; i++) {
               psi[i] = 0;
@@ -457,7 +456,7 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
         for (PetscInt j = 0; j < ngw; j++)
           if (hit[i][j]) PetscCall(EntryAdd(sl, (PetscInt64)pointOf[fv[i]] * s->nnodes + gn[j], sw[i][j]));
     }
-    for (PetscInt i = 0; i < nv; i++)
+    for (PetscInt i = 0; i < nv && mq; i++)
       if (pointOf[fv[i]] >= 0)
         for (PetscInt j = 0; j < nmw; j++)
           if (mw[i][j] != 0) PetscCall(EntryAdd(mq, (PetscInt64)pointOf[fv[i]] * m->nnodes + mn[j], mw[i][j]));
