@@ -2,7 +2,7 @@
 patch tests, tet10 on a curved boundary (Lame's thick cylinder), contact on a mixed mesh's
 triangles and quads, a MED file with its cell and node groups and mirrored cells (oriented and
 reported), and contact on tet10's 6-node faces (the patch test against hex8, tet4 and tet10, either
-side master). Small meshes: a second or two each."""
+side master; two tet10 bars' impact). Small meshes: a second or two each."""
 import subprocess
 
 import meshio
@@ -170,6 +170,39 @@ def test_tet10_contact_patch(tmp_path, base, master, nproc):
     for body in ("block", "base"):
         r = read_body(result(h5, ".h5"), body)
         assert np.abs(r["stress"][:, 5] / -P - 1).max() < 1e-9, body
+
+
+def test_tet10_bars_impact(tmp_path):
+    """Dynamic contact on tet10 faces: two tet10 bars (1 m, 0.1 x 0.1 m, 20 boxes of tets each,
+    E = rho = 1, nu = 0, y and z held), bar 1 at 1 m/s into bar 2, Newmark at c dt / dx = 1/2.
+    The contact force is rho c A v0 / 2 from t = 0 to 2 L / c = 2 s (its median within 2 %,
+    measured 0.5 %; contact ends within two steps of 2 s; the impulse m v0 within 2 %,
+    measured 1.3 %, as hex8's 1.5 %), the energy balance closes to 1e-9 of the impact's and the
+    kinetic energy never exceeds it: the quadratic faces' integrated gap moves exactly as H^T du."""
+    for name, lo in (("bar1", 0.0), ("bar2", 1.0)):
+        meshgen.tet10_box(str(tmp_path / f"{name}.msh"), (lo, 0, 0), (lo + 1, 0.1, 0.1), n=(20, 1, 1), name=name)
+        rename_sides(tmp_path / f"{name}.msh", name)
+    dt, area = 0.025, 0.01
+    h5 = prep(tmp_path, {
+        "meshes": {"a": "bar1.msh", "b": "bar2.msh"},
+        "bodies": {"bar1": {"mesh": "a", "regions": "bar1", "material": {"E": 1.0, "nu": 0.0, "density": 1.0}},
+                   "bar2": {"mesh": "b", "regions": "bar2", "material": {"E": 1.0, "nu": 0.0, "density": 1.0}}},
+        "couples": [{"master": "bar1_xmax", "slave": "bar2_xmin"}],
+        "dirichlet": [{"body": "bar1", "components": ["y", "z"]}, {"body": "bar2", "components": ["y", "z"]}],
+        "initial": [{"body": "bar1", "velocity": [1.0, 0, 0]}],
+        "analysis": {"type": "dynamic", "dt": dt, "final_time": 3.0},
+        "output": {"every": 1000, "energy": True},
+    }, name="bars")
+    solve(h5)
+    c = read_csv(result(h5, "_contact.csv"))
+    t, f = c["t"], c["normal_force"]
+    assert abs(np.median(f[(t > 0.3) & (t < 1.7)]) / (area / 2) - 1) < 0.02
+    assert abs(t[f > 1e-3 * area / 2].max() - 2.0) <= 2 * dt
+    assert abs(np.sum(f[1:]) * dt / area - 1) < 0.02
+    e = read_csv(result(h5, "_energy.csv"))
+    impact = e["kinetic"][0]
+    assert np.abs(e["total"]).max() < 1e-9 * impact
+    assert e["kinetic"].max() <= impact * (1 + 1e-12)
 
 
 def med_copy(src, dst, mirror=True):
