@@ -506,8 +506,21 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
     if (!quad[k]) PetscCall(EntryAdd(&ml, (PetscInt64)k * m->nnodes + p->master, integrated ? covered[k] : area[k]));
     if (integrated) continue;
     covered[k] = area[k];
-    for (PetscInt j = 0; j < p->nv; j++) PetscCall(EntryAdd(&sl, (PetscInt64)k * s->nnodes + s->fnode[MBC_MAX_FACE_NODES * p->face + j], p->w[j] * area[k]));
-    gsum[k] = p->gap * area[k];
+    { /* at the node: the slave weights at its projection (a tri6's quadratic ones, the gap to that point) */
+      PetscInt  wn[MBC_MAX_WEIGHT_NODES];
+      PetscReal W[MBC_MAX_WEIGHT_NODES], gap = p->gap;
+      const PetscInt nw = MBCSurfaceFaceWeights(s, p->face, p->w, wn, W);
+      if (nw == 6) {
+        PetscReal dx[3];
+        for (PetscInt d = 0; d < 3; d++) {
+          dx[d] = m->x[3 * p->master + d];
+          for (PetscInt j = 0; j < nw; j++) dx[d] -= W[j] * s->x[3 * wn[j] + d];
+        }
+        gap = MBCDot(dx, p->n);
+      }
+      for (PetscInt j = 0; j < nw; j++) PetscCall(EntryAdd(&sl, (PetscInt64)k * s->nnodes + wn[j], W[j] * area[k]));
+      gsum[k] = gap * area[k];
+    }
   }
   for (PetscInt k = 0; k < c->npoints; k++) PetscCheck(covered[k] > 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact point %" PetscInt_FMT " of couple %" PetscInt_FMT " has no area", k, c->k);
   PetscCall(EntryCSR(&ml, c->npoints, m->nnodes, covered, &c->moff, &c->mnode, &c->mw));
