@@ -7,7 +7,8 @@ up to 0.5 mm): DOFs, contact points, run time split by phase (-log_view events: 
 factorization, D = H^T A^-1 H, PGS, solves, search, output), peak RSS of the solver, and the
 errors of b (edge extrapolated from the last two loaded nodes, and "b fit": the least-squares
 line of p^2 against x^2) and p_max against Hertz for the computed load P and of the surface
-displacements against the paper's ANSYS column; for each of --elements (hex8, hex8i) and, beside
+displacements against the paper's ANSYS column; for each of --elements (hex8, hex8i; tet10, tet4:
+each hex cut into 6 tets, tet10's midside nodes on the arcs, contact on its 6-node faces) and, beside
 them on each level, CalculiX (meshes/hertz/ccx.py: the same hex meshes, boundary conditions and
 approach, --ccx-element C3D8I, face-to-face frictionless contact with a linear pressure-overclosure
 of slope --penalty, one *STATIC step; Debian calculix-ccx, installed with apt when missing unless
@@ -67,12 +68,12 @@ def solve(h5, *options):
 
 
 def cylinder_level(work, hc, analysis="static", delta=None, element=None):
-    h5 = build.build(work, hc, analysis=analysis)
+    h5 = build.build(work, hc, analysis=analysis, cell=element if element in ("tet4", "tet10") else "hex8")
     if delta is not None:  # another approach
         scene = build.cylinders_scene(analysis)
         scene["dirichlet"][-1]["value"] = -delta
         h5 = prepare(work, "hertz", scene)
-    wall, rss, ph, dofs, _ = solve(h5, *(("-body_element", element) if element else ()))
+    wall, rss, ph, dofs, _ = solve(h5, *(("-body_element", element) if element in ("hex8", "hex8i") else ()))
     res = report.cylinder_results(os.path.join(work, "hertz_result"))
     return dict(hc=hc, element=element, wall=wall, cpu=solve.cpu, rss=rss, dofs=dofs, res=res, err=report.errors(res), **ph)
 
@@ -108,7 +109,7 @@ def main():
     ap.add_argument("--quick", action="store_true", help="two coarse levels, no dynamic route, one sphere level")
     ap.add_argument("--smoke", action="store_true", help="one coarse cylinder level and a 13k-DOF sphere (25 s at load 10: does the bench still run)")
     ap.add_argument("--levels", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.0075, 0.005])
-    ap.add_argument("--elements", nargs="+", default=["hex8", "hex8i"], help="hex elements of the cylinder table (-body_element)")
+    ap.add_argument("--elements", nargs="+", default=["hex8", "hex8i"], help="elements of the cylinder table: hex8, hex8i (-body_element), tet10, tet4 (each hex as 6 tets, build.py's tet10_part)")
     ap.add_argument("--cylinders-only", action="store_true", help="the cylinder table only (no PGS tolerance, quarter approach, dynamic route, sphere)")
     ap.add_argument("--no-ccx", action="store_true", help="mbcontact only (never installs or runs CalculiX)")
     ap.add_argument("--ccx-element", default="C3D8I", help="CalculiX element of its rows (C3D8I, C3D8)")

@@ -131,6 +131,64 @@ def extrude(name, points2, quads, length, flip_y=False):
     return meshgen.Part(name, "hex8", pts, hexes, {k: np.asarray(v) for k, v in surfaces.items()})
 
 
+def _prism_tets(v):
+    """The 3 tets of the prism v (bottom v0 v1 v2, top v3 v4 v5 above them): each quad side face
+    cut along the diagonal through its smallest (global) vertex, so neighbours agree (Dompierre
+    et al.'s rule)."""
+    rot = {0: [0, 1, 2, 3, 4, 5], 1: [1, 2, 0, 4, 5, 3], 2: [2, 0, 1, 5, 3, 4],
+           3: [3, 5, 4, 0, 2, 1], 4: [4, 3, 5, 1, 0, 2], 5: [5, 4, 3, 2, 1, 0]}[int(np.argmin(v))]
+    w = [v[i] for i in rot]  # w0 the smallest
+    if min(w[1], w[5]) < min(w[2], w[4]):
+        return [[w[0], w[1], w[2], w[5]], [w[0], w[1], w[5], w[4]], [w[0], w[4], w[5], w[3]]]
+    return [[w[0], w[1], w[2], w[4]], [w[0], w[4], w[2], w[5]], [w[0], w[4], w[5], w[3]]]
+
+
+def tet10_part(part, centre):
+    """The one-layer hex8 part of extrude() as tet10: each hex two prisms (its quads cut along
+    (q0, q2)), each prism 3 tets; a midside node on every edge, on the cylinder (radius R about
+    the axis through `centre` in x, y) where both ends are; surfaces as tri6, each quad cut as the
+    tets cut it (along the diagonal through its smallest vertex)."""
+    pts, hexes = part.points, part.cells
+    tets = []
+    for h in hexes:
+        for t in ((0, 1, 2), (0, 2, 3)):
+            tets.extend(_prism_tets([h[t[0]], h[t[1]], h[t[2]], h[4 + t[0]], h[4 + t[1]], h[4 + t[2]]]))
+    tets = np.array(tets)
+    x = pts[tets]
+    vol = np.einsum("ij,ij->i", np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), x[:, 3] - x[:, 0])
+    tets[vol < 0] = tets[vol < 0][:, [0, 2, 1, 3]]
+    edges = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
+    pairs = np.sort(np.concatenate([tets[:, e] for e in edges]), axis=1)
+    key, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    mid = 0.5 * (pts[key[:, 0]] + pts[key[:, 1]])
+    r = lambda p: np.linalg.norm(p[:, :2] - centre, axis=1)  # noqa: E731
+    arc = (np.abs(r(pts[key[:, 0]]) - R) < 1e-6) & (np.abs(r(pts[key[:, 1]]) - R) < 1e-6)
+    mid[arc, :2] = centre + (mid[arc, :2] - centre) * (R / r(mid[arc]))[:, None]
+    n = len(pts)
+    cells = np.hstack([tets, n + inverse.ravel().reshape(6, -1).T])
+    lookup = {tuple(k): n + m for m, k in enumerate(key)}
+
+    def tri6(faces):
+        tris = []
+        for f in faces:
+            if len(f) == 4:
+                a = int(np.argmin(f))
+                f = [f[(a + i) % 4] for i in range(4)]
+                tris += [[f[0], f[1], f[2]], [f[0], f[2], f[3]]]
+            else:
+                tris.append(list(f))
+        return np.array([[a, b, c] + [lookup[tuple(sorted(e))] for e in ((a, b), (b, c), (c, a))] for a, b, c in tris])
+
+    surfaces = {}
+    for name, faces in part.surfaces.items():
+        if name.endswith("_ends"):  # the prisms' triangles, not the quads' min-vertex cut
+            m = len(faces) // 2
+            bottom, top = faces[:m][:, ::-1], faces[m:]
+            faces = [t for q in bottom for t in ([q[0], q[2], q[1]], [q[0], q[3], q[2]])] + [t for q in top for t in ([q[0], q[1], q[2]], [q[0], q[2], q[3]])]
+        surfaces[name] = tri6(faces)
+    return meshgen.Part(part.name, "tet10", np.vstack([pts, mid]), cells, surfaces)
+
+
 def cylinders_scene(analysis="static", dt=0.01, final_time=3.0, ramp=1.0):
     material = {"E": E, "nu": NU}
     if analysis == "dynamic":
@@ -155,13 +213,20 @@ def cylinders_scene(analysis="static", dt=0.01, final_time=3.0, ramp=1.0):
     return scene
 
 
-def build(outdir, hc=0.01, fine=None, analysis="static", dt=0.01, final_time=3.0):
+def build(outdir, hc=0.01, fine=None, analysis="static", dt=0.01, final_time=3.0, cell="hex8"):
     """Writes the cylinder pair with contact element edge hc (uniform over `fine` mm, default
-    4 half-widths) and its scene; returns the scene file."""
+    4 half-widths) and its scene; returns the scene file. cell "tet10": the same hexes as 6 tets
+    each with their midside nodes on the arcs (tet10_part); "tet4": those tets alone."""
     os.makedirs(outdir, exist_ok=True)
     fine = fine if fine is not None else 0.75
     p2, quads = quarter_disc(hc, fine)
-    meshgen.write_parts(os.path.join(outdir, "hertz.msh"), [extrude("upper", p2, quads, LENGTH), extrude("lower", p2, quads, LENGTH, flip_y=True)])
+    parts = [extrude("upper", p2, quads, LENGTH), extrude("lower", p2, quads, LENGTH, flip_y=True)]
+    if cell in ("tet10", "tet4"):
+        parts = [tet10_part(parts[0], np.array([0.0, R])), tet10_part(parts[1], np.array([0.0, -R]))]
+    if cell == "tet4":  # the same tets without their midside nodes
+        parts = [meshgen.Part(p.name, "tet4", p.points[:p.cells[:, :4].max() + 1], p.cells[:, :4],
+                              {k: f[:, :3] for k, f in p.surfaces.items()}) for p in parts]
+    meshgen.write_parts(os.path.join(outdir, "hertz.msh"), parts)
     return prepare(outdir, "hertz", cylinders_scene(analysis, dt, final_time))
 
 

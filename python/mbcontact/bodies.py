@@ -480,11 +480,6 @@ def face_labels(scene, bodies):
         for column, side in ((1, "master"), (2, "slave")):
             sides[side] = _union_faces(getattr(c, side), faces)
             for i, index in sides[side].items():
-                if np.any(bodies[i].boundary_nv[index] == 6):
-                    raise InputError(f"couple k={c.k}: the {side} surface ({', '.join(getattr(c, side))}) has 6-node "
-                                     f"faces of tet10 body '{bodies[i].name}': contact on quadratic faces is not "
-                                     "available (only their corners would touch: a wrong answer); mesh a body in "
-                                     "contact with linear cells (tet4, hex8, wedge6, pyr5)")
                 taken = labels[i][index, column]
                 if np.any(taken):
                     raise InputError(f"couples: faces of body '{bodies[i].name}' are {side} faces of "

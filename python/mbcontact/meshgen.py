@@ -46,8 +46,8 @@ def _kuhn_tets():
 
 
 _CELL_CORNERS = {"hex8": [_HEX_CORNERS], "tet4": _kuhn_tets()}
-_MESHIO_TYPE = {"hex8": "hexahedron", "tet4": "tetra"}
-_FACE_TYPE = {"hex8": "quad", "tet4": "triangle"}
+_MESHIO_TYPE = {"hex8": "hexahedron", "tet4": "tetra", "tet10": "tetra10"}
+_FACE_TYPE = {"hex8": "quad", "tet4": "triangle", "tet10": "triangle6"}
 
 
 def _box_arrays(lo, hi, n, cell, perturb, seed, face_perturb=None):

@@ -85,8 +85,9 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
 }
 
 /* Record of one face, packed in reals for one Allgatherv: couple index, side (0 master,
-   1 slave), body, nv, then per vertex: x0[3], x[3], row. */
-#define FACE_REC (4 + 7 * MBC_MAX_FACE_NODES)
+   1 slave), body, nv (3, 4, or 6: a tet10's tri6), then per node: x0[3], x[3], row (unused
+   slots zero: the canonical order compares whole records). */
+#define FACE_REC (4 + 7 * MBC_MAX_WEIGHT_NODES)
 
 /* Faces of this rank's part of a body carrying a contact label, oriented outward. */
 static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscReal **buf, PetscInt *n, PetscInt *cap)
@@ -143,12 +144,12 @@ static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscR
         if (PetscBTLookup(notmine, f)) continue;
         /* its nodes wound outward (a rigid surface's: towards the couple's other side, from the prep) */
         PetscCall(MBCBodyFaceNodes(body, f, x, pts, X, &nv, &ncorner));
-        nv = ncorner;
         if (*n == *cap) {
           *cap = 2 * (*cap) + 64;
           PetscCall(PetscRealloc((size_t)(*cap) * FACE_REC * sizeof(PetscReal), buf));
         }
-        r    = &(*buf)[(*n)++ * FACE_REC];
+        r = &(*buf)[(*n)++ * FACE_REC];
+        PetscCall(PetscArrayzero(r, FACE_REC));
         r[0] = ci;
         r[1] = side;
         r[2] = body->index;
@@ -192,19 +193,32 @@ static int CompareNodeRef(const void *a, const void *b)
   return 0;
 }
 
+/* The 4 sub-triangles of a tri6 (corners c0 c1 c2, midside nodes m01 m12 m20 at 3 4 5), wound as
+   the tri6: its three corners' triangles, then the middle one. */
+static const PetscInt Tri6Sub[4][3] = {
+  {0, 3, 5},
+  {3, 1, 4},
+  {5, 4, 2},
+  {3, 4, 5}
+};
+
 /* Builds one side of a couple from the gathered records: nodes in canonical order (body, then
-   reference coordinates), faces in record order after sorting the records canonically. */
+   reference coordinates), faces in record order after sorting the records canonically, a tri6
+   as its 4 sub-triangles (MBCSurface's fqnode). */
 static PetscErrorCode SurfaceFromRecords(MBCSurface *s, const PetscReal *rec, PetscInt nrec, PetscInt ci, PetscInt side)
 {
-  NodeRef *refs;
-  PetscInt nrefs = 0, nfaces = 0, *map, f = 0;
+  NodeRef  *refs;
+  PetscInt  nrefs = 0, nfaces = 0, *map, f = 0;
+  PetscBool quad = PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscCall(MBCSurfaceReset(s));
   for (PetscInt i = 0; i < nrec; i++)
     if ((PetscInt)rec[i * FACE_REC] == ci && (PetscInt)rec[i * FACE_REC + 1] == side) {
-      nfaces++;
-      nrefs += (PetscInt)rec[i * FACE_REC + 3];
+      const PetscInt nv = (PetscInt)rec[i * FACE_REC + 3];
+      nfaces += nv == 6 ? 4 : 1;
+      nrefs += nv;
+      quad = (PetscBool)(quad || nv == 6);
     }
   PetscCall(PetscMalloc1(nrefs, &refs));
   nrefs = 0;
@@ -214,7 +228,7 @@ static PetscErrorCode SurfaceFromRecords(MBCSurface *s, const PetscReal *rec, Pe
     for (PetscInt j = 0; j < (PetscInt)r[3]; j++) refs[nrefs++] = (NodeRef){(PetscInt)r[2], &r[4 + 7 * j], i, j};
   }
   qsort(refs, (size_t)nrefs, sizeof(NodeRef), CompareNodeRef);
-  PetscCall(PetscMalloc1(nrec * MBC_MAX_FACE_NODES, &map)); /* (record, slot) -> node */
+  PetscCall(PetscMalloc1(nrec * MBC_MAX_WEIGHT_NODES, &map)); /* (record, slot) -> node */
   for (PetscInt i = 0; i < nrefs; i++) {
     if (i == 0 || CompareNodeRef(&refs[i - 1], &refs[i])) s->nnodes++;
   }
@@ -230,17 +244,23 @@ static PetscErrorCode SurfaceFromRecords(MBCSurface *s, const PetscReal *rec, Pe
         s->x[3 * v + d]  = r[3 + d];
       }
     }
-    map[refs[i].rec * MBC_MAX_FACE_NODES + refs[i].slot] = v;
+    map[refs[i].rec * MBC_MAX_WEIGHT_NODES + refs[i].slot] = v;
   }
   s->nfaces = nfaces;
   PetscCall(PetscMalloc3(nfaces, &s->fnv, MBC_MAX_FACE_NODES * nfaces, &s->fnode, nfaces, &s->fbody));
+  if (quad) PetscCall(PetscMalloc2(6 * nfaces, &s->fqnode, 3 * nfaces, &s->fqslot));
   for (PetscInt i = 0; i < nrec; i++) {
-    const PetscReal *r = &rec[i * FACE_REC];
+    const PetscReal *r  = &rec[i * FACE_REC];
+    const PetscInt  *mp = &map[i * MBC_MAX_WEIGHT_NODES], nv = (PetscInt)r[3];
     if ((PetscInt)r[0] != ci || (PetscInt)r[1] != side) continue;
-    s->fnv[f]   = (PetscInt)r[3];
-    s->fbody[f] = (PetscInt)r[2];
-    for (PetscInt j = 0; j < MBC_MAX_FACE_NODES; j++) s->fnode[MBC_MAX_FACE_NODES * f + j] = j < s->fnv[f] ? map[i * MBC_MAX_FACE_NODES + j] : -1;
-    f++;
+    for (PetscInt t = 0; t < (nv == 6 ? 4 : 1); t++, f++) {
+      s->fnv[f]   = nv == 6 ? 3 : nv;
+      s->fbody[f] = (PetscInt)r[2];
+      for (PetscInt j = 0; j < MBC_MAX_FACE_NODES; j++) s->fnode[MBC_MAX_FACE_NODES * f + j] = j >= s->fnv[f] ? -1 : nv == 6 ? mp[Tri6Sub[t][j]] : mp[j];
+      if (!quad) continue;
+      for (PetscInt j = 0; j < 6; j++) s->fqnode[6 * f + j] = nv == 6 ? mp[j] : -1;
+      for (PetscInt j = 0; j < 3; j++) s->fqslot[3 * f + j] = nv == 6 ? Tri6Sub[t][j] : -1;
+    }
   }
   PetscCall(PetscFree(map));
   PetscCall(PetscFree(refs));

@@ -304,7 +304,7 @@ static PetscErrorCode FaceListAdd(PetscInt **faces, PetscInt *n, PetscInt *cap, 
    The slave faces of a master face are found by a flood from the faces around its nodes' search
    candidates over the faces that share a vertex with a cut one, so none is missed however fine the
    slave mesh (brute: every slave face, for -mbc_contact_check_search). */
-static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, PetscBool brute, PetscReal area[], PetscReal covered[], PetscReal gsum[], PetscReal nsum[], EntryList *sl, PetscReal qmin[])
+static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, PetscBool brute, PetscReal area[], PetscReal covered[], PetscReal gsum[], PetscReal nsum[], EntryList *sl, EntryList *mq, PetscReal qmin[])
 {
   MBCSurface *m = &c->master, *s = &c->slave;
   PetscInt   *pointOf, *pairOf, *mark, nface = 0, *faces = NULL, maxfaces = 0;
@@ -321,9 +321,11 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
   for (PetscInt f = 0; f < m->nfaces; f++) {
     const PetscInt *fv = &m->fnode[MBC_MAX_FACE_NODES * f];
     const PetscInt  nv = m->fnv[f];
-    PetscBool       any = PETSC_FALSE;
+    const PetscBool quad = (PetscBool)(m->fqnode && m->fqnode[6 * f] >= 0);
+    PetscBool       any  = PETSC_FALSE;
     MBCFacePlane    P;
-    PetscReal       amaster, rf;
+    PetscReal       amaster, rf, mw[MBC_MAX_FACE_NODES][MBC_MAX_WEIGHT_NODES] = {{0}};
+    PetscInt        mn[MBC_MAX_WEIGHT_NODES], nmw = 0;
 
     for (PetscInt i = 0; i < nv; i++) any = (PetscBool)(any || pointOf[fv[i]] >= 0);
     if (!any) continue;
@@ -337,6 +339,11 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
     if (!integrate) continue;
     MBCSurfaceFacePlane(m, f, &P);
     amaster = PetscAbsReal(PolyArea2(P.Y, nv));
+    if (quad) { /* a tri6's sub-triangle: the point's master side is int psi_i N6_j over its pieces, not its node alone */
+      const PetscReal w0[3] = {1, 0, 0};
+      PetscReal       W[MBC_MAX_WEIGHT_NODES];
+      nmw = MBCSurfaceFaceWeights(m, f, w0, mn, W);
+    }
     /* seeds: the slave faces around the search candidates of the face's master nodes and the faces of their points */
     nface = 0;
     if (brute)
@@ -360,9 +367,9 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
       }
     for (PetscInt q = 0; q < nface; q++) {
       const PetscInt  g = faces[q], ng = s->fnv[g], *gv = &s->fnode[MBC_MAX_FACE_NODES * g];
-      PetscReal       Z[MBC_MAX_FACE_NODES][2], W[MBC_MAX_CLIP][2], e[3], apiece, sw[MBC_MAX_FACE_NODES][MBC_MAX_FACE_NODES];
-      PetscBool       hit[MBC_MAX_FACE_NODES][MBC_MAX_FACE_NODES];
-      PetscInt        nw = nv;
+      PetscReal       Z[MBC_MAX_FACE_NODES][2], W[MBC_MAX_CLIP][2], e[3], apiece, sw[MBC_MAX_FACE_NODES][MBC_MAX_WEIGHT_NODES];
+      PetscBool       hit[MBC_MAX_FACE_NODES][MBC_MAX_WEIGHT_NODES];
+      PetscInt        nw = nv, gn[MBC_MAX_WEIGHT_NODES], ngw;
       MBCFacePlane    Pg;
 
       if (!(MBCDot(&s->fnormal[3 * g], P.n) < 0)) continue; /* the slave face must face the master face */
@@ -397,20 +404,37 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
       G[0] /= 3 * g2, G[1] /= 3 * g2;
       /* the slave weights of the piece summed here, entered once per (point, slave node) */
       MBCSurfaceFacePlane(s, g, &Pg);
+      {
+        const PetscReal w0[MBC_MAX_FACE_NODES] = {1, 0, 0, 0};
+        PetscReal       Wg[MBC_MAX_WEIGHT_NODES];
+        ngw = MBCSurfaceFaceWeights(s, g, w0, gn, Wg); /* the slave nodes the piece's weights reach */
+      }
       for (PetscInt i = 0; i < nv; i++)
-        for (PetscInt j = 0; j < ng; j++) sw[i][j] = 0, hit[i][j] = PETSC_FALSE;
+        for (PetscInt j = 0; j < ngw; j++) sw[i][j] = 0, hit[i][j] = PETSC_FALSE;
       for (PetscInt t = 0; t < nw; t++) {
         const PetscReal *w0 = W[t], *w1 = W[(t + 1) % nw];
         const PetscReal  a2 = (w0[0] - G[0]) * (w1[1] - G[1]) - (w1[0] - G[0]) * (w0[1] - G[1]);
         for (PetscInt a = 0; a < nq; a++)
           for (PetscInt b = 0; b < nq; b++) {
             const PetscReal ua = xq[a], vb = xq[b] * (1 - xq[a]);
-            PetscReal       y[2], N[4], psi[4], x[3], nrm[3], ratio, dA, qual;
+            PetscReal       y[2], N[4], psi[4], x[3], nrm[3], ratio, dA, qual, Ws[MBC_MAX_WEIGHT_NODES], Wm[MBC_MAX_WEIGHT_NODES];
+            PetscInt        ns[MBC_MAX_WEIGHT_NODES];
             MBCContactPoint cp;
             for (PetscInt d = 0; d < 2; d++) y[d] = G[d] + ua * (w0[d] - G[d]) + vb * (w1[d] - G[d]);
             MasterAt(m, f, &P, y, N, x, nrm, &ratio);
             dA = wq[a] * wq[b] * (1 - xq[a]) * a2 * ratio;
             if (!MBCCoupleProjectOnFacePlane(c, x, nrm, g, &Pg, PETSC_TRUE, &cp, &qual)) continue;
+            (void)MBCSurfaceFaceWeights(s, g, cp.w, ns, Ws);
+            if (quad) (void)MBCSurfaceFaceWeights(m, f, N, mn, Wm);
+            if (quad || ngw == 6) { /* the gap between the quadratic faces' points the weights give: H^T du moves it exactly */
+              PetscReal dx[3];
+              for (PetscInt d = 0; d < 3; d++) {
+                dx[d] = quad ? 0 : x[d];
+                for (PetscInt j = 0; j < nmw; j++) dx[d] += Wm[j] * m->x[3 * mn[j] + d];
+                for (PetscInt j = 0; j < ngw; j++) dx[d] -= Ws[j] * s->x[3 * ns[j] + d];
+              }
+              cp.gap = MBCDot(dx, cp.n);
+            }
             for (PetscInt i = 0; i < nv; i++) {
               psi[i] = 0;
               for (PetscInt j = 0; j < nv; j++) psi[i] += C[MBC_MAX_FACE_NODES * i + j] * N[j];
@@ -422,15 +446,20 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
               nsum[k] += N[i] * dA * rf; /* reference area */
               covered[k] += psi[i] * dA;
               gsum[k] += psi[i] * dA * cp.gap;
-              for (PetscInt j = 0; j < cp.nv; j++)
-                if (cp.w[j] != 0) sw[i][j] += psi[i] * cp.w[j] * dA, hit[i][j] = PETSC_TRUE;
+              for (PetscInt j = 0; j < ngw; j++)
+                if (Ws[j] != 0) sw[i][j] += psi[i] * Ws[j] * dA, hit[i][j] = PETSC_TRUE;
+              for (PetscInt j = 0; j < nmw; j++) mw[i][j] += psi[i] * Wm[j] * dA;
             }
           }
       }
       for (PetscInt i = 0; i < nv; i++)
-        for (PetscInt j = 0; j < ng; j++)
-          if (hit[i][j]) PetscCall(EntryAdd(sl, (PetscInt64)pointOf[fv[i]] * s->nnodes + gv[j], sw[i][j]));
+        for (PetscInt j = 0; j < ngw; j++)
+          if (hit[i][j]) PetscCall(EntryAdd(sl, (PetscInt64)pointOf[fv[i]] * s->nnodes + gn[j], sw[i][j]));
     }
+    for (PetscInt i = 0; i < nv && mq; i++)
+      if (pointOf[fv[i]] >= 0)
+        for (PetscInt j = 0; j < nmw; j++)
+          if (mw[i][j] != 0) PetscCall(EntryAdd(mq, (PetscInt64)pointOf[fv[i]] * m->nnodes + mn[j], mw[i][j]));
   }
   PetscCall(PetscFree(faces));
   PetscCall(PetscFree2(xq, wq));
@@ -449,27 +478,49 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
 {
   MBCSurface *m = &c->master, *s = &c->slave;
   PetscReal  *area, *covered, *nsum, *gsum;
-  EntryList   ml = {NULL, 0, 0}, sl = {NULL, 0, 0};
+  PetscBool  *quad;
+  EntryList   ml = {NULL, 0, 0}, sl = {NULL, 0, 0}, mq = {NULL, 0, 0};
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(MBC_ContactIntegrate, 0, 0, 0, 0));
   PetscCall(MBCCoupleIntegrateReset(c));
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
-  PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
+  PetscCall(Integrate(c, integrate, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, &mq, NULL));
   /* a point kept at its node (PointIntegrated): its integrated entries are dropped */
   for (size_t e = 0; e < sl.cap; e++) {
     const PetscInt k = sl.e[e].key < 0 ? -1 : (PetscInt)(sl.e[e].key / s->nnodes);
     if (k >= 0 && !PointIntegrated(covered[k], area[k])) sl.e[e].w = 0;
   }
+  /* a tri6's point: its master side is the quadratic face's (the entries sum to covered[k]) */
+  PetscCall(PetscCalloc1(c->npoints + 1, &quad));
+  for (size_t e = 0; e < mq.cap; e++) {
+    const PetscInt k = mq.e[e].key < 0 ? -1 : (PetscInt)(mq.e[e].key / m->nnodes);
+    if (k < 0 || !PointIntegrated(covered[k], area[k])) continue;
+    quad[k] = PETSC_TRUE;
+    PetscCall(EntryAdd(&ml, mq.e[e].key, mq.e[e].w));
+  }
   for (PetscInt k = 0; k < c->npoints; k++) { /* master side: the node alone (dual basis) */
     MBCContactPoint *p = &c->points[k];
     const PetscBool  integrated = PointIntegrated(covered[k], area[k]);
     p->area                     = nsum[k] > 0 ? nsum[k] : area[k];
-    PetscCall(EntryAdd(&ml, (PetscInt64)k * m->nnodes + p->master, integrated ? covered[k] : area[k]));
+    if (!quad[k]) PetscCall(EntryAdd(&ml, (PetscInt64)k * m->nnodes + p->master, integrated ? covered[k] : area[k]));
     if (integrated) continue;
     covered[k] = area[k];
-    for (PetscInt j = 0; j < p->nv; j++) PetscCall(EntryAdd(&sl, (PetscInt64)k * s->nnodes + s->fnode[MBC_MAX_FACE_NODES * p->face + j], p->w[j] * area[k]));
-    gsum[k] = p->gap * area[k];
+    { /* at the node: the slave weights at its projection (a tri6's quadratic ones, the gap to that point) */
+      PetscInt  wn[MBC_MAX_WEIGHT_NODES];
+      PetscReal W[MBC_MAX_WEIGHT_NODES], gap = p->gap;
+      const PetscInt nw = MBCSurfaceFaceWeights(s, p->face, p->w, wn, W);
+      if (nw == 6) {
+        PetscReal dx[3];
+        for (PetscInt d = 0; d < 3; d++) {
+          dx[d] = m->x[3 * p->master + d];
+          for (PetscInt j = 0; j < nw; j++) dx[d] -= W[j] * s->x[3 * wn[j] + d];
+        }
+        gap = MBCDot(dx, p->n);
+      }
+      for (PetscInt j = 0; j < nw; j++) PetscCall(EntryAdd(&sl, (PetscInt64)k * s->nnodes + wn[j], W[j] * area[k]));
+      gsum[k] = gap * area[k];
+    }
   }
   for (PetscInt k = 0; k < c->npoints; k++) PetscCheck(covered[k] > 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Contact point %" PetscInt_FMT " of couple %" PetscInt_FMT " has no area", k, c->k);
   PetscCall(EntryCSR(&ml, c->npoints, m->nnodes, covered, &c->moff, &c->mnode, &c->mw));
@@ -478,6 +529,8 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
   for (PetscInt k = 0; k < c->npoints; k++) c->igap[k] = gsum[k] / covered[k];
   PetscCall(PetscFree(ml.e));
   PetscCall(PetscFree(sl.e));
+  PetscCall(PetscFree(mq.e));
+  PetscCall(PetscFree(quad));
   PetscCall(PetscFree4(area, covered, gsum, nsum));
   PetscCall(PetscLogEventEnd(MBC_ContactIntegrate, 0, 0, 0, 0));
   PetscFunctionReturn(0);
@@ -494,8 +547,8 @@ PetscErrorCode MBCCoupleCheckIntegrate(MBCCouple *c, PetscInt nq, PetscInt *miss
   *missed = -1;
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
   PetscCall(PetscCalloc4(c->npoints + 1, &area2, c->npoints + 1, &covered2, c->npoints + 1, &gsum2, c->npoints + 1, &nsum2));
-  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL));
-  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_TRUE, area2, covered2, gsum2, nsum2, &sl2, NULL));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL, NULL));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_TRUE, area2, covered2, gsum2, nsum2, &sl2, NULL, NULL));
   for (PetscInt k = 0; k < c->npoints && *missed < 0; k++)
     if (PetscAbsReal(covered[k] - covered2[k]) > 1e-9 * area[k]) {
       *missed = k;
@@ -524,7 +577,7 @@ PetscErrorCode MBCCoupleInterference(MBCCouple *c, PetscInt nq, PetscReal qmin[]
   PetscFunctionBegin;
   PetscCall(PetscCalloc4(c->npoints + 1, &area, c->npoints + 1, &covered, c->npoints + 1, &gsum, c->npoints + 1, &nsum));
   for (PetscInt k = 0; k < c->npoints; k++) qmin[k] = c->points[k].gap;
-  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, qmin));
+  PetscCall(Integrate(c, PETSC_TRUE, nq, PETSC_FALSE, area, covered, gsum, nsum, &sl, NULL, qmin));
   for (PetscInt k = 0; k < c->npoints; k++)
     if (PointIntegrated(covered[k], area[k])) qmin[k] = PetscMin(qmin[k], gsum[k] / covered[k]);
   PetscCall(PetscFree(sl.e));

@@ -13,6 +13,7 @@ PetscErrorCode MBCSurfaceReset(MBCSurface *s)
   PetscCall(PetscFree2(s->fnormal, s->fcenter));
   PetscCall(PetscFree2(s->n2foff, s->n2f));
   PetscCall(PetscFree(s->ffree));
+  PetscCall(PetscFree2(s->fqnode, s->fqslot));
   PetscCall(PetscMemzero(s, sizeof(*s)));
   PetscFunctionReturn(0);
 }

@@ -1149,7 +1149,7 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "decomposition (METIS on the body graph) onto %d ranks: largest rank work (DOFs^4/3, the factor's entries) %.3f of the mean, %g contact faces between bodies on different ranks\n", P, (double)s->decomp_imbalance, (double)s->decomp_cut));
   }
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    const PetscInt ndof = 3 * s->scene->bodies[b].num_vertices; /* P1/Q1 displacement */
+    const PetscInt ndof = 3 * s->scene->bodies[b].num_nodes; /* the displacement: 3 per node (tet10: its midside nodes too) */
     PetscInt       nbc  = 0, element = 0;
     if (s->bodies[b]) {
       nbc     = s->bodies[b]->nbc;

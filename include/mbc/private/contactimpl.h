@@ -26,7 +26,42 @@ typedef struct {
                                corner's node within the feature angle of this face (MBC_FEATURE_COS): the smoothed surface's normal there */
   PetscInt  *n2foff, *n2f;  /* node -> faces (CSR) */
   PetscBool *ffree;         /* per face edge i (vertex i to i+1): on the surface's free boundary (no other face shares it) */
+  /* a tet10 body's 6-node faces enter as their 4 flat sub-triangles (corner ones, then the middle
+     one; docs/design.md): per face, the tri6's nodes (corners, then the midside nodes of
+     (c0 c1) (c1 c2) (c2 c0); -1 for a linear face) and its 3 vertices' places among them. NULL
+     without tri6 faces. The geometry (search, projection, mortar pieces) is the sub-triangles';
+     the weights that couple the bodies are the tri6's quadratic shape functions there
+     (MBCSurfaceFaceWeights), so a uniform pressure gives the quadratic face's consistent loads. */
+  PetscInt *fqnode, *fqslot;
 } MBCSurface;
+
+#define MBC_MAX_WEIGHT_NODES 6 /* nodes a face's weights reach: a tri6's */
+
+/* The nodes and weights of face f of s that reproduce the point with weights w on its vertices:
+   w itself on a linear face, the tri6's quadratic shape functions at that point on a
+   sub-triangle. Returns their count. */
+static inline PetscInt MBCSurfaceFaceWeights(const MBCSurface *s, PetscInt f, const PetscReal w[], PetscInt node[], PetscReal W[])
+{
+  static const PetscReal B[6][3] = {
+    {1,   0,   0  },
+    {0,   1,   0  },
+    {0,   0,   1  },
+    {0.5, 0.5, 0  },
+    {0,   0.5, 0.5},
+    {0.5, 0,   0.5}
+  };
+  PetscReal L[3] = {0, 0, 0};
+
+  if (!s->fqnode || s->fqnode[6 * f] < 0) {
+    for (PetscInt i = 0; i < s->fnv[f]; i++) node[i] = s->fnode[MBC_MAX_FACE_NODES * f + i], W[i] = w[i];
+    return s->fnv[f];
+  }
+  for (PetscInt i = 0; i < 3; i++)
+    for (PetscInt d = 0; d < 3; d++) L[d] += w[i] * B[s->fqslot[3 * f + i]][d];
+  for (PetscInt i = 0; i < 3; i++) W[i] = L[i] * (2 * L[i] - 1), W[3 + i] = 4 * L[i] * L[(i + 1) % 3];
+  for (PetscInt i = 0; i < 6; i++) node[i] = s->fqnode[6 * f + i];
+  return 6;
+}
 
 typedef struct {
   PetscInt  master;                          /* master node */
