@@ -247,6 +247,11 @@ def build_body(body, mesh):
     dims = set()
     for region_name in body.regions:
         region = mesh.regions.get(region_name)
+        if region is None and region_name in mesh.node_groups:  # e.g. a beam model's GROUP_NO
+            raise InputError(f"{where}: '{region_name}' is a node group (MED GROUP_NO) of {mesh.describe()}, "
+                             "not a group of cells: a body is made of volume regions (there: "
+                             f"{mesh.region_list(3)}; surface regions: {mesh.region_list(2)}; line regions: "
+                             f"{mesh.region_list(1)}); node groups name nodes for dirichlet, initial, springs")
         if region is None:
             raise InputError(f"{where}: region '{region_name}' not found in {mesh.describe()}; "
                              f"volume regions there: {mesh.region_list(3)}; "

@@ -1,8 +1,10 @@
 """Cells beyond tet4 and hex8 and meshes of other codes: tet10 and mixed (hex8, pyr5, wedge6)
 patch tests, tet10 on a curved boundary (Lame's thick cylinder), contact on a mixed mesh's
 triangles and quads, a MED file with its cell and node groups and mirrored cells (oriented and
-reported), and contact on tet10's 6-node faces (the patch test against hex8, tet4 and tet10, either
-side master; two tet10 bars' impact). Small meshes: a second or two each."""
+reported; a node group given as a body refused as such), and contact on tet10's 6-node faces
+(the patch test against hex8, tet4 and tet10, either side master; two tet10 bars' impact). Small
+meshes: a second or two each."""
+import os
 import subprocess
 
 import meshio
@@ -10,7 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import PREP, env, prep, result, solve
+from conftest import PREP, ROOT, env, prep, result, solve
 from mbcontact import meshgen
 from mbcontact.results import read_body, read_contact, read_csv
 
@@ -260,6 +262,20 @@ def test_med_groups_and_mirrored_cells(tmp_path):
     for key in ("top_ux", "top_uy", "top_uz"):
         assert abs(p[key][-1] - q[key][-1]) < 1e-9 * abs(p["top_uz"][-1])
     assert abs(c["normal_force"][-1] - d["normal_force"][-1]) < 1e-9 and abs(d["normal_force"][-1] - P) < 1e-8
+
+
+def test_med_node_group_as_a_body_is_named(tmp_path):
+    """Code_Aster's SDNL111A mesh (meshes/code_aster/sdnl111a.mmed: beams, SEG2 cells in no group,
+    the bars named by node groups only): a body given its node group POUTRE1 is refused as a node
+    group, not as a region "not found" in a mesh whose regions list is empty."""
+    mesh = os.path.join(ROOT, "meshes", "code_aster", "sdnl111a.mmed")
+    yml = tmp_path / "s.yaml"
+    yml.write_text(yaml.safe_dump({"meshes": {"m": mesh}, "bodies": {"bar": {"mesh": "m", "regions": "POUTRE1",
+                                                                               "material": {"E": 2e11}}},
+                                   "analysis": {"type": "static"}}))
+    r = subprocess.run([PREP, str(yml), "--check"], capture_output=True, text=True, env=env())
+    assert r.returncode == 1 and "bodies.bar.regions: 'POUTRE1' is a node group (MED GROUP_NO)" in r.stderr, r.stderr
+    assert "a body is made of volume regions (there: none" in r.stderr
 
 
 def test_mirrored_gmsh_cells_oriented(tmp_path):
