@@ -320,42 +320,34 @@ def oscillator(t_end, ramp=0.07, dt=1e-5):
 
 
 def test_sdnv104_friction_oscillator_with_springs(tmp_path):
-    """SDNV104E: a steel pad (E 210 GPa, nu 0, rho 7000, plane strain) on a base held in place
-    (here a rigid body), pressed by 70 kPa on top, pushed sideways by 200 kPa, both ramped over
-    0.07 s, held back by two discrete springs of 12 kN/m (RESLAT, K_T_D_L), Coulomb mu = 0.3, HHT
-    (alpha -0.3, the .comm's SCHEMA='HHT'), the .comm's step 0.01 s to 3.5 s. Its mesh is
-    quadratic (QUAD8: hex20 once extruded, not supported), so the pad is rebuilt as the MED's
-    PATIN, 1 m x 1 m (1 m thick), the size for which the analytic references hold (2 (F - mu N)
-    / k = 14.92 m at T / 2 = pi sqrt(m / k) = 1.70 s, 2 (F + mu N) / k - 14.92 = 3.50 m at T;
-    with m = 7000 kg, k = 24 kN/m). The springs act where the MED's RESLAT puts them: at the pad's
-    corners P2, P3 (their coordinates read from sdnv104e.mmed; 2 nodes through the slab, 6 kN/m
-    each). DX(A) within the .comm's PRECISION (5 %) of VALE_REFE (measured -0.08 % and +0.39 %;
-    Code_Aster's own -0.2 % and +1.4 %) and within 0.5 % of the 1-DOF oscillator's own solution
-    with the ramp (measured 0.00 % and +0.02 %: the pad is rigid next to the springs, and HHT's
-    damping at dt = T / 340 is far below that)."""
-    # RESLAT: the two springs (SEG2 K_T_D_L, 12 kN/m each) from the pad's corners P2, P3 to R1, R2
-    # (held) in sdnv104e.mmed: node-to-ground at those corners, on both faces of the slab
-    groups = aster_node_groups("sdnv104e")
-    springs = {name: {"box": {"lo": [float(v) - 1e-6 for v in groups[name][0, :2]] + [-1e-6],
-                              "hi": [float(v) + 1e-6 for v in groups[name][0, :2]] + [1 + 1e-6]}, "bodies": ["patin"]}
-               for name in ("P2", "P3")}
-    meshgen.box(str(tmp_path / "patin.msh"), (0, 0, 0), (1, 1, 1), n=(4, 4, 1), volume_name="patin")
-    rename_sides(tmp_path / "patin.msh", "patin")
-    meshgen.box(str(tmp_path / "bati.msh"), (-1, -0.5, 0), (20, 0, 1), n=(21, 1, 1), volume_name="bati")
-    rename_sides(tmp_path / "bati.msh", "bati")
+    """SDNV104E on its own mesh: a steel pad PATIN (E 210 GPa, nu 0, rho 7000, plane strain) on a
+    base BATI held in place (here a rigid body), pressed by 70 kPa on FSUP, pushed sideways by
+    200 kPa on FLAT, both ramped over 0.07 s, held back by the two discrete springs RESLAT of
+    12 kN/m (K_T_D_L) from the pad's corners P2, P3 to R1, R2 (held: node-to-ground springs on P2,
+    P3), Coulomb mu = 0.3 between LESC and LMAI, HHT (alpha -0.3, the .comm's SCHEMA='HHT'), the
+    .comm's step 0.01 s to 3.5 s. The mesh is quadratic (QUAD8, SEG3; hex20 once extruded, not
+    supported): `extrude: {linear: true}` takes its cells by their corners, the pad 5 x 5 hex8, 1 m
+    thick. The pad is 1 m x 1 m, the size for which the analytic references hold (2 (F - mu N) /
+    k = 14.92 m at T / 2 = pi sqrt(m / k) = 1.70 s, 2 (F + mu N) / k - 14.92 = 3.50 m at T; with
+    m = 7000 kg, k = 24 kN/m). DX(A) within the .comm's PRECISION (5 %) of VALE_REFE (measured
+    -0.08 % and +0.39 %, as on the 4 x 4 pad rebuilt before; Code_Aster's own -0.2 % and +1.4 %)
+    and within 0.5 % of the 1-DOF oscillator's own solution with the ramp (measured 0.00 % and
+    +0.02 %: the pad is rigid next to the springs, and HHT's damping at dt = T / 340 is far below
+    that)."""
     ramp = {"table": [[0, 0], [0.07, 1], [10, 1]]}
     h5 = prep(tmp_path, {
-        "meshes": {"p": "patin.msh", "b": "bati.msh"},
-        "bodies": {"patin": {"mesh": "p", "regions": "patin", "material": {"E": 2.1e11, "nu": 0.0, "density": 7000.0}},
-                   "bati": {"mesh": "b", "regions": "bati", "rigid": True}},
-        "couples": [{"master": "patin_ymin", "slave": "bati_ymax", "mu": MU_PAD}],  # LESC on LMAI
+        "meshes": {"m": {"file": aster_mesh("sdnv104e"), "extrude": {"length": 1.0, "layers": 1, "linear": True}}},
+        "bodies": {"patin": {"mesh": "m", "regions": "PATIN", "material": {"E": 2.1e11, "nu": 0.0, "density": 7000.0}},
+                   "bati": {"mesh": "m", "regions": "BATI", "rigid": True}},
+        "couples": [{"master": "LESC", "slave": "LMAI", "mu": MU_PAD}],  # GROUP_MA_ESCL LESC: mbcontact's master
         "dirichlet": [{"body": "bati", "components": "all"}, {"body": "patin", "components": ["z"]}],
-        "node_sets": springs,
-        "springs": [{"nodes": name, "stiffness": [0.5 * K_SPRINGS / 2, 0, 0]} for name in springs],  # 2 nodes each
-        "loads": [{"kind": "pressure", "surface": "patin_ymax", "value": N_TOP, "time": ramp},   # FSUP
-                  {"kind": "pressure", "surface": "patin_xmin", "value": F_LAT, "time": ramp}],  # FLAT
+        # RESLAT: each spring's node on both faces of the slab, half its stiffness each
+        "springs": [{"nodes": name, "stiffness": [0.5 * K_SPRINGS / 2, 0, 0]} for name in ("P2", "P3")],
+        "loads": [{"kind": "pressure", "surface": "FSUP", "value": N_TOP, "time": ramp},
+                  {"kind": "pressure", "surface": "FLAT", "value": F_LAT, "time": ramp}],
         "analysis": {"type": "dynamic", "dt": 0.01, "final_time": 3.5, "scheme": "hht", "alpha": -0.3},
-        "output": {"every": 1000000, "points": {"A": {"x": [0, 1, 0], "body": "patin"}}},
+        "output": {"every": 1000000, "points": {"A": {"x": [float(v) for v in aster_node_groups("sdnv104e")["A"][0]],
+                                                      "body": "patin"}}},
     }, name="sdnv104")
     solve(h5)
     p = point_history(result(h5, "_points.csv"), "A")

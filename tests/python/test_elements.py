@@ -295,6 +295,29 @@ def test_mirrored_gmsh_cells_oriented(tmp_path):
     assert_uniform(tmp_path / "s.h5", 4)
 
 
+def test_extruded_quadratic_2d_mesh_taken_linear(tmp_path):
+    """Code_Aster's SDNV104E mesh (meshes/code_aster/sdnv104e.mmed: QUAD8 and SEG3 cells): extruded
+    as it is, it is refused (hex20 does not exist here) with the way out named; with `linear: true`
+    its cells are taken by their corners (one note, each cell counted once though in several
+    groups): the pad PATIN's 25 quad8 become 25 hex8 on 2 x 36 corner nodes, its line LESC 5 quads."""
+    scene = {"meshes": {"m": {"file": os.path.join(ROOT, "meshes", "code_aster", "sdnv104e.mmed"),
+                              "extrude": {"length": 1.0}}},
+             "bodies": {"patin": {"mesh": "m", "regions": "PATIN", "material": {"E": 2.1e11}}},
+             "dirichlet": [{"surface": "LESC"}], "analysis": {"type": "static"}}
+    runs = []
+    for linear in (False, True):
+        scene["meshes"]["m"]["extrude"]["linear"] = linear
+        yml = tmp_path / "s.yaml"
+        yml.write_text(yaml.safe_dump(scene))
+        runs.append(subprocess.run([PREP, str(yml), "--check"], capture_output=True, text=True, env=env()))
+    (refused, taken) = runs
+    assert refused.returncode == 1 and "has cells of type 'quad8'" in refused.stderr, refused.stderr
+    assert "`linear: true` takes quadratic ones by their corners" in refused.stderr
+    assert taken.returncode == 0, taken.stderr
+    assert "note: meshes.m.extrude.linear: 26 quad8, 24 line3 cells" in taken.stderr
+    assert "body patin: 25 hex8 cells, 72 vertices" in taken.stdout and "LESC: 5 faces" in taken.stdout
+
+
 def test_extruded_2d_mesh(tmp_path):
     """A 2D mesh in the xy plane (a perturbed quad and triangle square, its sides as lines)
     extruded along z over 0.5 in 2 layers (`extrude`): quads become hexahedra, triangles prisms,
