@@ -2,15 +2,14 @@
 SDNL111A, SSNV104A, SDNV104E, each against the reference values of its TEST_RESU / TEST_FONCTION
 (VALE_REFE, within its PRECISION) and against the exact solution where there is one. The .comm
 files were read from Code_Aster's public sources (astest/); nothing of them is copied here but
-their numbers. SSNV128A and SSNV104A run on Code_Aster's own MED meshes (meshes/code_aster, its
-README: unmodified GPL v3 test data) through mbcontact-prep with the .comm's group names: the
-D_PLAN ssnv128a.mmed extruded into one layer of hex8 (its base line a rigid surface), the mixed
-ssnv104a.mmed (prisms, pyramids, tetrahedra) as it is. SSNV104A also runs on a finer mesh
-rebuilt as ssnv104a.datg builds it (the pole pressure's convergence). The two others run on
-meshes rebuilt from the .comm geometry, theirs being out of reach: sdnl111a.mmed is a beam mesh
-(POU_D_T SEG2, node groups only) and sdnv104e.mmed quadratic (QUAD8, hex20 once extruded): the
-1 m bars and the 1 m pad their analytic references imply (docs/validation.md), one layer of
-hex8 with the transverse (out-of-plane) displacements held. Seconds each."""
+their numbers. SSNV128A, SSNV104A and SDNV104E run on Code_Aster's own MED meshes
+(meshes/code_aster, its README: unmodified GPL v3 test data) through mbcontact-prep with the
+.comm's group names: the D_PLAN ssnv128a.mmed extruded into one layer of hex8 (its base line a
+rigid surface), the mixed ssnv104a.mmed (prisms, pyramids, tetrahedra) as it is, the D_PLAN
+sdnv104e.mmed extruded with its QUAD8 taken by their corners (`linear`: there is no hex20).
+SSNV104A also runs on a finer mesh rebuilt as ssnv104a.datg builds it (the pole pressure's
+convergence). SDNL111A's mesh is beams (POU_D_T SEG2, node groups only), out of reach: its 1 m
+bars are rebuilt as hex8 with the transverse displacements held. Seconds each."""
 import os
 
 import meshio
