@@ -55,7 +55,7 @@ class MeshFile:
 
 
 def read_mesh(name, path, extrude=None):
-    """A mesh file and its named regions; extrude (length, layers): a 2D mesh in the xy plane made
+    """A mesh file and its named regions; extrude (length, layers, linear): a 2D mesh in the xy plane made
     3D along z (extrude_mesh)."""
     import meshio  # slow import; only needed here
 
@@ -88,14 +88,30 @@ def read_mesh(name, path, extrude=None):
 
 
 _EXTRUDED = {"vertex": "line", "line": "quad", "triangle": "wedge", "quad": "hexahedron"}
+# quadratic cells -> their linear cell and corner count (meshio's and MED's orders: corners first)
+_LINEAR = {"line3": ("line", 2), "triangle6": ("triangle", 3), "triangle7": ("triangle", 3),
+           "quad8": ("quad", 4), "quad9": ("quad", 4)}
 
 
-def extrude_mesh(mesh, length, layers):
+def extrude_mesh(mesh, length, layers, linear=False):
     """A 2D mesh in the xy plane (z = 0) extruded along z over `length` in `layers` layers: triangles
     and quads become prisms and hexahedra, lines quads, points lines, node groups their nodes on
     every layer, point fields copied to every layer; every region keeps its name, one dimension up
-    (a plane-strain model of another code as a slab: hold z on its nodes)."""
+    (a plane-strain model of another code as a slab: hold z on its nodes). linear: quadratic cells
+    are taken by their corners first (there are no hex20 or wedge15), with a note."""
     where = f"meshes.{mesh.name}.extrude"
+    if linear:
+        dropped = {}
+        for region in mesh.regions.values():
+            for t in [t for t in region.blocks if t in _LINEAR]:
+                kind, corners = _LINEAR[t]
+                cells = region.blocks.pop(t)[:, :corners]
+                region.blocks[kind] = np.concatenate([region.blocks[kind], cells]) if kind in region.blocks else cells
+                dropped.setdefault(t, []).append(cells)
+        if dropped:  # a cell in several groups counted once
+            counts = {t: len(np.unique(np.concatenate(c), axis=0)) for t, c in dropped.items()}
+            note(f"{where}.linear: " + ", ".join(f"{n} {t}" for t, n in counts.items()) + f" cells of {mesh.path} "
+                 "taken by their corners (their midside nodes dropped)")
     if np.any(np.abs(mesh.points[:, 2]) > 1e-12 * max(1.0, np.abs(mesh.points).max())):
         raise InputError(f"{where}: {mesh.path} is not a 2D mesh in the xy plane (z != 0)")
     n = len(mesh.points)
@@ -109,7 +125,8 @@ def extrude_mesh(mesh, length, layers):
         for t, cells in region.blocks.items():
             if t not in _EXTRUDED:
                 raise InputError(f"{where}: region '{name}' has cells of type '{t}'; extruded are points, lines, "
-                                 "triangles and quads (not quadratic cells)")
+                                 "triangles and quads" + ("; `linear: true` takes quadratic ones by their corners"
+                                                          if t in _LINEAR else ""))
             out = []
             for k in range(layers):
                 lo, hi = cells + k * n, cells + (k + 1) * n
@@ -247,6 +264,11 @@ def build_body(body, mesh):
     dims = set()
     for region_name in body.regions:
         region = mesh.regions.get(region_name)
+        if region is None and region_name in mesh.node_groups:  # e.g. a beam model's GROUP_NO
+            raise InputError(f"{where}: '{region_name}' is a node group (MED GROUP_NO) of {mesh.describe()}, "
+                             "not a group of cells: a body is made of volume regions (there: "
+                             f"{mesh.region_list(3)}; surface regions: {mesh.region_list(2)}; line regions: "
+                             f"{mesh.region_list(1)}); node groups name nodes for dirichlet, initial, springs")
         if region is None:
             raise InputError(f"{where}: region '{region_name}' not found in {mesh.describe()}; "
                              f"volume regions there: {mesh.region_list(3)}; "

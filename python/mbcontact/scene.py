@@ -424,7 +424,7 @@ class Scene:
     node_sets: dict = field(default_factory=dict)  # name -> NodeSet, in file order
     initial: list = field(default_factory=list)
     springs: list = field(default_factory=list)
-    extrude: dict = field(default_factory=dict)  # mesh name -> (length, layers): a 2D mesh extruded along z
+    extrude: dict = field(default_factory=dict)  # mesh name -> (length, layers, linear): a 2D mesh extruded along z
 
 
 TOP_KEYS = ("title", "meshes", "bodies", "node_sets", "couples", "dirichlet", "loads", "initial", "springs",
@@ -486,7 +486,7 @@ def parse_scene(doc, base_dir):
 
 
 def _meshes(value, base_dir, extrude=None):
-    """name -> file, or name -> {file: FILE, extrude: {length: L, layers: n}} (a 2D mesh made 3D by
+    """name -> file, or name -> {file: FILE, extrude: {length: L, layers: n, linear: b}} (a 2D mesh made 3D by
     extruding it along z, as a plane-strain model of another code); extrude collects the latter."""
     meshes = named(value, "meshes")
     if not meshes:
@@ -497,11 +497,12 @@ def _meshes(value, base_dir, extrude=None):
         if isinstance(spec, dict):
             spec = mapping(spec, where, ("file", "extrude"), required=("file",))
             if "extrude" in spec:
-                ex = mapping(spec["extrude"], f"{where}.extrude", ("length", "layers"), required=("length",))
+                ex = mapping(spec["extrude"], f"{where}.extrude", ("length", "layers", "linear"), required=("length",))
                 length = real(ex["length"], f"{where}.extrude.length", gt=0)
                 layers = integer(ex.get("layers", 1), f"{where}.extrude.layers", ge=1, le=10000)
+                linear = boolean(ex.get("linear", False), f"{where}.extrude.linear")
                 if extrude is not None:
-                    extrude[name] = (length, layers)
+                    extrude[name] = (length, layers, linear)
             spec = spec["file"]
         out[name] = os.path.join(base_dir, string(spec, where, maxlen=None))
     return out

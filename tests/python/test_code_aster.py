@@ -1,21 +1,25 @@
 """Code_Aster's contact regression cases as their .comm files write them (issue 38): SSNV128A,
 SDNL111A, SSNV104A, SDNV104E, each against the reference values of its TEST_RESU / TEST_FONCTION
 (VALE_REFE, within its PRECISION) and against the exact solution where there is one. The .comm
-and .datg files were read from Code_Aster's public sources (astest/ in the GitHub mirror
-ehmoussi/code_aster); nothing of them is copied here but their numbers. Their .mmed meshes are
-stored there as Git LFS objects that the mirror does not carry, so each mesh is rebuilt from the
-geometry the .comm and .datg (Gibi) scripts give: ssnv128a.datg's contact line of 1, 3, 2, 3 and
-23 elements, ssnv104a.datg's revolved triangles (prisms, pyramids and tetrahedra), sdnl111's 1 m
-bars and sdnv104's 1 m pad (the sizes their analytic references imply; docs/validation.md).
-Plane (D_PLAN) and beam (POU_D_T) models become one layer of hex8 with the out-of-plane (or
-transverse) displacements held. Seconds each."""
+files were read from Code_Aster's public sources (astest/); nothing of them is copied here but
+their numbers. SSNV128A, SSNV104A and SDNV104E run on Code_Aster's own MED meshes
+(meshes/code_aster, its README: unmodified GPL v3 test data) through mbcontact-prep with the
+.comm's group names: the D_PLAN ssnv128a.mmed extruded into one layer of hex8 (its base line a
+rigid surface), the mixed ssnv104a.mmed (prisms, pyramids, tetrahedra) as it is, the D_PLAN
+sdnv104e.mmed extruded with its QUAD8 taken by their corners (`linear`: there is no hex20).
+SSNV104A also runs on a finer mesh rebuilt as ssnv104a.datg builds it (the pole pressure's
+convergence). SDNL111A's mesh is beams (POU_D_T SEG2, node groups only), out of reach: its 1 m
+bars are rebuilt as hex8 with the transverse displacements held. Seconds each."""
+import os
+
 import meshio
 import numpy as np
 import pytest
 
-from conftest import load_script, prep, result, solve
+from conftest import ROOT, load_script, prep, result, solve
 from mbcontact import meshgen
-from mbcontact.results import point_history, read_body, read_contact, read_csv
+from mbcontact.bodies import read_mesh
+from mbcontact.results import point_history, read_body, read_contact, read_csv, stress_component
 
 hertz_build = load_script("meshes/hertz/build.py", "hertz_build")
 
@@ -26,58 +30,63 @@ def rename_sides(path, prefix):
     meshio.write(str(path), m, file_format="gmsh22", binary=False)
 
 
+def aster_mesh(case):
+    """The path of Code_Aster's own mesh of a case (meshes/code_aster, its README)."""
+    return os.path.join(ROOT, "meshes", "code_aster", f"{case}.mmed")
+
+
+def aster_node_groups(case):
+    """A case's MED node groups (name -> coordinates), as mbcontact-prep reads them."""
+    mesh = read_mesh(case, aster_mesh(case))
+    return {name: mesh.points[nodes] for name, nodes in mesh.node_groups.items()}
+
+
 # ---------------------------------------------------------------- SSNV128
 SIDE, THICK = 0.04, 0.001  # the plate's side (COTE); one layer through z (plane strain)
-# ssnv128a.datg: LCONTA = PPA d 1 PPB d 3 PPC d 2 PPD d 3 PPE d 23 PPS; 10 elements up
-CONTACT_LINE = ((0.0, 0.00125, 1), (0.00125, 0.005, 3), (0.005, 0.0075, 2), (0.0075, 0.01125, 3), (0.01125, SIDE, 23))
 # TEST_RESU: DX at PPA .. PPE at INST 1 (VALE_REFE, SOURCE_EXTERNE, PRECISION 5 %)
-SSNV128_REF = {0.0: 2.86e-5, 0.00125: 2.72e-5, 0.005: 2.28e-5, 0.0075: 1.98e-5, 0.01125: 1.5e-5}
+SSNV128_REF = {"PPA": 2.86e-5, "PPB": 2.72e-5, "PPC": 2.28e-5, "PPD": 1.98e-5, "PPE": 1.5e-5}
 
 
 def ssnv128_scene(tmp_path):
-    xs = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in CONTACT_LINE] + [[SIDE]])
-    meshgen.box(str(tmp_path / "plaque.msh"), (0, 0, 0), (SIDE, SIDE, THICK), n=(len(xs) - 1, 10, 1), volume_name="plaque")
-    m = meshio.read(str(tmp_path / "plaque.msh"))
-    m.points[:, 0] = np.interp(m.points[:, 0], np.linspace(0, SIDE, len(xs)), xs)  # the uniform columns onto the .datg's
-    meshio.write(str(tmp_path / "plaque.msh"), m, file_format="gmsh22", binary=False)
-    rename_sides(tmp_path / "plaque.msh", "plaque")
-    meshgen.box(str(tmp_path / "bati.msh"), (-0.004, -0.004, 0), (SIDE + 0.004, 0, THICK), n=(4, 1, 1), volume_name="bati")
-    rename_sides(tmp_path / "bati.msh", "bati")
+    """ssnv128a.mmed as the .comm uses it: the D_PLAN mesh extruded into one layer of hex8 (the
+    base line LBATI into a rigid surface of quads), its groups as they are named there."""
     ramp = {"table": [[0, 0], [1, 1]]}  # RAMPE over L_INST's 5 equal steps
     return prep(tmp_path, {
-        "meshes": {"p": "plaque.msh", "b": "bati.msh"},
-        "bodies": {"plaque": {"mesh": "p", "regions": "plaque", "material": {"E": 1.3e11, "nu": 0.2}},
-                   "bati": {"mesh": "b", "regions": "bati", "rigid": True}},  # LBATI: DX = DY = 0
-        "node_sets": {"PPS": {"box": {"lo": [SIDE, 0, 0], "hi": [SIDE, 0, THICK]}, "bodies": ["plaque"]}},
+        "meshes": {"m": {"file": aster_mesh("ssnv128a"), "extrude": {"length": THICK, "layers": 1}}},
+        "bodies": {"plaque": {"mesh": "m", "regions": "SPLAQ", "material": {"E": 1.3e11, "nu": 0.2}},
+                   "bati": {"mesh": "m", "regions": "LBATI", "rigid": True}},  # LBATI: DX = DY = 0
         # GROUP_MA_ESCL = LCONTA: Code_Aster's slave nodes are the contact points, mbcontact's master side
-        "couples": [{"master": "plaque_ymin", "slave": "bati_ymax", "mu": 1.0}],
+        "couples": [{"master": "LCONTA", "slave": "LBATI", "mu": 1.0}],
         "dirichlet": [{"body": "bati", "components": "all"},
                       {"nodes": "PPS", "components": ["x", "y"]},
-                      {"surface": "plaque_xmax", "components": ["x"]},  # LBLOCX
-                      {"surface": "plaque_zmin", "components": ["z"]}, {"surface": "plaque_zmax", "components": ["z"]}],
-        "loads": [{"kind": "pressure", "surface": "plaque_ymax", "value": 5e7, "time": ramp},   # LPRESV
-                  {"kind": "pressure", "surface": "plaque_xmin", "value": 1.5e8, "time": ramp}],  # LPRESH
+                      {"surface": "LBLOCX", "components": ["x"]},
+                      {"body": "plaque", "components": ["z"]}],  # plane strain
+        "loads": [{"kind": "pressure", "surface": "LPRESV", "value": 5e7, "time": ramp},
+                  {"kind": "pressure", "surface": "LPRESH", "value": 1.5e8, "time": ramp}],
         "analysis": {"type": "static", "dt": 0.2, "final_time": 1.0},
     }, name="ssnv128")
 
 
 @pytest.mark.parametrize("nproc", [1, 2])
 def test_ssnv128_plate_with_friction_on_a_rigid_base(tmp_path, nproc):
-    """SSNV128A: a 40 mm plate (E 130 GPa, nu 0.2, plane strain) pressed on a rigid base (here a
-    rigid body, held) by 50 MPa on top and pushed sideways by 150 MPa, Coulomb mu = 1, the loads
-    ramped in 5 static steps (friction is path dependent). DX along the contact line at PPA ..
-    PPE within 1 % of the .comm's VALE_REFE at PPA .. PPD and 3 % at PPE (its PRECISION is 5 %;
-    measured -0.44, -0.40, -0.25, -0.35, +2.4 %; Code_Aster's own VALE_CALC +0.17 .. +4.1 %)."""
+    """SSNV128A on its own mesh: a 40 mm plate (E 130 GPa, nu 0.2, plane strain) pressed on a
+    rigid base (the line LBATI, here a rigid surface, held) by 50 MPa on top and pushed sideways
+    by 150 MPa, Coulomb mu = 1, the loads ramped in 5 static steps (friction is path dependent).
+    DX at the node groups PPA .. PPE within 1 % of the .comm's VALE_REFE at PPA .. PPD and 3 % at
+    PPE (its PRECISION is 5 %; measured -0.44, -0.40, -0.25, -0.35, +2.4 %, as on the mesh
+    rebuilt from the .datg; Code_Aster's own VALE_CALC +0.17 .. +4.1 %)."""
     h5 = ssnv128_scene(tmp_path)
     solve(h5, nproc=nproc)
     b = read_body(result(h5, ".h5"), "plaque")
     x, u = b["vertices"], b["displacement"]
-    for x0, ref in SSNV128_REF.items():
-        on = (np.abs(x[:, 0] - x0) < 1e-9) & (np.abs(x[:, 1]) < 1e-9)
-        assert on.sum() == 2  # both z faces: plane strain
+    groups = aster_node_groups("ssnv128a")
+    for name, ref in SSNV128_REF.items():
+        (x0, y0), = groups[name][:, :2]
+        on = (np.abs(x[:, 0] - x0) < 1e-9) & (np.abs(x[:, 1] - y0) < 1e-9)
+        assert on.sum() == 2  # the group's node on both z faces
         err = u[on, 0] / ref - 1
-        print(f"x = {x0}: DX {u[on, 0].mean():.4e}, reference {ref:.3e}: {err.mean():+.2%}")
-        assert np.all(np.abs(err) < (0.03 if x0 > 0.01 else 0.01))
+        print(f"{name} (x = {x0}): DX {u[on, 0].mean():.4e}, reference {ref:.3e}: {err.mean():+.2%}")
+        assert np.all(np.abs(err) < (0.03 if name == "PPE" else 0.01))
         assert np.ptp(u[on, 0]) < 1e-6 * ref
 
 
@@ -202,33 +211,73 @@ def ssnv104_mesh(path, hc=0.8, nrot=8):
     return {t: len(c) for t, c in blocks.items()}
 
 
-def test_ssnv104_hertz_spheres_on_a_mixed_mesh(tmp_path):
-    """SSNV104A: two spheres (R 50, E 2e4, nu 0.3) pressed together, the upper one's eighth
-    modelled (its flat face y = 2 R moved by -2, symmetry on x = 0 and z = 0) on the plane y = R
-    of symmetry (LIAISON_UNIL on DY: here a rigid body, held), its mesh of prisms, pyramids and
-    tetrahedra revolved as ssnv104a.datg does (8 layers over 90 degrees). Hertz (the .comm's
-    reference): a = sqrt(R / 2 * 2 * 2) = 10, p0 = 2798.3. The contact pressure at G1 (the pole)
-    within 5 % of p0 (the .comm's PRECISION is 14 %: Code_Aster's own SIYY there is 13.5 % off
-    it; measured -3.5 %, the loaded radius 10.33). The load is printed, not tested: it is 12.5 %
-    above Hertz's half-space value, the approach being imposed at the equator, R from the contact
-    (a / R = 0.2), not at infinity."""
-    counts = ssnv104_mesh(str(tmp_path / "sphere.msh"))
-    assert counts["wedge"] and counts["pyramid"] and counts["tetra"]
+def ssnv104_scene(tmp_path, mesh, region, skin):
+    """The sphere's eighth (mesh file, its volume region, its contact skin) on the plane y = R of
+    LIAISON_UNIL (a rigid body, held), the .comm's DEFI_GROUP planes FACESUP, LIM1, LIM2."""
     meshgen.box(str(tmp_path / "plane.msh"), (0, R_SPH - 5, 0), (0.5 * R_SPH, R_SPH, 0.5 * R_SPH), n=(2, 1, 2), volume_name="plane")
     rename_sides(tmp_path / "plane.msh", "plane")
-    h5 = prep(tmp_path, {
-        "meshes": {"s": "sphere.msh", "p": "plane.msh"},
-        "bodies": {"sphere": {"mesh": "s", "regions": "sphere", "material": {"E": E_SPH, "nu": NU_SPH}},
+    return prep(tmp_path, {
+        "meshes": {"s": mesh, "p": "plane.msh"},
+        "bodies": {"sphere": {"mesh": "s", "regions": region, "material": {"E": E_SPH, "nu": NU_SPH}},
                    "plane": {"mesh": "p", "regions": "plane", "rigid": True}},
         "node_sets": {"FACESUP": {"plane": {"point": [0, 2 * R_SPH, 0], "normal": [0, 1, 0]}, "bodies": ["sphere"]},
                       "LIM1": {"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}, "bodies": ["sphere"]},
                       "LIM2": {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "bodies": ["sphere"]}},
-        "couples": [{"master": "pole", "slave": "plane_ymax"}],
+        "couples": [{"master": skin, "slave": "plane_ymax"}],
         "dirichlet": [{"nodes": "FACESUP", "components": ["y"], "value": -APPROACH},
                       {"nodes": "LIM1", "components": ["x"]}, {"nodes": "LIM2", "components": ["z"]},
                       {"body": "plane", "components": "all"}],
         "analysis": {"type": "static"},
     }, name="ssnv104")
+
+
+def test_ssnv104_hertz_spheres_on_their_mixed_mesh(tmp_path):
+    """SSNV104A on its own mesh (2936 prisms, 112 pyramids, 96 tetrahedra; the .comm's groups
+    SPHSUP, SMAI), as SSNV104 below: the .comm's TEST_RESU itself, SIYY at G1 in the eight
+    tetrahedra M2948 .. M3032 around it (constant in a tet4, as Code_Aster's SIGM_ELNO there),
+    within the PRECISION (14 %) of VALE_REFE (Hertz's p0) and within 0.1 % of Code_Aster's own
+    VALE_CALC on this mesh (-3176.3, 13.5 % above p0: the mesh has 2.5 cells across the contact
+    radius; measured -3175.3), and DX at H and I (on the contact) within 0.1 % of VALE_CALC
+    (measured -0.03 and -0.01 %). The pyramids come mirrored but for the 8 below the pole ring
+    (either way a valid pyramid): the prep reorders them. The contact pressure at G1 is printed,
+    not tested: +16.8 % of p0 on this mesh (-3.5 % on the finer one below)."""
+    h5 = ssnv104_scene(tmp_path, aster_mesh("ssnv104a"), "SPHSUP", "SMAI")
+    solve(h5, nproc=2)
+    b = read_body(result(h5, ".h5"), "sphere")
+    x, u = b["vertices"], b["displacement"]
+    g1 = np.argmin(np.linalg.norm(x - [0, R_SPH, 0], axis=1))
+    tets = np.nonzero((b["cells"] == g1).any(axis=1) & (b["cells"][:, 4] < 0))[0]
+    assert len(tets) == 8  # M2948 .. M3032
+    syy = stress_component(b["stress"], "yy")[tets]
+    print(f"SIYY(G1) {syy.mean():.1f}: VALE_REFE -2798.3 {-syy.mean() / P0_REF - 1:+.2%}, VALE_CALC -3176.34 "
+          f"{syy.mean() / -3176.3351 - 1:+.3%}")
+    assert np.all(np.abs(-syy / P0_REF - 1) < 0.14)
+    assert np.all(np.abs(syy / -3176.3351 - 1) < 0.001)
+    for name, p, calc in (("H", (4.0329, 50.16291, 0), -0.1134313295), ("I", (7.9101, 50.62966, 0), -0.1784505174)):
+        k = np.argmin(np.linalg.norm(x - p, axis=1))
+        assert np.linalg.norm(x[k] - p) < 1e-3
+        print(f"{name}: DX {u[k, 0]:.6f}, VALE_CALC {calc:.6f} ({u[k, 0] / calc - 1:+.3%}), DY {u[k, 1]:.5f}")
+        assert abs(u[k, 0] / calc - 1) < 0.001
+        assert abs(x[k, 1] + u[k, 1] - R_SPH) < 1e-6  # on the plane
+    c = read_contact(result(h5, ".h5"))
+    r = np.hypot(c["reference"][:, 0], c["reference"][:, 2])
+    print(f"p(G1) {c['pressure'][np.argmin(r)]:.1f} ({c['pressure'][np.argmin(r)] / P0_REF - 1:+.2%} of p0)")
+
+
+def test_ssnv104_hertz_spheres_on_a_mixed_mesh(tmp_path):
+    """SSNV104A: two spheres (R 50, E 2e4, nu 0.3) pressed together, the upper one's eighth
+    modelled (its flat face y = 2 R moved by -2, symmetry on x = 0 and z = 0) on the plane y = R
+    of symmetry (LIAISON_UNIL on DY: here a rigid body, held). Kept beside the case on its own
+    mesh (above) for its finer mesh (0.8 at the pole against the MED's 4): prisms, pyramids and
+    tetrahedra revolved as ssnv104a.datg does (8 layers over 90 degrees), on which the contact
+    pressure itself converges to Hertz's (the .comm's reference): a = sqrt(R / 2 * 2 * 2) = 10,
+    p0 = 2798.3. The contact pressure at G1 (the pole) within 5 % of p0 (the .comm's PRECISION is
+    14 %; measured -3.5 %, the loaded radius 10.33; +16.8 % on the MED mesh). The load is printed, not tested: it is 12.5 %
+    above Hertz's half-space value, the approach being imposed at the equator, R from the contact
+    (a / R = 0.2), not at infinity."""
+    counts = ssnv104_mesh(str(tmp_path / "sphere.msh"))
+    assert counts["wedge"] and counts["pyramid"] and counts["tetra"]
+    h5 = ssnv104_scene(tmp_path, "sphere.msh", "sphere", "pole")
     solve(h5, nproc=2)
     c = read_contact(result(h5, ".h5"))
     r = np.hypot(c["reference"][:, 0], c["reference"][:, 2])
@@ -270,33 +319,34 @@ def oscillator(t_end, ramp=0.07, dt=1e-5):
 
 
 def test_sdnv104_friction_oscillator_with_springs(tmp_path):
-    """SDNV104E: a steel pad (E 210 GPa, nu 0, rho 7000, plane strain) on a base held in place
-    (here a rigid body), pressed by 70 kPa on top, pushed sideways by 200 kPa, both ramped over
-    0.07 s, held back by two discrete springs of 12 kN/m (RESLAT, K_T_D_L), Coulomb mu = 0.3, HHT
-    (alpha -0.3, the .comm's SCHEMA='HHT'), the .comm's step 0.01 s to 3.5 s. Its mesh is an LFS
-    object the mirrors lack and its .comm gives no size: the pad is 1 m x 1 m (1 m thick), the size
-    for which the analytic references hold (2 (F - mu N) / k = 14.92 m at T / 2 = pi sqrt(m / k) =
-    1.70 s, 2 (F + mu N) / k - 14.92 = 3.50 m at T; with m = 7000 kg, k = 24 kN/m). The springs
-    act on the pad's right face (10 nodes, 2.4 kN/m each). DX(A) within the .comm's PRECISION (5 %)
-    of VALE_REFE (measured -0.08 % and +0.39 %; Code_Aster's own -0.2 % and +1.4 %) and within
-    0.5 % of the 1-DOF oscillator's own solution with the ramp (measured 0.00 % and +0.02 %: the pad
-    is rigid next to the springs, and HHT's damping at dt = T / 340 is far below that)."""
-    meshgen.box(str(tmp_path / "patin.msh"), (0, 0, 0), (1, 1, 1), n=(4, 4, 1), volume_name="patin")
-    rename_sides(tmp_path / "patin.msh", "patin")
-    meshgen.box(str(tmp_path / "bati.msh"), (-1, -0.5, 0), (20, 0, 1), n=(21, 1, 1), volume_name="bati")
-    rename_sides(tmp_path / "bati.msh", "bati")
+    """SDNV104E on its own mesh: a steel pad PATIN (E 210 GPa, nu 0, rho 7000, plane strain) on a
+    base BATI held in place (here a rigid body), pressed by 70 kPa on FSUP, pushed sideways by
+    200 kPa on FLAT, both ramped over 0.07 s, held back by the two discrete springs RESLAT of
+    12 kN/m (K_T_D_L) from the pad's corners P2, P3 to R1, R2 (held: node-to-ground springs on P2,
+    P3), Coulomb mu = 0.3 between LESC and LMAI, HHT (alpha -0.3, the .comm's SCHEMA='HHT'), the
+    .comm's step 0.01 s to 3.5 s. The mesh is quadratic (QUAD8, SEG3; hex20 once extruded, not
+    supported): `extrude: {linear: true}` takes its cells by their corners, the pad 5 x 5 hex8, 1 m
+    thick. The pad is 1 m x 1 m, the size for which the analytic references hold (2 (F - mu N) /
+    k = 14.92 m at T / 2 = pi sqrt(m / k) = 1.70 s, 2 (F + mu N) / k - 14.92 = 3.50 m at T; with
+    m = 7000 kg, k = 24 kN/m). DX(A) within the .comm's PRECISION (5 %) of VALE_REFE (measured
+    -0.08 % and +0.39 %, as on the 4 x 4 pad rebuilt before; Code_Aster's own -0.2 % and +1.4 %)
+    and within 0.5 % of the 1-DOF oscillator's own solution with the ramp (measured 0.00 % and
+    +0.02 %: the pad is rigid next to the springs, and HHT's damping at dt = T / 340 is far below
+    that)."""
     ramp = {"table": [[0, 0], [0.07, 1], [10, 1]]}
     h5 = prep(tmp_path, {
-        "meshes": {"p": "patin.msh", "b": "bati.msh"},
-        "bodies": {"patin": {"mesh": "p", "regions": "patin", "material": {"E": 2.1e11, "nu": 0.0, "density": 7000.0}},
-                   "bati": {"mesh": "b", "regions": "bati", "rigid": True}},
-        "couples": [{"master": "patin_ymin", "slave": "bati_ymax", "mu": MU_PAD}],  # LESC on LMAI
+        "meshes": {"m": {"file": aster_mesh("sdnv104e"), "extrude": {"length": 1.0, "layers": 1, "linear": True}}},
+        "bodies": {"patin": {"mesh": "m", "regions": "PATIN", "material": {"E": 2.1e11, "nu": 0.0, "density": 7000.0}},
+                   "bati": {"mesh": "m", "regions": "BATI", "rigid": True}},
+        "couples": [{"master": "LESC", "slave": "LMAI", "mu": MU_PAD}],  # GROUP_MA_ESCL LESC: mbcontact's master
         "dirichlet": [{"body": "bati", "components": "all"}, {"body": "patin", "components": ["z"]}],
-        "springs": [{"nodes": "patin_xmax", "stiffness": [K_SPRINGS / 10, 0, 0]}],
-        "loads": [{"kind": "pressure", "surface": "patin_ymax", "value": N_TOP, "time": ramp},   # FSUP
-                  {"kind": "pressure", "surface": "patin_xmin", "value": F_LAT, "time": ramp}],  # FLAT
+        # RESLAT: each spring's node on both faces of the slab, half its stiffness each
+        "springs": [{"nodes": name, "stiffness": [0.5 * K_SPRINGS / 2, 0, 0]} for name in ("P2", "P3")],
+        "loads": [{"kind": "pressure", "surface": "FSUP", "value": N_TOP, "time": ramp},
+                  {"kind": "pressure", "surface": "FLAT", "value": F_LAT, "time": ramp}],
         "analysis": {"type": "dynamic", "dt": 0.01, "final_time": 3.5, "scheme": "hht", "alpha": -0.3},
-        "output": {"every": 1000000, "points": {"A": {"x": [0, 1, 0], "body": "patin"}}},
+        "output": {"every": 1000000, "points": {"A": {"x": [float(v) for v in aster_node_groups("sdnv104e")["A"][0]],
+                                                      "body": "patin"}}},
     }, name="sdnv104")
     solve(h5)
     p = point_history(result(h5, "_points.csv"), "A")

@@ -1,8 +1,10 @@
 """Cells beyond tet4 and hex8 and meshes of other codes: tet10 and mixed (hex8, pyr5, wedge6)
 patch tests, tet10 on a curved boundary (Lame's thick cylinder), contact on a mixed mesh's
 triangles and quads, a MED file with its cell and node groups and mirrored cells (oriented and
-reported), and contact on tet10's 6-node faces (the patch test against hex8, tet4 and tet10, either
-side master; two tet10 bars' impact). Small meshes: a second or two each."""
+reported; a node group given as a body refused as such), and contact on tet10's 6-node faces
+(the patch test against hex8, tet4 and tet10, either side master; two tet10 bars' impact). Small
+meshes: a second or two each."""
+import os
 import subprocess
 
 import meshio
@@ -10,7 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import PREP, env, prep, result, solve
+from conftest import PREP, ROOT, env, prep, result, solve
 from mbcontact import meshgen
 from mbcontact.results import read_body, read_contact, read_csv
 
@@ -262,6 +264,20 @@ def test_med_groups_and_mirrored_cells(tmp_path):
     assert abs(c["normal_force"][-1] - d["normal_force"][-1]) < 1e-9 and abs(d["normal_force"][-1] - P) < 1e-8
 
 
+def test_med_node_group_as_a_body_is_named(tmp_path):
+    """Code_Aster's SDNL111A mesh (meshes/code_aster/sdnl111a.mmed: beams, SEG2 cells in no group,
+    the bars named by node groups only): a body given its node group POUTRE1 is refused as a node
+    group, not as a region "not found" in a mesh whose regions list is empty."""
+    mesh = os.path.join(ROOT, "meshes", "code_aster", "sdnl111a.mmed")
+    yml = tmp_path / "s.yaml"
+    yml.write_text(yaml.safe_dump({"meshes": {"m": mesh}, "bodies": {"bar": {"mesh": "m", "regions": "POUTRE1",
+                                                                               "material": {"E": 2e11}}},
+                                   "analysis": {"type": "static"}}))
+    r = subprocess.run([PREP, str(yml), "--check"], capture_output=True, text=True, env=env())
+    assert r.returncode == 1 and "bodies.bar.regions: 'POUTRE1' is a node group (MED GROUP_NO)" in r.stderr, r.stderr
+    assert "a body is made of volume regions (there: none" in r.stderr
+
+
 def test_mirrored_gmsh_cells_oriented(tmp_path):
     """Orientation is checked for any format: a Gmsh box whose tets are all mirrored (two vertices
     swapped) is oriented, reported, and passes the patch test."""
@@ -277,6 +293,29 @@ def test_mirrored_gmsh_cells_oriented(tmp_path):
     assert r.returncode == 0 and "48 of the 48 tet4 cells" in r.stderr and "mirrored" in r.stderr, r.stderr
     solve(tmp_path / "s.h5")
     assert_uniform(tmp_path / "s.h5", 4)
+
+
+def test_extruded_quadratic_2d_mesh_taken_linear(tmp_path):
+    """Code_Aster's SDNV104E mesh (meshes/code_aster/sdnv104e.mmed: QUAD8 and SEG3 cells): extruded
+    as it is, it is refused (hex20 does not exist here) with the way out named; with `linear: true`
+    its cells are taken by their corners (one note, each cell counted once though in several
+    groups): the pad PATIN's 25 quad8 become 25 hex8 on 2 x 36 corner nodes, its line LESC 5 quads."""
+    scene = {"meshes": {"m": {"file": os.path.join(ROOT, "meshes", "code_aster", "sdnv104e.mmed"),
+                              "extrude": {"length": 1.0}}},
+             "bodies": {"patin": {"mesh": "m", "regions": "PATIN", "material": {"E": 2.1e11}}},
+             "dirichlet": [{"surface": "LESC"}], "analysis": {"type": "static"}}
+    runs = []
+    for linear in (False, True):
+        scene["meshes"]["m"]["extrude"]["linear"] = linear
+        yml = tmp_path / "s.yaml"
+        yml.write_text(yaml.safe_dump(scene))
+        runs.append(subprocess.run([PREP, str(yml), "--check"], capture_output=True, text=True, env=env()))
+    (refused, taken) = runs
+    assert refused.returncode == 1 and "has cells of type 'quad8'" in refused.stderr, refused.stderr
+    assert "`linear: true` takes quadratic ones by their corners" in refused.stderr
+    assert taken.returncode == 0, taken.stderr
+    assert "note: meshes.m.extrude.linear: 26 quad8, 24 line3 cells" in taken.stderr
+    assert "body patin: 25 hex8 cells, 72 vertices" in taken.stdout and "LESC: 5 faces" in taken.stdout
 
 
 def test_extruded_2d_mesh(tmp_path):
