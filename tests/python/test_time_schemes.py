@@ -1,6 +1,7 @@
 """Time integration beyond Newmark's defaults, against closed forms: Newmark, HHT-alpha and
 generalized-alpha reproduce their own one-DOF recurrence step by step (so their spectral radius
-and numerical damping are the closed-form ones), generalized-alpha converges at second order,
+and numerical damping are the closed-form ones), generalized-alpha converges at second order
+(one DOF, and HHT too on a block sliding against friction and springs),
 a spring-dashpot oscillator follows its damped solution, initial conditions from the scene and from
 Python, and a bar set moving at 1 m/s hits another (SDNL111-like) with the impedance's force.
 One-element or 40-element models: about a second each."""
@@ -115,6 +116,57 @@ def test_generalized_alpha_second_order(tmp_path):
         errors.append(np.abs(p["u"][:, 0] - U0 * np.cos(OMEGA1 * p["t"])).max())
     ratios = [errors[i] / errors[i + 1] for i in range(2)]
     assert all(3.6 < r < 4.4 for r in ratios), (errors, ratios)
+
+
+SLIDE_MU, SLIDE_K, SLIDE_F = 0.3, 4.0e4, 6.0e3
+SLIDE_PERIOD = 2 * math.pi / math.sqrt(SLIDE_K / 1000.0)
+
+
+def sliding_block_scene(tmp_path, n, analysis, name):
+    """A 1 m cube (1 000 kg, stiff: E 1e10) resting on a rigid base with mu = 0.3, held back by
+    springs of 40 kN/m in all (10 kN/m at each top corner), pushed by 6 kPa on its side from t = 0
+    under gravity: it slides forward from rest, x(t) = (F - mu m g) / k (1 - cos omega t), until
+    it stops at T / 2. Run to T / 4 with dt = T / n."""
+    meshgen.boxes(str(tmp_path / "slide.msh"), [dict(lo=(-0.5, -0.5, -1), hi=(1.5, 1.5, 0), n=(2, 2, 1), name="base"),
+                                                dict(lo=(0, 0, 0), hi=(1, 1, 1), n=(1, 1, 1), name="block")])
+    dt = float(SLIDE_PERIOD / n)
+    always = {"table": [[0, 1], [100, 1]]}
+    return prep(tmp_path, {
+        "meshes": {"m": "slide.msh"},
+        "node_sets": {"top": {"plane": {"point": [0, 0, 1], "normal": [0, 0, 1]}, "bodies": ["block"]}},
+        "bodies": {"base": {"mesh": "m", "regions": "base", "rigid": True},
+                   "block": {"mesh": "m", "regions": "block", "material": {"E": 1.0e10, "nu": 0.0, "density": 1000.0}}},
+        "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": SLIDE_MU}],
+        "dirichlet": [{"body": "base"}, {"body": "block", "components": ["y"]}],
+        "springs": [{"nodes": "top", "stiffness": [SLIDE_K / 4, 0, 0]}],
+        "loads": [{"kind": "gravity", "vector": [0, 0, -9.81], "time": always},
+                  {"kind": "pressure", "surface": "block_xmin", "value": SLIDE_F, "time": always}],
+        "analysis": {"type": "dynamic", "dt": dt, "final_time": float(n // 4 * dt), **analysis},
+        "output": {"every": 1000000, "points": {"c": {"x": [0, 0, 1], "body": "block"}}},
+    }, name=name)
+
+
+@pytest.mark.parametrize("analysis", [{"scheme": "generalized_alpha", "rho_inf": 0.8}, {"scheme": "hht", "alpha": -0.3}],
+                         ids=["generalized_alpha", "hht"])
+def test_second_order_on_a_sliding_block(tmp_path, analysis):
+    """The block sliding against friction and its springs (sliding_block_scene): its displacement
+    at T / 4 converges at second order with the contact in every step, the error falling by 4
+    (3.6 to 4.4; measured 3.95 and 3.98 for generalized-alpha, 3.87 and 3.95 for HHT) per halving
+    of the step from T / 20 to T / 80 (Newmark with gamma 0.6, first order: 2.5 and 2.3), and within 1.5e-3 of
+    the exact value at T / 80 (measured 8.5e-4 and 1.2e-3)."""
+    omega = 2 * math.pi / SLIDE_PERIOD
+    errors = []
+    for n in (20, 40, 80):
+        h5 = sliding_block_scene(tmp_path, n, analysis, f"slide{n}")
+        solve(h5)
+        p = point_history(result(h5, "_points.csv"), "c")
+        t, x = p["t"][-1], p["u"][-1, 0]
+        exact = (SLIDE_F - SLIDE_MU * 1000.0 * 9.81) / SLIDE_K * (1 - math.cos(omega * t))
+        assert abs(t - SLIDE_PERIOD / 4) < SLIDE_PERIOD / 80
+        errors.append(abs(x - exact) / exact)
+    ratios = [errors[i] / errors[i + 1] for i in range(2)]
+    assert all(3.6 < r < 4.4 for r in ratios), (errors, ratios)
+    assert errors[-1] < 1.5e-3, errors
 
 
 def test_spring_dashpot_oscillator(tmp_path):
