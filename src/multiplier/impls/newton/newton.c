@@ -1314,7 +1314,7 @@ PetscErrorCode MBCMultiplierCreate_Newton(MBCMultiplier m)
   nt->w_dense_fill = 0.5; /* the dense copy's memory 8 N^2 against AIJ's 12 f N^2: at f = 0.5 its products were 4x faster (dgemv against MatMult_SeqAIJ_Inode, N = 3 384, one thread) */
   nt->slip_eliminate = PETSC_TRUE;
   nt->lowrank      = PETSC_TRUE;
-  nt->lowrank_max  = 0.8;
+  nt->lowrank_max  = 0.8; /* the 198k dam's strong phase: 0.6 fell back to LUs and new references (71 LUs, 3 inverses against 39, 1), 1.0 paid more in k x k corrections */
   nt->lowrank_dist_min = 1000; /* M's LU (k^3) then dominates the step, and every rank factoring it alone costs more than the direct step's LU over the ranks where k nears the active rows */
   m->data          = nt;
   if (m->max_it < 0) m->max_it = 100;
