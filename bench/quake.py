@@ -7,10 +7,12 @@ earthquake stage starts in its strong phase; the run stops after --steps steps o
 Per size: DOFs, contact points, the earthquake stage's wall time per step, and per step the
 bodies' solves (MBCBodySolve), D (MBCFlexibilityAssemble) with its number of builds in the stage,
 the multiplier solve (MBCMultiplierSolve) with its dense LU factorizations (MatLUFactor, MBCMixedLUFactor; the
-step time and the multiplier solve leave out the Newton type's kept inverse, built once while W
-holds, MBCNewtonInverse, shown apart as "inverse"), the
+step time and the multiplier solve leave out the Newton type's kept inverses, MBCNewtonInverse,
+shown apart as "inverse": once a stage over a few strong steps, but taken again as the references
+go stale over a whole record, 17-46 times in 2 000 steps at 49k DOFs), the
 mortar integration and the search (MBCContactIntegrate; MBCContactGather + MBCGlobalSearch +
-MBCLocalSearch), "iface/solves" = (D + multiplier + integration + search) / bodies' solves, the
+MBCLocalSearch), "iface/solves" = (D + multiplier with its inverses + integration + search) /
+bodies' solves, the
 static stage's wall time, the solver's peak RSS (os.wait4; on P ranks the largest process), and
 at the last step the largest joint opening and slip. --compare OPTIONS runs every size a second
 time with those options added and prints the second run's times against the first's and the
@@ -122,7 +124,7 @@ def answers_differ(a, b):
 
 def row(label, r):
     n = max(r["steps"], 1)
-    iface = sum(r[k] for k in INTERFACE) - r["inv"]
+    iface = sum(r[k] for k in INTERFACE)  # the inverses too: a record takes them again and again
     return (f"{label:>9} {r['points']:>7} {r['steps']:>5} {(r['eq_wall'] - r['inv']) / n:>8.3f} {r['solves'] / n:>8.3f} {r['D'] / n:>8.3f} {r['builds']:>6} "
             f"{(r['mult'] - r['inv']) / n:>8.3f} {r['LU_n']:>5} {r['inv']:>8.2f} {(r['integ'] + r['search']) / n:>8.3f} {iface / max(r['solves'], 1e-12):>7.1f} "
             f"{r['static_wall']:>8.1f} {r['rss']:>7.0f} {r.get('opening', float('nan')) * 1e3:>8.3f} {r.get('slip', float('nan')) * 1e3:>8.3f}"
@@ -146,8 +148,8 @@ def main():
     print(f"staged dam with joints, record from {a.record_from:g} s, {a.steps} earthquake steps of {DT:g} s, {a.ranks} rank(s)")
     for v, opts in variants:
         print(f"  {v}: {' '.join(opts) or '(defaults)'}")
-    print("\nper earthquake step [s], without the Newton type's kept inverse, built once a stage (inverse [s]); iface/solves: (D + multiplier\n"
-          "+ integration + search) / bodies' solves; opening, slip [mm] at the last step")
+    print("\nper earthquake step [s], step and mult without the Newton type's kept inverses (inverse [s], all of the stage); iface/solves:\n"
+          "(D + multiplier with its inverses + integration + search) / bodies' solves; opening, slip [mm] at the last step")
     head = f"{'DOFs':>9} {'points':>7} {'steps':>5} {'step':>8} {'solves':>8} {'D':>8} {'builds':>6} {'mult':>8} {'LU':>5} {'inverse':>8} {'integ+s':>8} {'iface/s':>7} {'static':>8} {'MiB':>7} {'opening':>8} {'slip':>8}"
     print(head)
     runs = []
