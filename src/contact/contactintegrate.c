@@ -293,6 +293,19 @@ static PetscErrorCode FaceListAdd(PetscInt **faces, PetscInt *n, PetscInt *cap, 
   PetscFunctionReturn(0);
 }
 
+/* The gap along n from the slave surface's point sum_j W_j x_s[node_j] (a tri6's quadratic point)
+   to the master point xm: the gap H^T du moves exactly. */
+static PetscReal SlavePointGap(const MBCSurface *s, PetscInt nw, const PetscInt node[], const PetscReal W[], const PetscReal xm[3], const PetscReal n[3])
+{
+  PetscReal dx[3];
+
+  for (PetscInt d = 0; d < 3; d++) {
+    dx[d] = xm[d];
+    for (PetscInt j = 0; j < nw; j++) dx[d] -= W[j] * s->x[3 * node[j] + d];
+  }
+  return MBCDot(dx, n);
+}
+
 /* Segment-based (mortar) integration: every master face with a contact point at one of its nodes is
    cut, in its plane, by the orthogonal projections of the slave faces that face it; each piece (a
    convex polygon, master face ∩ slave face) is split into triangles and integrated with a collapsed
@@ -426,14 +439,13 @@ static PetscErrorCode Integrate(MBCCouple *c, PetscBool integrate, PetscInt nq, 
             if (!MBCCoupleProjectOnFacePlane(c, x, nrm, g, &Pg, PETSC_TRUE, &cp, &qual)) continue;
             (void)MBCSurfaceFaceWeights(s, g, cp.w, ns, Ws);
             if (quad) (void)MBCSurfaceFaceWeights(m, f, N, mn, Wm);
-            if (quad || ngw == 6) { /* the gap between the quadratic faces' points the weights give: H^T du moves it exactly */
-              PetscReal dx[3];
+            if (quad || ngw == 6) { /* the gap between the quadratic faces' points the weights give */
+              PetscReal xm[3];
               for (PetscInt d = 0; d < 3; d++) {
-                dx[d] = quad ? 0 : x[d];
-                for (PetscInt j = 0; j < nmw; j++) dx[d] += Wm[j] * m->x[3 * mn[j] + d];
-                for (PetscInt j = 0; j < ngw; j++) dx[d] -= Ws[j] * s->x[3 * ns[j] + d];
+                xm[d] = quad ? 0 : x[d];
+                for (PetscInt j = 0; j < nmw; j++) xm[d] += Wm[j] * m->x[3 * mn[j] + d];
               }
-              cp.gap = MBCDot(dx, cp.n);
+              cp.gap = SlavePointGap(s, ngw, ns, Ws, xm, cp.n);
             }
             for (PetscInt i = 0; i < nv; i++) {
               psi[i] = 0;
@@ -510,14 +522,7 @@ PetscErrorCode MBCCoupleIntegrate(MBCCouple *c, PetscBool integrate, PetscInt nq
       PetscInt  wn[MBC_MAX_WEIGHT_NODES];
       PetscReal W[MBC_MAX_WEIGHT_NODES], gap = p->gap;
       const PetscInt nw = MBCSurfaceFaceWeights(s, p->face, p->w, wn, W);
-      if (nw == 6) {
-        PetscReal dx[3];
-        for (PetscInt d = 0; d < 3; d++) {
-          dx[d] = m->x[3 * p->master + d];
-          for (PetscInt j = 0; j < nw; j++) dx[d] -= W[j] * s->x[3 * wn[j] + d];
-        }
-        gap = MBCDot(dx, p->n);
-      }
+      if (nw == 6) gap = SlavePointGap(s, nw, wn, W, &m->x[3 * p->master], p->n);
       for (PetscInt j = 0; j < nw; j++) PetscCall(EntryAdd(&sl, (PetscInt64)k * s->nnodes + wn[j], W[j] * area[k]));
       gsum[k] = gap * area[k];
     }
