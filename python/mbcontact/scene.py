@@ -293,6 +293,9 @@ class Couple:
     slave: list
     mu: float
     exclude: list = field(default_factory=list)  # regions whose nodes carry no contact point
+    cohesion: float = 0.0          # joint law (docs/dam.md): 0 = unbonded Coulomb contact
+    tensile_strength: float = 0.0  # resolved: cohesion / mu when not given
+    mu_residual: float = 0.0       # resolved: mu when not given
 
 
 @dataclass
@@ -590,7 +593,8 @@ def _couples(value):
     couples, seen = [], {}
     for i, spec in enumerate(entries(value, "couples")):
         where = f"couples[{i}]"
-        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude"), required=("master", "slave"))
+        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude", "cohesion", "tensile_strength", "mu_residual"),
+                       required=("master", "slave"))
         k = integer(spec.get("k", i + 1), f"{where}.k", ge=1)
         if k in seen:
             raise InputError(f"{where}.k: couple k={k} is already defined by couples[{seen[k]}]")
@@ -602,7 +606,36 @@ def _couples(value):
         if couples[-1].mu > MAX_MU:
             raise InputError(f"{where}.mu: {couples[-1].mu:g} is not a friction coefficient (at most "
                              f"{MAX_MU:g}, a friction angle of 89.94 degrees)")
+        _joint_law(couples[-1], spec, where)
     return couples
+
+
+def _joint_law(c, spec, where):
+    """The bonded joint's keys (docs/dam.md): cohesion c, tensile strength f_t <= c / mu (the apex of
+    the Mohr-Coulomb cone), residual friction after the bond breaks."""
+    for key in ("tensile_strength", "mu_residual"):
+        if key in spec and "cohesion" not in spec:
+            raise InputError(f"{where}.{key} (couple k={c.k}): a joint law's key needs cohesion (> 0) on the couple")
+    c.cohesion = real(spec.get("cohesion", 0.0), f"{where}.cohesion (couple k={c.k})", ge=0)
+    c.mu_residual = real(spec.get("mu_residual", c.mu), f"{where}.mu_residual (couple k={c.k})", ge=0)
+    if c.cohesion == 0:
+        if "tensile_strength" in spec or "mu_residual" in spec:
+            raise InputError(f"{where} (couple k={c.k}): tensile_strength and mu_residual belong to a bonded joint: "
+                             f"give cohesion > 0, or leave them out")
+        c.tensile_strength, c.mu_residual = 0.0, c.mu
+        return
+    if c.mu == 0:
+        raise InputError(f"{where}.cohesion (couple k={c.k}): a bonded joint needs friction mu > 0 (its cone "
+                         f"|t| <= c + mu p has its apex at p = -c/mu; with mu = 0 the tensile strength is unbounded)")
+    apex = c.cohesion / c.mu
+    c.tensile_strength = real(spec.get("tensile_strength", apex), f"{where}.tensile_strength (couple k={c.k})", ge=0)
+    if c.tensile_strength > apex * (1 + 1e-12):
+        raise InputError(f"{where}.tensile_strength (couple k={c.k}): {c.tensile_strength:g} exceeds cohesion / mu = "
+                         f"{c.cohesion:g} / {c.mu:g} = {apex:g}, the apex of the Mohr-Coulomb cone")
+    c.tensile_strength = min(c.tensile_strength, apex)
+    if c.mu_residual > MAX_MU:
+        raise InputError(f"{where}.mu_residual (couple k={c.k}): {c.mu_residual:g} is not a friction coefficient "
+                         f"(at most {MAX_MU:g})")
 
 
 def _dirichlet(spec, where, base_dir=".", bodies=()):

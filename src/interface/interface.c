@@ -1450,6 +1450,7 @@ PetscErrorCode MBCInterfaceDestroy(MBCInterface *iface)
   PetscCall(PetscFree4(ifc->sinv, ifc->sinv_is, ifc->sinv_id, ifc->sinv_state));
   PetscCall(PetscFree(ifc->schur_fits));
   PetscCall(MBCMultiplierDestroy(&ifc->mult));
+  PetscCall(MBCInterfaceJointDestroy(ifc));
   PetscCall(PetscFree(*iface));
   PetscFunctionReturn(0);
 }

@@ -5,10 +5,11 @@
 
 /* -mbc_fclib_write FILE at step -mbc_fclib_write_step: the scaled problem (W = D / dscale,
    r = dscale lambda) and its solution as an FCLIB local problem in rank order, gathered to and
-   written by rank 0. */
+   written by rank 0. With bonded couples it is the shifted problem of the step's last solve
+   (InterfaceSolveJoints): a bonded point's r is r_n + s (s = dscale (c/mu) A / theta), q is
+   q - W s, its mu the couple's; a broken point's mu is mu_residual; the title says so. */
 static PetscErrorCode InterfaceWriteFclib(MBCInterface ifc, PetscInt step)
 {
-  MBCContact         c = ifc->contact;
   PetscMPIInt        rank;
   PetscInt           m = ifc->coff[ifc->ncontact];
   IS                 is;
@@ -37,11 +38,12 @@ static PetscErrorCode InterfaceWriteFclib(MBCInterface ifc, PetscInt step)
     fp0.q  = v0[0];
     PetscCall(PetscMalloc2(fp0.nc + 1, &fp0.mu, fp0.nc + 1, &dims));
     for (PetscInt p = 0; p < fp0.nc; p++) {
-      fp0.mu[p] = c->couples[ifc->kcouple[ifc->order[p]]].mu;
+      fp0.mu[p] = MBCInterfaceJointMu(ifc, ifc->order[p]);
       dims[p]   = ifc->poff[p + 1] - ifc->poff[p];
     }
     PetscCall(MBCFrictionProblemSetBlocks(&fp0, dims));
-    PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, ifc->scene->filename, step));
+    if (MBCInterfaceJointBonded(ifc)) PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT ", bonded points: the shifted cone, r_n = r_n(contact) + dscale (c/mu) A, q = q(contact) - W s", ifc->scene->filename, step));
+    else PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, ifc->scene->filename, step));
     PetscCall(MBCFclibWriteLocal(ifc->fclib_file, &fp0, v0[1], v0[2]));
     PetscCall(PetscFree(fp0.off));
     PetscCall(PetscFree2(fp0.mu, dims));
@@ -191,6 +193,78 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
   PetscFunctionReturn(0);
 }
 
+/* The multiplier solve of fp with q scaled to unit norm: the FCLIB merit |r - proj(..)| / (1 + |q|)
+   then is relative, and -mbc_pgs_rtol means the same in m or mm (absolute in the scene's length
+   unit, 1e-8 would be 10 nm in m and 10 pm in mm). shift (bonded couples, else NULL): the problem
+   is in r' = r + shift, so the free bodies' equilibrium G r = e becomes G r' = e + G shift. */
+static PetscErrorCode InterfaceSolveScaled(MBCInterface ifc, PetscInt step, PetscReal time, Vec shift, PetscReal *qnorm)
+{
+  PetscReal L;
+
+  PetscFunctionBegin;
+  PetscCall(VecNorm(ifc->fp.q, NORM_2, &L));
+  *qnorm = L;
+  if (!(L > 0)) L = 1;
+  PetscCall(MBCInterfaceRigidRHS(ifc, step, time));
+  if (shift && ifc->fp.G) PetscCall(MatMultAdd(ifc->fp.G, shift, ifc->fp.e, ifc->fp.e));
+  if (ifc->fp.G) PetscCall(VecZeroEntries(ifc->fp.alpha)); /* the rigid motion of this increment */
+  PetscCall(VecScale(ifc->fp.q, 1 / L));
+  PetscCall(VecScale(ifc->lambda, 1 / L));
+  if (ifc->fp.G) {
+    PetscCall(VecScale(ifc->fp.e, 1 / L));
+    PetscCall(VecScale(ifc->fp.alpha, 1 / L));
+  }
+  PetscCall(MBCMultiplierSetProblem(ifc->mult, &ifc->fp));
+  PetscCall(MBCMultiplierSolve(ifc->mult, ifc->lambda, ifc->ucontact)); /* warm start: r of the last step */
+  PetscCall(VecScale(ifc->fp.q, L));
+  PetscCall(VecScale(ifc->lambda, L));
+  PetscCall(VecScale(ifc->ucontact, L));
+  if (ifc->fp.G) {
+    PetscCall(VecScale(ifc->fp.e, L));
+    PetscCall(VecScale(ifc->fp.alpha, L));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Bonded couples (interfacejoint.c): the bonded cone is the Coulomb cone shifted along the normal
+   by s, so the multiplier problem in r' = r + s is the solvers' own, with q' = q - W s (one product
+   with W). After each solve the bonded points whose traction reached the cone's boundary break,
+   and the changed problem (their shift gone, mu_residual) is solved again, until no point breaks:
+   points only break, so the cascade ends within the points' count. A failed solve undoes the
+   breaks of this call (the caller cuts the step). The FCLIB copy is the last solve's shifted
+   problem. */
+static PetscErrorCode InterfaceSolveJoints(MBCInterface ifc, PetscInt step, PetscReal time, PetscBool may_fail, PetscReal *qnorm)
+{
+  Vec      q0, s;
+  PetscInt nnew, total = 0, nsolves = 0;
+
+  PetscFunctionBegin;
+  PetscCall(VecDuplicate(ifc->fp.q, &q0));
+  PetscCall(VecCopy(ifc->fp.q, q0));
+  PetscCall(VecDuplicate(ifc->lambda, &s));
+  for (;;) {
+    PetscCall(MBCInterfaceJointProblem(ifc, s));
+    PetscCall(MatMult(ifc->fp.W, s, ifc->ucontact));
+    PetscCall(VecWAXPY(ifc->fp.q, -1.0, ifc->ucontact, q0));
+    PetscCall(VecAXPY(ifc->lambda, 1.0, s)); /* the warm start in r' */
+    PetscCall(InterfaceSolveScaled(ifc, step, time, s, qnorm));
+    nsolves++;
+    if (ifc->fclib_step == step && ifc->fclib_file[0]) PetscCall(InterfaceWriteFclib(ifc, step));
+    PetscCall(VecAXPY(ifc->lambda, -1.0, s));
+    if (ifc->mult->reason < 0) break;
+    PetscCall(MBCInterfaceGather(ifc, ifc->lambda, ifc->rall));
+    PetscCall(MBCInterfaceJointBreak(ifc, time, &nnew));
+    if (!nnew) break;
+    total += nnew;
+  }
+  if (ifc->mult->reason < 0 && may_fail) PetscCall(MBCInterfaceJointUnbreak(ifc, time)); /* the step is cut: its breaks are undone */
+  if (total) PetscCall(PetscInfo(NULL, "step %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " bonds broke, %" PetscInt_FMT " multiplier solves\n", step, (double)time, total, nsolves));
+  PetscCall(VecCopy(q0, ifc->fp.q));
+  PetscCall(VecDestroy(&q0));
+  PetscCall(VecDestroy(&s));
+  PetscFunctionReturn(0);
+}
+
 /* Coulomb's law in a static load step holds for the slip over the whole load step: the
    equilibrium iterations after the first only correct it, so their tangential rates start from
    the slip the load step's earlier iterations made (else a point that slid in the first iteration
@@ -231,10 +305,11 @@ PetscErrorCode MBCInterfaceLoadStepBegin(MBCInterface ifc)
   PetscFunctionBegin;
   if (ifc->cutslip) PetscCall(PetscArraycpy(ifc->cutslip, ifc->stepslip, 3 * ifc->ncontact));
   ifc->cutres = ifc->stepres;
+  PetscCall(MBCInterfaceJointSave(ifc, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
 
-/* A static load step is abandoned (to be cut): the slip it made is undone. */
+/* A static load step is abandoned (to be cut): the slip it made and its breaks are undone. */
 PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
 {
   PetscFunctionBegin;
@@ -243,6 +318,7 @@ PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
     ifc->stepslip[i] = ifc->cutslip[i];
   }
   ifc->stepres = ifc->cutres;
+  PetscCall(MBCInterfaceJointSave(ifc, PETSC_TRUE)); /* and the bonds it broke */
   PetscFunctionReturn(0);
 }
 
@@ -271,32 +347,11 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
     PetscCall(VecAXPY(ifc->fp.q, -ifc->carry, ifc->ucontact));
     PetscCall(VecDestroy(&t));
   }
-  { /* solve with q scaled to unit norm: the FCLIB merit |r - proj(..)| / (1 + |q|) then is
-       relative, and -mbc_pgs_rtol means the same in m or mm (absolute in the scene's length
-       unit, 1e-8 would be 10 nm in m and 10 pm in mm) */
-    PetscReal L;
-    PetscCall(VecNorm(ifc->fp.q, NORM_2, &L));
-    qnorm = L;
-    if (!(L > 0)) L = 1;
-    PetscCall(MBCInterfaceRigidRHS(ifc, step, time));
-    if (ifc->fp.G) PetscCall(VecZeroEntries(ifc->fp.alpha)); /* the rigid motion of this increment */
-    PetscCall(VecScale(ifc->fp.q, 1 / L));
-    PetscCall(VecScale(ifc->lambda, 1 / L));
-    if (ifc->fp.G) {
-      PetscCall(VecScale(ifc->fp.e, 1 / L));
-      PetscCall(VecScale(ifc->fp.alpha, 1 / L));
-    }
-    PetscCall(MBCMultiplierSetProblem(ifc->mult, &ifc->fp));
-    PetscCall(MBCMultiplierSolve(ifc->mult, ifc->lambda, ifc->ucontact)); /* warm start: r of the last step */
-    PetscCall(VecScale(ifc->fp.q, L));
-    PetscCall(VecScale(ifc->lambda, L));
-    PetscCall(VecScale(ifc->ucontact, L));
-    if (ifc->fp.G) {
-      PetscCall(VecScale(ifc->fp.e, L));
-      PetscCall(VecScale(ifc->fp.alpha, L));
-    }
+  if (MBCInterfaceHasJoints(ifc)) PetscCall(InterfaceSolveJoints(ifc, step, time, may_fail, &qnorm));
+  else {
+    PetscCall(InterfaceSolveScaled(ifc, step, time, NULL, &qnorm));
+    if (ifc->fclib_step == step && ifc->fclib_file[0]) PetscCall(InterfaceWriteFclib(ifc, step));
   }
-  if (ifc->fclib_step == step && ifc->fclib_file[0]) PetscCall(InterfaceWriteFclib(ifc, step));
   if (ifc->mult->reason < 0 && ifc->fp.G) PetscCall(InterfaceFrictionCapacity(ifc, step, time));
   if (ifc->mult->reason < 0 && may_fail) { /* the caller cuts the step: nothing changed */
     PetscCall(VecCopy(ifc->lamsave, ifc->lambda));

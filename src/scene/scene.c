@@ -294,6 +294,30 @@ static PetscErrorCode ReadRealDataset(H5Node *entry, const char *name, PetscInt 
 
 /* The optional dataset `exclude` of a couple: (n, 2) integers, body and vertex (scene order) of
    each node taken out of contact (docs/scene-h5.md). */
+/* The joint law of a bonded couple (docs/dam.md): optional, cohesion 0 (absent) is today's
+   unbonded contact; the prep resolves the defaults, a hand-made file gets them here. */
+static PetscErrorCode ReadCoupleJoint(H5Node *e, MBCScene s, MBCCoupleDesc *c)
+{
+  PetscFunctionBegin;
+  c->cohesion = 0, c->tensile = -1, c->mu_residual = -1;
+  PetscCall(H5ReadReal(e, "cohesion", &c->cohesion, PETSC_TRUE));
+  PetscCall(H5ReadReal(e, "tensile_strength", &c->tensile, PETSC_TRUE));
+  PetscCall(H5ReadReal(e, "mu_residual", &c->mu_residual, PETSC_TRUE));
+  PetscCheck(c->cohesion >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": cohesion %g < 0", s->filename, c->k, (double)c->cohesion);
+  if (c->cohesion == 0) {
+    PetscCheck(c->tensile <= 0 && c->mu_residual < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": tensile_strength and mu_residual belong to a bonded joint (cohesion > 0)", s->filename, c->k);
+    c->tensile = 0, c->mu_residual = c->mu;
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(c->mu > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": cohesion %g needs friction mu > 0 (the bonded cone's apex lies at -cohesion/mu)", s->filename, c->k, (double)c->cohesion);
+  if (c->tensile < 0) c->tensile = c->cohesion / c->mu;
+  if (c->mu_residual < 0) c->mu_residual = c->mu;
+  PetscCheck(c->tensile <= c->cohesion / c->mu * (1 + 1e-12), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": tensile_strength %g exceeds cohesion / mu = %g", s->filename, c->k, (double)c->tensile, (double)(c->cohesion / c->mu));
+  c->tensile = PetscMin(c->tensile, c->cohesion / c->mu);
+  PetscCheck(c->mu_residual <= MBC_MAX_MU, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": mu_residual %g above %g", s->filename, c->k, (double)c->mu_residual, (double)MBC_MAX_MU);
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode ReadCoupleExclude(H5Node *entry, MBCScene scene, MBCCoupleDesc *c)
 {
   PetscFunctionBegin;
@@ -722,6 +746,7 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCall(H5ReadReals(&e, "slave_faces", s->nbodies, c->slave_faces, PETSC_TRUE));
     PetscCheck(c->k >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple %s has real constant k = %" PetscInt_FMT "; k must be at least 1", s->filename, e.path, c->k);
     PetscCheck(c->mu >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g < 0", s->filename, c->k, (double)c->mu);
+    PetscCall(ReadCoupleJoint(&e, s, c));
     PetscCall(ReadCoupleExclude(&e, s, c));
     PetscCall(H5NodeClose(&e));
   }
@@ -1029,7 +1054,7 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
     MBCBodyDesc *b = &s->bodies[i];
     PetscCall(PetscViewerASCIIPrintf(viewer, "body %s: %" PetscInt_FMT " %s cells, %" PetscInt_FMT " vertices, E %g nu %g density %g damping %g rayleigh %g %g\n", b->name, b->num_cells, b->cell_type, b->num_vertices, (double)b->E, (double)b->nu, (double)b->density, (double)b->damping, (double)b->rayleigh_alpha, (double)b->rayleigh_beta));
   }
-  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "couple %" PetscInt_FMT ": master %s (+k), slave %s (-k), mu %g, %" PetscInt_FMT " master nodes taken out of contact\n", s->couples[i].k, s->couples[i].master, s->couples[i].slave, (double)s->couples[i].mu, s->couples[i].nexclude));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "couple %" PetscInt_FMT ": master %s (+k), slave %s (-k), mu %g, %" PetscInt_FMT " master nodes taken out of contact%s\n", s->couples[i].k, s->couples[i].master, s->couples[i].slave, (double)s->couples[i].mu, s->couples[i].nexclude, s->couples[i].cohesion > 0 ? ", bonded" : ""));
   for (PetscInt i = 0; i < s->ndirichlet; i++) {
     const MBCDirichletDesc *d = &s->dirichlet[i];
     const char *const       comp[] = {"ux", "uy", "uz", "rx", "ry", "rz"};

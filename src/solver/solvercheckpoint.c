@@ -234,6 +234,17 @@ PetscErrorCode MBCSolverCheckpointWrite(MBCSolver s)
     PetscCall(PetscViewerHDF5PopGroup(v));
     PetscCall(PetscFree2(lam, pr));
   }
+  if (MBCInterfaceHasJoints(s->iface)) { /* the bonded couples' break times per master node (interfacejoint.c) */
+    PetscInt   nj;
+    PetscReal *tj;
+    PetscCall(MBCInterfaceJointGetState(s->iface, &nj, NULL));
+    PetscCall(PetscMalloc1(nj + 1, &tj));
+    PetscCall(MBCInterfaceJointGetState(s->iface, &nj, tj));
+    PetscCall(PetscViewerHDF5PushGroup(v, "/joints"));
+    PetscCall(CheckpointArray(s, v, nj, tj, "break_time", PETSC_FALSE));
+    PetscCall(PetscViewerHDF5PopGroup(v));
+    PetscCall(PetscFree(tj));
+  }
   PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "num_points", PETSC_INT, &nc));
   PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "num_multipliers", PETSC_INT, &m));
   PetscCall(PetscViewerDestroy(&v));
@@ -385,6 +396,20 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
     c->nsearches         = nsearches;
     c->check_penetration = PETSC_TRUE;
   } else if (s->contact) PetscCall(MBCContactUpdate(s->contact, s->nbodies, s->bodies, PETSC_TRUE, NULL));
+  if (MBCInterfaceHasJoints(s->iface)) { /* the bonds broken before the checkpoint stay broken */
+    PetscBool  hasj;
+    PetscInt   nj;
+    PetscReal *tj;
+    PetscCall(PetscViewerHDF5HasDataset(v, "/joints/break_time", &hasj));
+    PetscCheck(hasj, s->comm, PETSC_ERR_FILE_UNEXPECTED, "Restart file %s has no joint state (/joints/break_time) for the scene's bonded couples: written for another scene?", file);
+    PetscCall(MBCInterfaceJointGetState(s->iface, &nj, NULL));
+    PetscCall(PetscMalloc1(nj + 1, &tj));
+    PetscCall(PetscViewerHDF5PushGroup(v, "/joints"));
+    PetscCall(CheckpointArray(s, v, nj, tj, "break_time", PETSC_TRUE));
+    PetscCall(PetscViewerHDF5PopGroup(v));
+    PetscCall(MBCInterfaceJointSetState(s->iface, nj, tj));
+    PetscCall(PetscFree(tj));
+  }
   PetscCall(PetscViewerDestroy(&v));
   if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g restarted from %s (stage %" PetscInt_FMT ")\n", s->step, (double)s->time, file, s->istage));
   PetscFunctionReturn(0);

@@ -31,7 +31,8 @@ PetscErrorCode MBCSolverMonitorContact(MBCSolver s, MBCMultiplier mult)
   if (s->contact_line[0]) {
     PetscInt count[3] = {0, 0, 0};
     PetscCall(MBCInterfaceStates(s->iface, count, NULL, NULL));
-    PetscCall(PetscPrintf(s->comm, "%s; separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->contact_line, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
+    if (MBCInterfaceHasJoints(s->iface)) PetscCall(PetscPrintf(s->comm, "%s; separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT ", bonded %" PetscInt_FMT "\n", s->contact_line, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP], MBCInterfaceJointBonded(s->iface)));
+    else PetscCall(PetscPrintf(s->comm, "%s; separated %" PetscInt_FMT ", stick %" PetscInt_FMT ", slip %" PetscInt_FMT "\n", s->contact_line, count[MBC_CONTACT_SEPARATED], count[MBC_CONTACT_STICK], count[MBC_CONTACT_SLIP]));
     s->contact_line[0] = 0;
   }
   if (mult) {

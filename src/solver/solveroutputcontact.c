@@ -22,7 +22,7 @@ PetscErrorCode MBCSolverOutputContactOpen(MBCSolver s)
   if (rank) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_contact.csv", s->output));
   PetscCall(MBCFileOpenWrite(file, &s->contact_csv));
-  fprintf(s->contact_csv, "t,couple,points,separated,stick,slip,normal_force,fx,fy,fz,max_slip,max_opening\n");
+  fprintf(s->contact_csv, "t,couple,points,separated,stick,slip,normal_force,fx,fy,fz,max_slip,max_opening%s\n", MBCInterfaceHasJoints(s->iface) ? ",bonded" : ""); /* bonded couples: the points whose bond holds */
   PetscFunctionReturn(0);
 }
 
@@ -46,7 +46,9 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   MBCInterface ifc = s->iface; /* read through its struct: the frames and the slip of the last build */
   PetscInt     np = 0, count[3], *state;
   PetscReal *lam, *x, *x0, *slip, *nrm, *force, *pressure, *traction, *gap, *area;
-  int       *couple, *istate;
+  int       *couple, *istate, *bonded = NULL;
+  PetscReal *tbreak = NULL;
+  PetscBool  joints = (PetscBool)(c && MBCInterfaceHasJoints(ifc));
 
   PetscFunctionBegin;
   if (!c) PetscFunctionReturn(0);
@@ -54,12 +56,14 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   PetscCall(PetscCalloc6(3 * np + 1, &lam, 3 * np + 1, &x, 3 * np + 1, &nrm, 3 * np + 1, &force, 3 * np + 1, &traction, np + 1, &state));
   PetscCall(PetscCalloc5(np + 1, &pressure, np + 1, &gap, np + 1, &area, np + 1, &couple, np + 1, &istate));
   PetscCall(PetscCalloc2(3 * np + 1, &x0, 3 * np + 1, &slip));
+  if (joints) PetscCall(PetscCalloc2(np + 1, &bonded, np + 1, &tbreak));
   if (np == ifc->ncontact) PetscCall(MBCInterfaceStates(ifc, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
     PetscReal  sum[5] = {0, 0, 0, 0, 0}; /* -, the three states, normal force */
     PetscReal  f[3]   = {0, 0, 0}, maxslip = 0, maxopen = 0;
     PetscInt   kfirst = k;
+    PetscInt   nbonded = 0;
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
       const MBCContactPoint *p = &cp->points[j];
       const PetscReal       *z = &lam[3 * k];
@@ -83,11 +87,17 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       maxslip = PetscMax(maxslip, PetscSqrtReal(PetscSqr(slip[3 * k]) + PetscSqr(slip[3 * k + 1]) + PetscSqr(slip[3 * k + 2])));
       maxopen = PetscMax(maxopen, gap[k]);
       pressure[k] = area[k] > 0 ? z[0] / area[k] : 0;
+      if (joints) {
+        bonded[k] = (int)(MBCInterfaceJointPoint(ifc, i, j, &tbreak[k]) == 1);
+        nbonded += bonded[k];
+      }
       sum[1 + state[k]] += 1;
       sum[4] += z[0];
     }
     if (cp->mu == 0) maxslip = NAN; /* frictionless: the tangential motion is not tracked */
-    if (s->contact_csv) fprintf(s->contact_csv, "%.17g,%" PetscInt_FMT ",%" PetscInt_FMT ",%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)s->time, cp->k, k - kfirst, (int)sum[1], (int)sum[2], (int)sum[3], (double)sum[4], (double)f[0], (double)f[1], (double)f[2], (double)maxslip, (double)maxopen);
+    if (s->contact_csv) fprintf(s->contact_csv, "%.17g,%" PetscInt_FMT ",%" PetscInt_FMT ",%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", (double)s->time, cp->k, k - kfirst, (int)sum[1], (int)sum[2], (int)sum[3], (double)sum[4], (double)f[0], (double)f[1], (double)f[2], (double)maxslip, (double)maxopen);
+    if (s->contact_csv && joints) fprintf(s->contact_csv, ",%d", (int)nbonded);
+    if (s->contact_csv) fprintf(s->contact_csv, "\n");
   }
   if (fields && s->h5 >= 0) {
     char     name[64];
@@ -111,9 +121,14 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     PetscCall(MBCH5WriteRows(g, "area", H5T_NATIVE_DOUBLE, np, 1, r0, nr, area + r0));
     PetscCall(MBCH5WriteRows(g, "state", H5T_NATIVE_INT, np, 1, r0, nr, istate + r0));
     PetscCall(MBCH5WriteRows(g, "couple", H5T_NATIVE_INT, np, 1, r0, nr, couple + r0));
+    if (joints) { /* bonded couples: per point 1 while its bond holds, and the time it broke (NaN: it did not, or no bond) */
+      PetscCall(MBCH5WriteRows(g, "bonded", H5T_NATIVE_INT, np, 1, r0, nr, bonded + r0));
+      PetscCall(MBCH5WriteRows(g, "break_time", H5T_NATIVE_DOUBLE, np, 1, r0, nr, tbreak + r0));
+    }
     PetscCall(MBCH5GroupClose(&g));
     s->output_npoints[s->noutputs] = np;
   }
+  PetscCall(PetscFree2(bonded, tbreak));
   PetscCall(MBCSolverContactPointsFree(s)); /* keep this step's points for MBCSolverGetContactPoints */
   s->cpts.n = np;
   s->cpts.lam = lam, s->cpts.x = x, s->cpts.nrm = nrm, s->cpts.force = force, s->cpts.traction = traction, s->cpts.state = state;

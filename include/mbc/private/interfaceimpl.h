@@ -82,6 +82,9 @@ struct _n_MBCInterface {
   PetscReal *stepslip;    /* per point: the same since the step began (a static step's equilibrium iterations, a step's cut steps) */
   PetscReal *cutslip;     /* per point, static: stepslip where the load step under way began (a step cut in two: the first half's) */
   PetscReal  stepres, cutres; /* what the step's multiplier solves resolve of stepslip, 2 rtol |q| summed over its (cut) steps (MBCInterfaceStates); stepres where the load step under way began */
+  PetscReal **jbreak, **jsave; /* per couple with cohesion (NULL otherwise), per master node: the time its bond broke, PETSC_MAX_REAL while
+                                 bonded; saved where a static load step begins (interfacejoint.c) */
+  PetscReal  jtol;        /* -mbc_joint_break_rtol: a bond breaks within this fraction of its apex force (c/mu) A of the cone's boundary */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
 
@@ -139,6 +142,18 @@ PETSC_INTERN PetscErrorCode MBCInterfaceRigidRHS(MBCInterface, PetscInt, PetscRe
 PETSC_INTERN PetscErrorCode MBCInterfaceRigidMotion(MBCInterface);
 /* interfaceheld.c: contact points on prescribed nodes */
 PETSC_INTERN PetscErrorCode MBCInterfaceHeldDirections(MBCInterface);
+/* interfacejoint.c: bonded couples (cohesion, tensile strength, brittle break) */
+PETSC_INTERN PetscBool      MBCInterfaceHasJoints(MBCInterface);
+PETSC_INTERN PetscInt       MBCInterfaceJointPoint(MBCInterface, PetscInt, PetscInt, PetscReal *);
+PETSC_INTERN PetscReal      MBCInterfaceJointMu(MBCInterface, PetscInt);
+PETSC_INTERN PetscInt       MBCInterfaceJointBonded(MBCInterface);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointProblem(MBCInterface, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointBreak(MBCInterface, PetscReal, PetscInt *);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointSave(MBCInterface, PetscBool);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointUnbreak(MBCInterface, PetscReal);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointGetState(MBCInterface, PetscInt *, PetscReal[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointSetState(MBCInterface, PetscInt, const PetscReal[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointDestroy(MBCInterface);
 /* interfacesolve.c: the multipliers of a step */
 PETSC_INTERN PetscErrorCode MBCInterfaceSolve(MBCInterface, PetscInt, PetscReal, PetscBool, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCInterfaceStepBegin(MBCInterface);

@@ -1,0 +1,197 @@
+/* The joint law of bonded couples (docs/dam.md, "Bonded joints"): per master node of a couple
+   with cohesion c > 0, its bond's state (bonded, or the time it broke: brittle, for good). A
+   bonded point's traction lies in |t| <= c + mu p, p >= -f_t (f_t <= c/mu). With the apex
+   s = c/mu times the point's area A this is the Coulomb cone shifted along the normal,
+   r_n' = r_n + s: u = W r + q = W r' + (q - W s), so the bonded problem is the multiplier
+   solve's own problem in r' (the solvers are untouched). A point whose traction the solve puts on
+   the cone's boundary (slip, or the tension cut-off p = -f_t) breaks; the problem then changes
+   (no shift, mu_residual) and is solved again until no point breaks (MBCInterfaceSolve). The
+   break times are this module's state; the interface keeps them per (couple, master node), which
+   the re-search and the rebuilds of H keep, and the checkpoint carries them. */
+#include <mbc/private/interfaceimpl.h>
+
+/* A couple's scene description (the contact's couples are the scene's, in its order). */
+static inline const MBCCoupleDesc *JointDesc(MBCInterface ifc, PetscInt i)
+{
+  return &ifc->scene->couples[i];
+}
+
+PetscBool MBCInterfaceHasJoints(MBCInterface ifc)
+{
+  if (!ifc) return PETSC_FALSE;
+  for (PetscInt i = 0; i < ifc->scene->ncouples; i++)
+    if (JointDesc(ifc, i)->cohesion > 0) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/* The arrays of break times, every bond intact (PETSC_MAX_REAL): made at the first use. */
+static PetscErrorCode JointSetUp(MBCInterface ifc)
+{
+  MBCContact c = ifc->contact;
+
+  PetscFunctionBegin;
+  if (ifc->jbreak) PetscFunctionReturn(0);
+  PetscCall(PetscCalloc2(c->ncouples, &ifc->jbreak, c->ncouples, &ifc->jsave));
+  for (PetscInt i = 0; i < c->ncouples; i++) {
+    const PetscInt n = c->couples[i].master.nnodes;
+    if (!(JointDesc(ifc, i)->cohesion > 0)) continue;
+    PetscCall(PetscMalloc2(n + 1, &ifc->jbreak[i], n + 1, &ifc->jsave[i]));
+    for (PetscInt m = 0; m <= n; m++) ifc->jbreak[i][m] = ifc->jsave[i][m] = PETSC_MAX_REAL;
+  }
+  ifc->jtol = 1e-6;
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-mbc_joint_break_rtol", &ifc->jtol, NULL));
+  PetscCheck(ifc->jtol >= 0 && ifc->jtol < 1, ifc->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_joint_break_rtol %g must lie in [0, 1)", (double)ifc->jtol);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCInterfaceJointDestroy(MBCInterface ifc)
+{
+  PetscFunctionBegin;
+  if (!ifc->jbreak) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) PetscCall(PetscFree2(ifc->jbreak[i], ifc->jsave[i]));
+  PetscCall(PetscFree2(ifc->jbreak, ifc->jsave));
+  PetscFunctionReturn(0);
+}
+
+/* Point j of couple i: bonded (1), broken (0), or on an unbonded couple (-1); *tbreak the time it broke (NaN if it did not). */
+PetscInt MBCInterfaceJointPoint(MBCInterface ifc, PetscInt i, PetscInt j, PetscReal *tbreak)
+{
+  const PetscReal *jb = ifc->jbreak ? ifc->jbreak[i] : NULL;
+  PetscReal        t;
+
+  if (tbreak) *tbreak = NAN;
+  if (!(JointDesc(ifc, i)->cohesion > 0)) return -1;
+  t = jb ? jb[ifc->contact->couples[i].points[j].master] : PETSC_MAX_REAL;
+  if (t == PETSC_MAX_REAL) return 1;
+  if (tbreak) *tbreak = t;
+  return 0;
+}
+
+/* The friction coefficient of point k (couple order): the couple's mu, mu_residual once broken. */
+PetscReal MBCInterfaceJointMu(MBCInterface ifc, PetscInt k)
+{
+  const PetscInt i = ifc->kcouple[k];
+  return MBCInterfaceJointPoint(ifc, i, ifc->kpoint[k], NULL) == 0 ? JointDesc(ifc, i)->mu_residual : ifc->contact->couples[i].mu;
+}
+
+/* Bonded points among the points of the last build (for the monitor and the CSV). */
+PetscInt MBCInterfaceJointBonded(MBCInterface ifc)
+{
+  PetscInt n = 0;
+  for (PetscInt k = 0; k < ifc->ncontact; k++) n += MBCInterfaceJointPoint(ifc, ifc->kcouple[k], ifc->kpoint[k], NULL) == 1;
+  return n;
+}
+
+/* The apex shift of point k in the units of r (scaled, r = dscale z / theta): the cone on the
+   step's mean force z is |z_t| <= mu (z_n + (c/mu) A). */
+static PetscReal JointShift(MBCInterface ifc, PetscInt k)
+{
+  const PetscInt       i = ifc->kcouple[k];
+  const MBCCoupleDesc *d = JointDesc(ifc, i);
+  if (MBCInterfaceJointPoint(ifc, i, ifc->kpoint[k], NULL) != 1) return 0;
+  return ifc->dscale * d->cohesion / d->mu * ifc->contact->couples[i].points[ifc->kpoint[k]].area / ifc->theta;
+}
+
+/* This rank's rows: the shift s (r's layout, the normal rows of bonded points) and each point's
+   mu in the problem. */
+PetscErrorCode MBCInterfaceJointProblem(MBCInterface ifc, Vec s)
+{
+  PetscScalar *a;
+  PetscInt     rstart;
+
+  PetscFunctionBegin;
+  PetscCall(JointSetUp(ifc));
+  PetscCall(VecGetOwnershipRange(s, &rstart, NULL));
+  PetscCall(VecGetArray(s, &a));
+  for (PetscInt p = ifc->pfirst; p < ifc->plast; p++) {
+    const PetscInt k = ifc->order[p];
+    for (PetscInt d = ifc->poff[p]; d < ifc->poff[p + 1]; d++) a[d - rstart] = 0;
+    a[ifc->poff[p] - rstart]   = JointShift(ifc, k);
+    ifc->fp.mu[p - ifc->pfirst] = MBCInterfaceJointMu(ifc, k);
+  }
+  PetscCall(VecRestoreArray(s, &a));
+  PetscFunctionReturn(0);
+}
+
+/* After a solve (rall: r of every point, couple order, the same on every rank): the bonded points
+   whose traction reached the cone's boundary break at `time`; *nnew of them. The test, on the
+   mean force z with the tolerance jtol of the apex's force (c/mu) A: the tension cut-off
+   z_n <= -f_t A, or the slip boundary |z_t| >= c A + mu z_n. Points with no area carry nothing
+   and are not judged. */
+PetscErrorCode MBCInterfaceJointBreak(MBCInterface ifc, PetscReal time, PetscInt *nnew)
+{
+  PetscFunctionBegin;
+  *nnew = 0;
+  PetscCall(JointSetUp(ifc));
+  for (PetscInt k = 0; k < ifc->ncontact; k++) {
+    const PetscInt       i = ifc->kcouple[k], j = ifc->kpoint[k], o = ifc->coff[k];
+    const MBCCoupleDesc *d = JointDesc(ifc, i);
+    const PetscReal      A = ifc->contact->couples[i].points[j].area, f = ifc->theta / ifc->dscale;
+    PetscReal            zn, zt, tol;
+    if (MBCInterfaceJointPoint(ifc, i, j, NULL) != 1 || !(A > 0)) continue;
+    zn  = f * ifc->rall[o];
+    zt  = f * PetscSqrtReal(PetscSqr(ifc->rall[o + 1]) + PetscSqr(ifc->rall[o + 2]));
+    tol = ifc->jtol * d->cohesion / d->mu * A;
+    if (zn + d->tensile * A <= tol || zt >= d->cohesion * A + d->mu * zn - d->mu * tol) {
+      ifc->jbreak[i][ifc->contact->couples[i].points[j].master] = time;
+      (*nnew)++;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The break state where a load step begins (saved) and where it is abandoned (restored). */
+PetscErrorCode MBCInterfaceJointSave(MBCInterface ifc, PetscBool restore)
+{
+  PetscFunctionBegin;
+  if (!ifc->jbreak) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) {
+    if (!ifc->jbreak[i]) continue;
+    if (restore) PetscCall(PetscArraycpy(ifc->jbreak[i], ifc->jsave[i], ifc->contact->couples[i].master.nnodes));
+    else PetscCall(PetscArraycpy(ifc->jsave[i], ifc->jbreak[i], ifc->contact->couples[i].master.nnodes));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* A failed solve at `time` (the step is cut): the bonds that broke at that time are whole again. */
+PetscErrorCode MBCInterfaceJointUnbreak(MBCInterface ifc, PetscReal time)
+{
+  PetscFunctionBegin;
+  for (PetscInt i = 0; ifc->jbreak && i < ifc->contact->ncouples; i++)
+    for (PetscInt m = 0; ifc->jbreak[i] && m < ifc->contact->couples[i].master.nnodes; m++)
+      if (ifc->jbreak[i][m] == time) ifc->jbreak[i][m] = PETSC_MAX_REAL;
+  PetscFunctionReturn(0);
+}
+
+/* For the checkpoint: every bonded couple's break times, couple after couple, per master node
+   (n of them; NULL t: the count only); and back. */
+PetscErrorCode MBCInterfaceJointGetState(MBCInterface ifc, PetscInt *n, PetscReal t[])
+{
+  PetscFunctionBegin;
+  *n = 0;
+  if (!MBCInterfaceHasJoints(ifc)) PetscFunctionReturn(0);
+  PetscCall(JointSetUp(ifc));
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) {
+    if (!ifc->jbreak[i]) continue;
+    if (t) PetscCall(PetscArraycpy(t + *n, ifc->jbreak[i], ifc->contact->couples[i].master.nnodes));
+    *n += ifc->contact->couples[i].master.nnodes;
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCInterfaceJointSetState(MBCInterface ifc, PetscInt n, const PetscReal t[])
+{
+  PetscInt m;
+
+  PetscFunctionBegin;
+  PetscCall(MBCInterfaceJointGetState(ifc, &m, NULL));
+  PetscCheck(m == n, ifc->comm, PETSC_ERR_FILE_UNEXPECTED, "Checkpoint: %" PetscInt_FMT " joint break times where the scene's bonded couples have %" PetscInt_FMT " master nodes", n, m);
+  m = 0;
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) {
+    if (!ifc->jbreak[i]) continue;
+    PetscCall(PetscArraycpy(ifc->jbreak[i], t + m, ifc->contact->couples[i].master.nnodes));
+    PetscCall(PetscArraycpy(ifc->jsave[i], t + m, ifc->contact->couples[i].master.nnodes));
+    m += ifc->contact->couples[i].master.nnodes;
+  }
+  PetscFunctionReturn(0);
+}
