@@ -1,0 +1,216 @@
+"""The joint law of a bonded couple (docs/dam.md, "Bonded joints"): cohesion c, tensile strength
+f_t <= c/mu, brittle break point by point to residual friction mu_r.
+
+The scenes are a block of one hex8 cell (1 x 1 x 0.5, nu = 0) on a base held at every node. The
+block is the master side, so its four bottom corners are the contact points, each of area 1/4;
+the loads act on those nodes (the push, the pull) and as a uniform pressure on its top, so every
+point carries the same traction (nu = 0: the pressure reaches the base unchanged, no Poisson
+shear): the bond of all four points reaches the cone's boundary at the same load, the resultant's
+capacity c A + mu N, and the law can be checked against that number to the solver's tolerance."""
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import PREP, env, prep, result, solve
+from mbcontact import meshgen
+from mbcontact.results import output_times, read_contact, read_csv
+
+A, H = 1.0, 0.5          # contact area, block height
+C, MU, MU_R = 1.0e6, 0.6, 0.5
+P = 1.0e6                # pressure on the block's top: N = P A
+
+
+def scene(tmp_path, push=0.0, pull=0.0, dynamic=None, joint=None, pressure=P, mu=MU):
+    """push: the resultant at the end of a load on the block's bottom nodes along x; pull: a uniform
+    traction up on its top, resultant `pull` (the block stretched uniformly, nu = 0: its bottom
+    nodes carry pull/4 each). Static: both grow linearly over t = 0..1 in steps of 0.1, the pressure
+    is constant. dynamic = dt: a static stage (t = 0..1) under the pressure alone, then the push or
+    pull growing linearly from 0 at t = 1 to its resultant at t = 2, in dynamic steps of dt."""
+    meshgen.boxes(str(tmp_path / "j.msh"),
+                  [dict(lo=(0, 0, -0.5), hi=(1, 1, 0), n=(1, 1, 1), name="base", cell="hex8"),
+                   dict(lo=(0, 0, 0), hi=(1, 1, H), n=(1, 1, 1), name="block", cell="hex8")])
+    material = {"E": 3.0e10, "nu": 0.0, "density": 2400}
+    couple = {"master": "block_zmin", "slave": "base_zmax", "mu": mu}
+    couple.update(joint if joint is not None else {"cohesion": C, "mu_residual": MU_R})
+    loads = [{"kind": "pressure", "surface": "block_zmax", "value": pressure}] if pressure else []
+    ramp = {"table": [[1, 0], [2, 1]] if dynamic else [[0, 0], [1, 1]]}
+    growing = []
+    if push:
+        growing.append({"kind": "nodal_force", "nodes": "bottom", "vector": [push / 4, 0, 0], "time": ramp})
+    if pull:
+        growing.append({"kind": "traction", "surface": "block_zmax", "vector": [0, 0, pull / A], "time": ramp})
+    sc = {"meshes": {"m": "j.msh"},
+          "bodies": {b: {"mesh": "m", "regions": b, "material": material} for b in ("base", "block")},
+          "node_sets": {"bottom": {"box": {"lo": [0, 0, 0], "hi": [1, 1, 0]}, "bodies": ["block"]}},
+          "couples": [couple],
+          "dirichlet": [{"body": "base", "components": "all"}],
+          "loads": loads}
+    if dynamic:
+        sc["stages"] = [{"name": "weight", "analysis": {"type": "static"}},
+                        {"name": "push", "analysis": {"type": "dynamic", "dt": dynamic, "final_time": 1.6}, "loads": growing}]
+    else:
+        sc["loads"] = loads + growing
+        sc["analysis"] = {"type": "static", "dt": 0.1, "final_time": 1.0}
+    return sc
+
+
+def steps(h5):
+    return [read_contact(result(h5, ".h5"), step=k) for k in range(len(output_times(result(h5, ".h5"))))]
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_bonded_block_pushed_holds_below_capacity(tmp_path, nproc):
+    """Static, pushed up to T = 0.95 (c A + mu N) = 1.52 MN (mu N alone is 0.6 MN: unbonded it would
+    slide from T = 0.375 of this): every point stays bonded, sticks, and carries T/4 and N/4, in every
+    load step; the monitor and the CSV count the bonded points."""
+    cap = C * A + MU * P * A
+    h5 = prep(tmp_path, scene(tmp_path, push=0.95 * cap))
+    r = solve(h5, "-mbc_monitor", "-mbc_multiplier_rtol", "1e-10", nproc=nproc)  # static, free block: newton
+    assert "bonded 4" in r.stdout
+    c = read_csv(result(h5, "_contact.csv"))
+    assert np.all(c["bonded"] == 4)
+    for q in steps(h5):
+        T = 0.95 * cap * q["time"]
+        assert np.all(q["bonded"] == 1) and np.all(np.isnan(q["break_time"]))
+        assert np.all(q["state"] == 1), q["state"]
+        assert np.allclose(q["pressure"], P, rtol=1e-6)
+        assert np.allclose(q["traction"][:, 0], -T / A, rtol=1e-6, atol=1e-6 * P), (q["time"], q["traction"])
+
+
+def test_bonded_block_pushed_beyond_capacity_has_no_static_state(tmp_path):
+    """Static: at the load step where T passes c A + mu N every bond breaks (in that step), and
+    mu_r N cannot hold the block: no static equilibrium, a clear error."""
+    cap = C * A + MU * P * A
+    h5 = prep(tmp_path, scene(tmp_path, push=1.05 * cap))
+    r = solve(h5, check=False)
+    assert r.returncode != 0
+    assert "no static equilibrium" in r.stderr + r.stdout
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_bonded_block_pushed_breaks_at_capacity_then_slides(tmp_path, nproc):
+    """Dynamic (trapezoidal Newmark, dt 0.01 s) after a static stage under the pressure, the push
+    growing from t = 1 so that T reaches c A + mu N at t* = 1.505 s (between steps): the
+    complementarity holds on the step's mean force, T at mid-step, so the bonds hold up to the step
+    ending at 1.51 and break in it (all four: one step); from there every point slides with
+    |t| = mu_r p (the residual friction)."""
+    cap = C * A + MU * P * A
+    tstar = 0.505
+    h5 = prep(tmp_path, scene(tmp_path, push=cap / tstar, dynamic=0.01))
+    r = solve(h5, "-mbc_monitor", "-mbc_multiplier_rtol", "1e-10", nproc=nproc)
+    seen_break = None
+    for q in steps(h5)[2:]:  # the static stage's step, the dynamic stage's initial state
+        t = q["time"]
+        mid = t - 1.005
+        if mid < tstar:
+            assert np.all(q["bonded"] == 1), (t, q["bonded"])
+            assert np.allclose(q["traction"][:, 0], -cap / tstar * mid / A, rtol=1e-6), (t, q["traction"])
+        else:
+            assert np.all(q["bonded"] == 0), (t, q["bonded"])
+            seen_break = seen_break or t
+            assert np.allclose(q["break_time"], seen_break)
+            assert np.all(q["state"] == 2), (t, q["state"])
+            ratio = np.linalg.norm(q["traction"], axis=1) / q["pressure"]
+            assert np.allclose(ratio, MU_R, rtol=1e-6), (t, ratio)
+    assert seen_break is not None and abs(seen_break - 1.51) < 1e-9
+    assert "bonded 0" in r.stdout
+
+
+@pytest.mark.parametrize("mtype", ["newton", "pgs"])
+def test_bonded_block_pushed_without_pressure_dynamic(tmp_path, mtype):
+    """Both multiplier types, dynamic from rest (the projected Gauss-Seidel cannot hold a free body in
+    a static stage): no pressure, the push reaches the capacity c A at t = 0.505 s; bonded (t = T/A
+    at mid-step) before, broken in the step ending at 0.51 s, then no friction holds the block
+    (mu_r N = 0 at rest): it moves off along +x, tipping onto its front edge under its own
+    inertia, whose points slide with |t| = mu_r p."""
+    tstar = 0.505
+    sc = scene(tmp_path, push=C * A / tstar, pressure=0.0)
+    sc["analysis"] = {"type": "dynamic", "dt": 0.01, "final_time": 0.6}
+    h5 = prep(tmp_path, sc)
+    solve(h5, "-mbc_multiplier_type", mtype, "-mbc_multiplier_rtol", "1e-10")
+    for q in steps(h5)[1:]:
+        t, mid = q["time"], q["time"] - 0.005
+        if mid < tstar:
+            assert np.all(q["bonded"] == 1), t
+            assert np.allclose(q["traction"][:, 0], -C / tstar * mid, rtol=1e-6), (t, q["traction"])
+        elif len(q["bonded"]):
+            assert np.all(q["bonded"] == 0) and np.allclose(q["break_time"], 0.51), (t, q["break_time"])
+            tn = np.linalg.norm(q["traction"], axis=1)
+            assert np.allclose(tn, MU_R * np.maximum(q["pressure"], 0), rtol=1e-6, atol=1e-6 * C), (t, tn, q["pressure"])
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_bonded_block_pulled_holds_below_tensile_strength(tmp_path, nproc):
+    """Static, no pressure, pulled up to F = 0.9 f_t A with f_t = c/(2 mu), half the cone's apex (the
+    cut-off is judged after the solve of the shifted cone): every bond holds in tension, p = -F/A."""
+    ft = 0.5 * C / MU
+    h5 = prep(tmp_path, scene(tmp_path, pull=0.9 * ft * A, pressure=0.0,
+                              joint={"cohesion": C, "tensile_strength": ft}))
+    solve(h5, "-mbc_multiplier_rtol", "1e-10", nproc=nproc)
+    for q in steps(h5):
+        assert np.all(q["bonded"] == 1)
+        assert np.allclose(q["pressure"], -0.9 * ft * q["time"], rtol=1e-6, atol=1e-3), (q["time"], q["pressure"])
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_bonded_block_pulled_separates_beyond_tensile_strength(tmp_path, nproc):
+    """Dynamic: the pull reaches f_t A at t* = 0.505 s; the bonds hold (p = -F/A at mid-step) before,
+    break in the step ending at 0.51 s, and the block separates: no normal force, the gap opens."""
+    ft = 0.5 * C / MU
+    tstar = 0.505
+    h5 = prep(tmp_path, scene(tmp_path, pull=ft * A / tstar, pressure=0.0,
+                              joint={"cohesion": C, "tensile_strength": ft}, dynamic=0.01))
+    solve(h5, "-mbc_multiplier_rtol", "1e-10", nproc=nproc)
+    gaps = []
+    for q in steps(h5)[2:]:
+        t, mid = q["time"], q["time"] - 1.005
+        if not len(q["bonded"]):  # the block has left the search's reach
+            break
+        if mid < tstar:
+            assert np.all(q["bonded"] == 1), t
+            # the traction acts on the top: the block's inertia (the elastic oscillation the ramp
+            # starts, undamped by the trapezoidal rule) puts the bottom's force off it by ~1e-4
+            assert np.allclose(q["pressure"], -ft / tstar * mid, rtol=2e-3), (t, q["pressure"])
+        else:
+            assert np.all(q["bonded"] == 0) and np.allclose(q["break_time"], 1.51), (t, q["break_time"])
+            assert np.all(q["state"] == 0), (t, q["state"])
+            gaps.append(q["gap"].min())
+    assert gaps and gaps[0] >= 0 and np.all(np.diff(gaps) > 0), gaps
+
+
+def test_unbonded_couple_unchanged(tmp_path):
+    """Cohesion 0 (the default) is today's law: the same scene without the joint keys gives the same
+    result file datasets bitwise, and no bonded/break_time datasets nor CSV column."""
+    sc = scene(tmp_path, push=0.3 * MU * P, joint={})
+    h5 = prep(tmp_path, sc)
+    solve(h5)
+    q = read_contact(result(h5, ".h5"))
+    assert "bonded" not in q and "break_time" not in q
+    assert "bonded" not in read_csv(result(h5, "_contact.csv"))
+
+
+@pytest.mark.parametrize("joint,message", [
+    ({"cohesion": -1.0}, "couples[0].cohesion (couple k=1): must be >= 0"),
+    ({"cohesion": "nan"}, "couples[0].cohesion (couple k=1): must be a finite number"),
+    ({"cohesion": 1.0e6, "tensile_strength": 2.0e6}, "couples[0].tensile_strength (couple k=1): 2e+06 exceeds cohesion / mu"),
+    ({"cohesion": 1.0e6, "tensile_strength": -1.0}, "couples[0].tensile_strength (couple k=1): must be >= 0"),
+    ({"cohesion": 1.0e6, "mu_residual": -0.1}, "couples[0].mu_residual (couple k=1): must be >= 0"),
+    ({"tensile_strength": 1.0}, "couples[0].tensile_strength (couple k=1): a joint law's key needs cohesion"),
+    ({"cohesion": 0, "mu_residual": 0.3}, "couples[0] (couple k=1): tensile_strength and mu_residual belong to a bonded joint"),
+])
+def test_joint_input_errors(tmp_path, joint, message):
+    """Bad joint keys stop the prep with a message naming the couple and the key, non-zero exit."""
+    sc = scene(tmp_path, joint=joint, mu=0.6 if "mu0" not in joint else 0.0)
+    (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(sc, sort_keys=False))
+    r = subprocess.run([PREP, str(tmp_path / "s.yaml"), "-o", str(tmp_path / "s.h5")], capture_output=True, text=True, env=env())
+    assert r.returncode != 0
+    assert message in r.stderr, r.stderr
+
+
+def test_joint_cohesion_needs_friction(tmp_path):
+    sc = scene(tmp_path, joint={"cohesion": 1.0e6}, mu=0.0)
+    (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(sc, sort_keys=False))
+    r = subprocess.run([PREP, str(tmp_path / "s.yaml"), "-o", str(tmp_path / "s.h5")], capture_output=True, text=True, env=env())
+    assert r.returncode != 0
+    assert "couples[0].cohesion (couple k=1): a bonded joint needs friction mu > 0" in r.stderr, r.stderr
