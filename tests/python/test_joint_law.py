@@ -214,3 +214,30 @@ def test_joint_cohesion_needs_friction(tmp_path):
     r = subprocess.run([PREP, str(tmp_path / "s.yaml"), "-o", str(tmp_path / "s.h5")], capture_output=True, text=True, env=env())
     assert r.returncode != 0
     assert "couples[0].cohesion (couple k=1): a bonded joint needs friction mu > 0" in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_broken_points_survive_restart(tmp_path, nproc):
+    """The checkpoint keeps the bonds' state (/joints/break_time): the pushed block checkpointed at
+    t = 1.53 s, after its bonds broke at 1.51 s, and restarted to 1.6 s goes on sliding with the
+    same break times and ends where the uninterrupted run ends (1e-12); a restart that forgot them
+    would bond the block again and hold it."""
+    import h5py
+    from mbcontact.results import read_body
+    cap = C * A + MU * P * A
+    sc = scene(tmp_path, push=cap / 0.505, dynamic=0.01)
+    sc["output"] = {"fields": ["displacement"]}
+    h5 = prep(tmp_path, sc)
+    solve(h5, "-mbc_output", str(tmp_path / "full"), nproc=nproc)
+    part = str(tmp_path / "part")
+    solve(h5, "-mbc_output", part, "-mbc_checkpoint_every", "1", "-mbc_final_time", "1.53", nproc=nproc)
+    with h5py.File(part + "_checkpoint.h5", "r") as f:
+        assert np.any(np.abs(f["joints/break_time"][:] - 1.51) < 1e-12)
+    r = solve(h5, "-mbc_output", part, "-mbc_restart", part + "_checkpoint.h5", "-mbc_monitor", nproc=nproc)
+    assert "restarted from" in r.stdout
+    q = read_contact(part + "_restart.h5")
+    assert q["time"] == pytest.approx(1.6) and np.all(q["bonded"] == 0) and np.allclose(q["break_time"], 1.51)
+    a = read_body(str(tmp_path / "full.h5"), "block")
+    b = read_body(part + "_restart.h5", "block")
+    assert a["time"] == b["time"] == pytest.approx(1.6)
+    assert np.abs(a["displacement"] - b["displacement"]).max() <= 1e-12 * np.abs(a["displacement"]).max()
