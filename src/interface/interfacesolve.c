@@ -42,8 +42,8 @@ static PetscErrorCode InterfaceWriteFclib(MBCInterface ifc, PetscInt step)
       dims[p]   = ifc->poff[p + 1] - ifc->poff[p];
     }
     PetscCall(MBCFrictionProblemSetBlocks(&fp0, dims));
-    if (MBCInterfaceJointBonded(ifc)) PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT ", bonded points: the shifted cone, r_n = r_n(contact) + dscale (c/mu) A, q = q(contact) - W s", ifc->scene->filename, step));
-    else PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, ifc->scene->filename, step));
+    PetscCall(PetscSNPrintf(fp0.title, sizeof(fp0.title), "%s, step %" PetscInt_FMT, ifc->scene->filename, step));
+    if (MBCInterfaceJointBonded(ifc)) PetscCall(PetscSNPrintf(fp0.description, sizeof(fp0.description), "mbcontact bonded joints: %" PetscInt_FMT " bonded points: the shifted cone, their r_n = r_n(contact) + s with s = dscale (c/mu) A / theta (the apex force), q = q(contact) - W s (the other points as they are; broken points have mu_residual); the contact force is r - s", MBCInterfaceJointBonded(ifc)));
     PetscCall(MBCFclibWriteLocal(ifc->fclib_file, &fp0, v0[1], v0[2]));
     PetscCall(PetscFree(fp0.off));
     PetscCall(PetscFree2(fp0.mu, dims));

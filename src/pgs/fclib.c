@@ -1,6 +1,7 @@
 /* FCLIB interchange (layout: shared/benchmarks/fclib/README.md) with the HDF5 C API: Debian's
    libfclib links the serial HDF5, which must not share a process with PETSc's MPI HDF5. */
 #include <mbc/private/multiplierimpl.h>
+#include <string.h>
 #include <mbc/private/h5util.h>
 
 /* Entries beyond this magnitude overflow the squares in the norms and the merit function. */
@@ -367,6 +368,20 @@ PetscErrorCode MBCFclibWriteLocal(const char file[], MBCFrictionProblem *fp, Vec
   {
     int sd = 3;
     PetscCall(MBCH5WriteArray(g, "spacedim", H5T_NATIVE_INT, 1, 1, &sd));
+  }
+  if (fp->description[0]) { /* FCLIB's info group (title, description, math_info strings): what the rows mean, where it is not plain Coulomb contact */
+    const char *names[3] = {"title", "description", "math_info"}, *text[3] = {fp->title, fp->description, "u = W r + q, r in the Coulomb cones |r_t| <= mu r_n"};
+    hid_t       gi       = H5Gcreate2(g, "info", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    for (int k = 0; k < 3; k++) {
+      hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR), ds;
+      H5Tset_size(type, strlen(text[k]) + 1);
+      ds = H5Dcreate2(gi, names[k], type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+      PetscCheck(ds >= 0 && H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, text[k]) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write fclib_local/info/%s", names[k]);
+      H5Dclose(ds);
+      H5Sclose(space);
+      H5Tclose(type);
+    }
+    H5Gclose(gi);
   }
   H5Gclose(g);
   if (r && u) {

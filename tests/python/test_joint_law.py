@@ -241,3 +241,34 @@ def test_broken_points_survive_restart(tmp_path, nproc):
     b = read_body(part + "_restart.h5", "block")
     assert a["time"] == b["time"] == pytest.approx(1.6)
     assert np.abs(a["displacement"] - b["displacement"]).max() <= 1e-12 * np.abs(a["displacement"]).max()
+
+
+@pytest.mark.parametrize("when,bonded", [("3", True), ("55", False)])
+def test_fclib_write_of_a_bonded_step(tmp_path, when, bonded):
+    """-mbc_fclib_write at a bonded step writes the shifted problem (r_n' = r_n + s, q' = q - W s,
+    the couple's mu; its title says so): the stored r' solves it in the Coulomb cones, each bonded
+    point's r_n' exceeds the shift s = dscale (c/mu) A / theta by the (compressive) multiplier, and
+    mbcontact -fclib solves the file again. The info group's description says what the rows hold.
+    After the break (step 55) it is the plain problem with mu_residual, and no info group."""
+    from mbcontact.fclib import merit_local, read
+    tstar = 0.505
+    sc = scene(tmp_path, push=C * A / tstar, pressure=0.0)
+    sc["analysis"] = {"type": "dynamic", "dt": 0.01, "final_time": 0.6}
+    h5 = prep(tmp_path, sc)
+    out = tmp_path / f"step{when}.hdf5"
+    solve(h5, "-mbc_fclib_write", str(out), "-mbc_fclib_write_step", when, "-mbc_multiplier_rtol", "1e-10")
+    kind, W, q, mus = read(str(out))
+    import h5py
+    with h5py.File(out, "r") as f:
+        r, u = f["solution/r"][...], f["solution/u"][...]
+        title = f["fclib_local/info/description"][()].decode() if "fclib_local/info" in f else ""
+    assert np.abs(W @ r + q - u).max() <= 1e-10 * (1 + np.abs(u).max())
+    assert merit_local(W, q, mus, r) < 1e-8
+    assert np.allclose(mus, MU if bonded else MU_R)
+    assert ("bonded points: the shifted cone" in title) == bonded, title
+    if bonded:  # at rest, pushed: the normal multipliers of the shifted problem are the shift itself
+        rn = r[0::3]
+        assert np.all(rn > 0) and np.allclose(rn, rn[0], rtol=1e-8)
+    from conftest import SOLVER
+    again = subprocess.run([SOLVER, "-fclib", str(out)], capture_output=True, text=True, env=env())
+    assert again.returncode == 0 and "CONVERGED" in again.stdout, again.stdout + again.stderr

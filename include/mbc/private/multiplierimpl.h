@@ -27,6 +27,7 @@ struct _n_MBCFrictionProblem {
   PetscReal *cow;   /*   and its value there */
   Mat        WPhi;  /* W Phi, dense, W's row layout */
   char       title[256];
+  char       description[512]; /* written to an FCLIB file's info group when not empty (what a bonded point's row holds) */
 };
 
 typedef struct _MBCMultiplierOps *MBCMultiplierOps;
