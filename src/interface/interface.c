@@ -44,6 +44,8 @@ PetscErrorCode MBCInterfaceCreate(MPI_Comm comm, MBCScene scene, MBCContact cont
   ifc->analysis        = scene->analysis;
   ifc->theta           = 1;
   ifc->dblock          = 256;
+  ifc->jtol            = 1e-6; /* -mbc_joint_break_rtol */
+  ifc->jfrac           = 1;    /* -mbc_joint_break_fraction */
   ifc->fclib_step      = -1;
   PetscCall(MBCMultiplierCreate(comm, &ifc->mult));
   PetscCall(MBCMultiplierSetOptionsPrefix(ifc->mult, prefix));

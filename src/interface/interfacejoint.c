@@ -47,6 +47,15 @@ static PetscErrorCode JointSetUp(MBCInterface ifc)
   PetscFunctionReturn(0);
 }
 
+/* -mbc_joint_break_rtol, -mbc_joint_break_fraction (the solver's options) */
+PetscErrorCode MBCInterfaceSetJointBreak(MBCInterface ifc, PetscReal tol, PetscReal frac)
+{
+  PetscFunctionBegin;
+  ifc->jtol  = tol;
+  ifc->jfrac = frac;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCInterfaceJointDestroy(MBCInterface ifc)
 {
   PetscFunctionBegin;

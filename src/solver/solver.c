@@ -20,6 +20,8 @@ PetscErrorCode MBCSolverCreate(MPI_Comm comm, MBCSolver *solver)
   s->dt_cut           = PETSC_TRUE;
   s->dt_min           = -1;
   s->dblock           = 256;
+  s->joint_tol        = 1e-6;
+  s->joint_frac       = 1;
   s->droute           = MBC_D_ROUTE_AUTO; /* auto: matrix-free, Schur or solves by size (docs/performance.md) */
   s->rows_even        = PETSC_TRUE;
   s->schur_max_mb     = 8192; /* S^-1 and MUMPS's factorization with the Schur set: 4.3 GB at the 400k-DOF dam's foundation */
@@ -93,6 +95,10 @@ PetscErrorCode MBCSolverSetFromOptions(MBCSolver s)
   }
   PetscCall(PetscOptionsReal("-mbc_static_rtol", "Static: equilibrium iterations stop when the out-of-balance force max|A du| <= rtol max|K u|", "MBCSolverSetFromOptions", s->static_rtol, &s->static_rtol, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_rows_even", "The contact points' rows of W (and the multiplier problem's) split evenly over the ranks, in the order of the ranks that compute most of each row, instead of each on that rank: the multiplier solve's row-wise work (products with W and the kept inverse) is the rows' owners'", "MBCSolverSetFromOptions", s->rows_even, &s->rows_even, NULL));
+  PetscCall(PetscOptionsReal("-mbc_joint_break_rtol", "Bonded couples: a bond breaks where its traction lies within this fraction of its apex force (c/mu) A of the cone's boundary", "MBCSolverSetFromOptions", s->joint_tol, &s->joint_tol, NULL));
+  PetscCheck(s->joint_tol >= 0 && s->joint_tol < 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_joint_break_rtol %g must lie in [0, 1)", (double)s->joint_tol);
+  PetscCall(PetscOptionsReal("-mbc_joint_break_fraction", "Bonded couples: each solve of a step's cascade breaks the bonds whose excess over the cone is within this fraction of the largest (1: every bond beyond; 0: the most loaded, and those tied with it)", "MBCSolverSetFromOptions", s->joint_frac, &s->joint_frac, NULL));
+  PetscCheck(s->joint_frac >= 0 && s->joint_frac <= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_joint_break_fraction %g must lie in [0, 1]", (double)s->joint_frac);
   PetscCall(PetscOptionsInt("-mbc_contact_block", "Columns of A^-1 H per multi-right-hand-side solve while D is built (memory: DOFs x block per body)", "MBCSolverSetFromOptions", s->dblock, &s->dblock, NULL));
   {
     const char *routes[] = {"multirhs", "schur", "auto", "matfree"};
@@ -248,6 +254,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
     PetscCall(MBCInterfaceSetBlockSize(s->iface, s->dblock));
     PetscCall(MBCInterfaceSetDRoute(s->iface, s->droute, s->schur_max_mb, s->dense_max_mb, s->solves_max));
     PetscCall(MBCInterfaceSetRowsEven(s->iface, s->rows_even));
+    PetscCall(MBCInterfaceSetJointBreak(s->iface, s->joint_tol, s->joint_frac));
     PetscCall(MBCInterfaceSetCoarse(s->iface, s->coarse_points, s->coarse_max_mb));
     PetscCall(MBCInterfaceSetFclibWrite(s->iface, s->fclib_file, s->fclib_step));
   }

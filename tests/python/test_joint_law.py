@@ -274,8 +274,8 @@ def test_fclib_write_of_a_bonded_step(tmp_path, when, bonded):
     assert again.returncode == 0 and "CONVERGED" in again.stdout, again.stdout + again.stderr
 
 
-@pytest.mark.parametrize("nproc", [1, 2])
-def test_cracked_base_under_a_moment(tmp_path, nproc):
+@pytest.mark.parametrize("nproc,fraction", [(1, "1"), (2, "1"), (1, "0")])
+def test_cracked_base_under_a_moment(tmp_path, nproc, fraction):
     """The classical cracked-base analysis of a gravity dam: a stiff block (B = 4 m along x, 2 m
     high, 1 m wide, E = 1e12) bonded (c = 10 MPa, mu = 1, f_t = 0.1 MPa) on a thin elastic layer
     (0.1 m, E = 1e9, nu = 0, held at its bottom: a Winkler foundation, so the base pressure is
@@ -288,9 +288,10 @@ def test_cracked_base_under_a_moment(tmp_path, nproc):
     (h = 1/16 m): the crack runs from the tension side, in the step's cascade of re-solves (behind
     its tip at most one row of nodes still bonded, where the nodal pressures alternate, and the
     heel's corner nodes, whose pressure the layer's free edge keeps above beam theory's), its
-    length within 1.6 h of a (0.1 m of up to 1.95 m), and before the crack the pressures inside the
+    length within 1.8 h of a (0.11 m of up to 1.95 m; measured 1.55 h, 1.73 h with fraction 0), and before the crack the pressures inside the
     base (the corner nodes aside) within 6 % of the mean pressure N/A of beam theory's (the
-    corners' share moves inward)."""
+    corners' share moves inward). The same with -mbc_joint_break_fraction 0 (the most loaded bond
+    first in each solve of the cascade: 42 solves for the whole crack instead of 29)."""
     from scipy.optimize import brentq
     B, Hb, n = 4.0, 2.0, 64
     h = B / n
@@ -309,7 +310,7 @@ def test_cracked_base_under_a_moment(tmp_path, nproc):
                     {"kind": "traction", "surface": "block_xmin", "vector": [Tfin / Hb, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
           "analysis": {"type": "static", "dt": 0.05, "final_time": 1.0}}
     h5 = prep(tmp_path, sc)
-    solve(h5, "-mbc_multiplier_rtol", "1e-10", nproc=nproc)
+    solve(h5, "-mbc_multiplier_rtol", "1e-10", "-mbc_joint_break_fraction", fraction, nproc=nproc)
     cracked, worst = 0, 0.0
     for q in steps(h5):
         x = q["reference"][:, 0]
@@ -326,7 +327,7 @@ def test_cracked_base_under_a_moment(tmp_path, nproc):
         # heel's corner (the nodal pressures near the tip alternate: the layer's consistent forces)
         behind = ~broken & (x > h / 2) & (x < (x[broken].max() if broken.any() else 0))
         assert len(set(x[behind])) <= 1, (q["time"], sorted(set(x[behind])))
-        assert abs(crack - a) <= 1.6 * h, (q["time"], crack, a)
+        assert abs(crack - a) <= 1.8 * h, (q["time"], crack, a)
         if not broken.any():
             inner = (x > 1.5 * h) & (x < B - 1.5 * h)
             beam = N / B + M * (x[inner] - B / 2) / (B**3 / 12)
@@ -354,3 +355,13 @@ def test_energy_balance_closes_across_the_break(tmp_path):
     tot = e["total"][dyn]
     assert np.abs(tot - tot[0]).max() <= 1e-11 * e["external_work"].max(), (tot - tot[0])
     assert e["kinetic"][-1] > 1e6 and e["friction_dissipation"][-1] > 1e5
+
+
+@pytest.mark.parametrize("option,value,message", [
+    ("-mbc_joint_break_fraction", "2", "must lie in [0, 1]"),
+    ("-mbc_joint_break_rtol", "-1", "must lie in [0, 1)"),
+])
+def test_joint_option_errors(tmp_path, option, value, message):
+    h5 = prep(tmp_path, scene(tmp_path, push=1.0))
+    r = solve(h5, option, value, check=False)
+    assert r.returncode != 0 and option in r.stderr and message in r.stderr, r.stderr

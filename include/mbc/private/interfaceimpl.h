@@ -154,6 +154,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceJointSave(MBCInterface, PetscBool);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointUnbreak(MBCInterface, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointGetState(MBCInterface, PetscInt *, PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointSetState(MBCInterface, PetscInt, const PetscReal[]);
+PETSC_INTERN PetscErrorCode MBCInterfaceSetJointBreak(MBCInterface, PetscReal, PetscReal);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointDestroy(MBCInterface);
 /* interfacesolve.c: the multipliers of a step */
 PETSC_INTERN PetscErrorCode MBCInterfaceSolve(MBCInterface, PetscInt, PetscReal, PetscBool, PetscBool *);

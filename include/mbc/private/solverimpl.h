@@ -103,6 +103,7 @@ struct _n_MBCSolver {
   PetscInt   dblock;      /* -mbc_contact_block, for the interface */
   PetscInt   droute;      /* -mbc_d_route: MBCDRoute (interfaceimpl.h), auto by default */
   PetscBool  rows_even;   /* -mbc_contact_rows_even */
+  PetscReal  joint_tol, joint_frac; /* -mbc_joint_break_rtol, -mbc_joint_break_fraction (interfacejoint.c) */
   PetscReal  schur_max_mb; /* -mbc_d_schur_max_mb */
   PetscReal  dense_max_mb; /* -mbc_d_dense_max_mb */
   PetscReal  solves_max;   /* -mbc_d_solves_max */
