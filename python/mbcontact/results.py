@@ -90,8 +90,8 @@ def read_body(path, body, step=-1):
 
 def read_contact(path, step=-1):
     """Datasets of the contact points at an output step (position, reference, normal, force,
-    multiplier, pressure, traction, gap, slip, area, state, couple) as numpy arrays, with the
-    step's time."""
+    multiplier, pressure, traction, gap, slip, area, state, couple; with bonded couples bonded
+    and break_time) as numpy arrays, with the step's time."""
     import h5py
 
     with h5py.File(path, "r") as f:

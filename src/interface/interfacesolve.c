@@ -179,7 +179,7 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
       const PetscInt   j  = ifc->kpoint[k];
       if (!MBCInterfacePointTouches(cp, j, b)) continue;
       for (PetscInt d = 0; d < 3; d++) n[d] += ifc->frames[9 * k + d];
-      mu = PetscMax(mu, cp->mu);
+      mu = PetscMax(mu, MBCInterfaceJointMu(ifc, k)); /* a broken bond's mu_residual */
       cnt++;
     }
     N = PetscSqrtReal(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
