@@ -161,7 +161,7 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    PetscReal F[8] = {0, 0, 0, 0, 0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N;
+    PetscReal F[8] = {0, 0, 0, 0, 0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N, cA = 0;
     PetscInt  cnt = 0;
     if (ifc->bodies[b]) { /* F, its moment and whether the body is free (held only by contact), from its first rank */
       PetscMPIInt brank;
@@ -180,6 +180,7 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
       if (!MBCInterfacePointTouches(cp, j, b)) continue;
       for (PetscInt d = 0; d < 3; d++) n[d] += ifc->frames[9 * k + d];
       mu = PetscMax(mu, MBCInterfaceJointMu(ifc, k)); /* a broken bond's mu_residual */
+      if (MBCInterfaceJointPoint(ifc, ifc->kcouple[k], j, NULL) == 1) cA += ifc->scene->couples[ifc->kcouple[k]].cohesion * cp->points[j].area; /* a bond's cohesion holds too */
       cnt++;
     }
     N = PetscSqrtReal(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -187,6 +188,8 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
     for (PetscInt d = 0; d < 3; d++) n[d] /= N, fn += F[d] * n[d];
     for (PetscInt d = 0; d < 3; d++) ft[d] = F[d] - fn * n[d], T += ft[d] * ft[d];
     T = PetscSqrtReal(T);
+    PetscCheck(!(cA > 0 && T > mu * PetscAbsReal(fn) + cA), ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: body '%s' carries a tangential load of %g against a capacity mu N + c A_bonded = %g x %g + %g = %g on its contact surfaces (its bonds broken so far: mu_residual; T / capacity = %.4f); lower the load, or run a dynamic analysis", step, (double)time, ifc->scene->bodies[b].name, (double)T, (double)mu, (double)PetscAbsReal(fn), (double)cA, (double)(mu * PetscAbsReal(fn) + cA), (double)(T / (mu * PetscAbsReal(fn) + cA)));
+    if (cA > 0) continue; /* within the bonded capacity: the generic message, or a cut */
     PetscCheck(!(T > mu * PetscAbsReal(fn)), ifc->comm, PETSC_ERR_NOT_CONVERGED, "Static step %" PetscInt_FMT " (t = %g): no static equilibrium: body '%s' carries a tangential load of %g along (%.3f, %.3f, %.3f) against a friction capacity mu N = %g x %g = %g on its contact surfaces (T / mu N = %.4f); a static state needs T <= mu N: lower the load, prescribe a displacement that holds the body, or run a dynamic analysis", step, (double)time, ifc->scene->bodies[b].name, (double)T, (double)(ft[0] / T), (double)(ft[1] / T), (double)(ft[2] / T), (double)mu, (double)PetscAbsReal(fn), (double)(mu * PetscAbsReal(fn)), (double)(T / (mu * PetscAbsReal(fn))));
     if (F[7]) PetscCall(InterfaceOverturning(ifc, b, F, F + 4, n, step, time));
   }
@@ -259,6 +262,7 @@ static PetscErrorCode InterfaceSolveJoints(MBCInterface ifc, PetscInt step, Pets
   }
   if (ifc->mult->reason < 0 && may_fail) PetscCall(MBCInterfaceJointUnbreak(ifc, time)); /* the step is cut: its breaks are undone */
   if (total) PetscCall(PetscInfo(NULL, "step %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " bonds broke, %" PetscInt_FMT " multiplier solves\n", step, (double)time, total, nsolves));
+  ifc->jbroke = ifc->mult->reason < 0 && may_fail ? 0 : total, ifc->jsolves = nsolves;
   PetscCall(VecCopy(q0, ifc->fp.q));
   PetscCall(VecDestroy(&q0));
   PetscCall(VecDestroy(&s));

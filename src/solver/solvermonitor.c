@@ -39,6 +39,11 @@ PetscErrorCode MBCSolverMonitorContact(MBCSolver s, MBCMultiplier mult)
     MBCMultiplierType type;
     PetscCall(MBCMultiplierGetType(mult, &type));
     PetscCall(PetscSNPrintf(s->contact_line, sizeof(s->contact_line), "step %5" PetscInt_FMT " t %-12.6g contact: %s %s in %" PetscInt_FMT " iterations (merit %.2e)", s->step, (double)s->time, type, MBCMultiplierConvergedReasonName(mult->reason), mult->its, (double)mult->merit));
+    if (s->iface->jbroke) { /* bonded couples: the cascade of this solve */
+      size_t len;
+      PetscCall(PetscStrlen(s->contact_line, &len));
+      PetscCall(PetscSNPrintf(s->contact_line + len, sizeof(s->contact_line) - len, ", %" PetscInt_FMT " bonds broke (%" PetscInt_FMT " solves)", s->iface->jbroke, s->iface->jsolves));
+    }
   }
   PetscFunctionReturn(0);
 }

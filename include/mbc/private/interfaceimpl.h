@@ -85,6 +85,7 @@ struct _n_MBCInterface {
   PetscReal **jbreak, **jsave; /* per couple with cohesion (NULL otherwise), per master node: the time its bond broke, PETSC_MAX_REAL while
                                  bonded; saved where a static load step begins (interfacejoint.c) */
   PetscReal  jtol;        /* -mbc_joint_break_rtol: a bond breaks within this fraction of its apex force (c/mu) A of the cone's boundary */
+  PetscInt   jbroke, jsolves; /* the last MBCInterfaceSolve: the bonds it broke and its multiplier solves (the monitor's) */
   PetscReal  jfrac;       /* -mbc_joint_break_fraction: a solve breaks the points within this fraction of the largest excess (1: all beyond the cone) */
   char       fclib_file[PETSC_MAX_PATH_LEN]; /* -mbc_fclib_write: the multiplier problem of step fclib_step */
   PetscInt   fclib_step;
