@@ -1,8 +1,8 @@
 """The joint law of a bonded couple (docs/dam.md, "Bonded joints"): cohesion c, tensile strength
 f_t <= c/mu, brittle break point by point to residual friction mu_r.
 
-The scenes are a block of one hex8 cell (1 x 1 x 0.5, nu = 0) on a base held at every node. The
-block is the master side, so its four bottom corners are the contact points, each of area 1/4;
+The scenes are a block of one hex8 cell (1 x 1 x 0.5, nu = 0) on a larger base (3 x 3, one cell)
+held at every node. The block is the master side, so its four bottom corners are the contact points, each of area 1/4;
 the loads act on those nodes (the push, the pull) and as a uniform pressure on its top, so every
 point carries the same traction (nu = 0: the pressure reaches the base unchanged, no Poisson
 shear): the bond of all four points reaches the cone's boundary at the same load, the resultant's
@@ -22,14 +22,14 @@ C, MU, MU_R = 1.0e6, 0.6, 0.5
 P = 1.0e6                # pressure on the block's top: N = P A
 
 
-def scene(tmp_path, push=0.0, pull=0.0, dynamic=None, joint=None, pressure=P, mu=MU):
+def scene(tmp_path, push=0.0, pull=0.0, dynamic=None, joint=None, pressure=P, mu=MU, final_time=1.6):
     """push: the resultant at the end of a load on the block's bottom nodes along x; pull: a uniform
     traction up on its top, resultant `pull` (the block stretched uniformly, nu = 0: its bottom
     nodes carry pull/4 each). Static: both grow linearly over t = 0..1 in steps of 0.1, the pressure
     is constant. dynamic = dt: a static stage (t = 0..1) under the pressure alone, then the push or
     pull growing linearly from 0 at t = 1 to its resultant at t = 2, in dynamic steps of dt."""
     meshgen.boxes(str(tmp_path / "j.msh"),
-                  [dict(lo=(0, 0, -0.5), hi=(1, 1, 0), n=(1, 1, 1), name="base", cell="hex8"),
+                  [dict(lo=(-1, -1, -0.5), hi=(2, 2, 0), n=(1, 1, 1), name="base", cell="hex8"),
                    dict(lo=(0, 0, 0), hi=(1, 1, H), n=(1, 1, 1), name="block", cell="hex8")])
     material = {"E": 3.0e10, "nu": 0.0, "density": 2400}
     couple = {"master": "block_zmin", "slave": "base_zmax", "mu": mu}
@@ -49,7 +49,7 @@ def scene(tmp_path, push=0.0, pull=0.0, dynamic=None, joint=None, pressure=P, mu
           "loads": loads}
     if dynamic:
         sc["stages"] = [{"name": "weight", "analysis": {"type": "static"}},
-                        {"name": "push", "analysis": {"type": "dynamic", "dt": dynamic, "final_time": 1.6}, "loads": growing}]
+                        {"name": "push", "analysis": {"type": "dynamic", "dt": dynamic, "final_time": final_time}, "loads": growing}]
     else:
         sc["loads"] = loads + growing
         sc["analysis"] = {"type": "static", "dt": 0.1, "final_time": 1.0}
@@ -89,18 +89,21 @@ def test_bonded_block_pushed_beyond_capacity_has_no_static_state(tmp_path):
     assert "no static equilibrium" in r.stderr + r.stdout
 
 
-@pytest.mark.parametrize("nproc", [1, 2])
-def test_bonded_block_pushed_breaks_at_capacity_then_slides(tmp_path, nproc):
+@pytest.mark.parametrize("nproc,options", [(1, ()), (2, ()), (1, ("-mbc_d_route", "matfree")),
+                                            (1, ("-mbc_contact_sliding", "small"))])
+def test_bonded_block_pushed_breaks_at_capacity_then_slides(tmp_path, nproc, options):
     """Dynamic (trapezoidal Newmark, dt 0.01 s) after a static stage under the pressure, the push
     growing from t = 1 so that T reaches c A + mu N at t* = 1.505 s (between steps): the
     complementarity holds on the step's mean force, T at mid-step, so the bonds hold up to the step
     ending at 1.51 and break in it (all four: one step); from there every point slides with
-    |t| = mu_r p (the residual friction)."""
+    |t| = mu_r p (the residual friction), in the four steps to 1.54 s (it has slid 0.3 m by then:
+    (T - mu_r N)/m is 900 m/s^2). The same with the matrix-free D (the shift's
+    product W s through the bodies' solves) and with small sliding."""
     cap = C * A + MU * P * A
     tstar = 0.505
-    h5 = prep(tmp_path, scene(tmp_path, push=cap / tstar, dynamic=0.01))
-    r = solve(h5, "-mbc_monitor", "-mbc_multiplier_rtol", "1e-10", nproc=nproc)
-    seen_break = None
+    h5 = prep(tmp_path, scene(tmp_path, push=cap / tstar, dynamic=0.01, final_time=1.54))
+    r = solve(h5, "-mbc_monitor", "-mbc_multiplier_rtol", "1e-10", *options, nproc=nproc)
+    seen_break, sliding = None, 0
     for q in steps(h5)[2:]:  # the static stage's step, the dynamic stage's initial state
         t = q["time"]
         mid = t - 1.005
@@ -113,8 +116,9 @@ def test_bonded_block_pushed_breaks_at_capacity_then_slides(tmp_path, nproc):
             assert np.allclose(q["break_time"], seen_break)
             assert np.all(q["state"] == 2), (t, q["state"])
             ratio = np.linalg.norm(q["traction"], axis=1) / q["pressure"]
-            assert np.allclose(ratio, MU_R, rtol=1e-6), (t, ratio)
-    assert seen_break is not None and abs(seen_break - 1.51) < 1e-9
+            assert len(ratio) == 4 and np.allclose(ratio, MU_R, rtol=1e-6), (t, ratio)
+            sliding += 1
+    assert seen_break is not None and abs(seen_break - 1.51) < 1e-9 and sliding == 4
     assert "bonded 0" in r.stdout and re.search(r"step +\d+ t 1.51 .*, 4 bonds broke \(2 solves\); .*bonded 0", r.stdout), r.stdout
 
 
