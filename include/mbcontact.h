@@ -73,6 +73,7 @@ PETSC_EXTERN PetscErrorCode MBCSolverMonitorSet(MBCSolver, PetscErrorCode (*)(MB
    valid until the next step); state: 0 separated, 1 stick, 2 slip. */
 PETSC_EXTERN PetscErrorCode MBCSolverGetMultipliers(MBCSolver, Vec *);
 PETSC_EXTERN PetscErrorCode MBCSolverGetContactPoints(MBCSolver, PetscInt *, const PetscReal *[], const PetscReal *[], const PetscReal *[], const PetscReal *[], const PetscReal *[], const PetscInt *[]);
+PETSC_EXTERN PetscErrorCode MBCSolverGetContactJoints(MBCSolver, PetscInt *, const PetscInt *[], const PetscReal *[]);
 PETSC_EXTERN PetscErrorCode MBCSolverView(MBCSolver, PetscViewer);
 PETSC_EXTERN PetscErrorCode MBCSolverDestroy(MBCSolver *);
 PETSC_EXTERN PetscErrorCode MBCSolverOutputAbort(MBCSolver);

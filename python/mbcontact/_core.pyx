@@ -385,7 +385,8 @@ cdef class Solver:
     def getContactPoints(self):
         """The contact points of the last step, couple order, on every rank, as a dict of numpy
         arrays (copies): position, normal, traction (n x 3), pressure (n), slip (n x 3; NaN on
-        frictionless couples), state (n: 0 separated, 1 stick, 2 slip)."""
+        frictionless couples), state (n: 0 separated, 1 stick, 2 slip); with bonded couples
+        (cohesion) also bonded (n: 1 while the bond holds) and break_time (n, NaN if it did not)."""
         cdef PetscInt n = 0
         cdef const PetscReal *x = NULL
         cdef const PetscReal *nrm = NULL
@@ -408,5 +409,11 @@ cdef class Solver:
                 mn[i, d] = nrm[3 * i + d]
                 mt[i, d] = t[3 * i + d]
                 ms[i, d] = sl[3 * i + d]
+        cdef const PetscInt *jb = NULL
+        cdef const PetscReal *jt = NULL
+        CHKERR(MBCSolverGetContactJoints(self._get(), &n, &jb, &jt))
+        if jb != NULL:
+            out["bonded"] = np.array([jb[i] for i in range(n)], dtype=np.int64)
+            out["break_time"] = np.array([jt[i] for i in range(n)])
         return out
 

@@ -41,6 +41,7 @@ cdef extern from "mbcontact.h" nogil:
     PetscErrorCode MBCSolverGetBody(MBCSolver, PetscInt, MBCBody *)
     PetscErrorCode MBCSolverGetMultipliers(MBCSolver, PetscVec *)
     PetscErrorCode MBCSolverGetContactPoints(MBCSolver, PetscInt *, const PetscReal *[], const PetscReal *[], const PetscReal *[], const PetscReal *[], const PetscReal *[], const PetscInt *[])
+    PetscErrorCode MBCSolverGetContactJoints(MBCSolver, PetscInt *, const PetscInt *[], const PetscReal *[])
 
     PetscErrorCode MBCBodyGetName(MBCBody, const char **)
     PetscErrorCode MBCBodyGetDM(MBCBody, PetscDM *)

@@ -1105,6 +1105,19 @@ PetscErrorCode MBCSolverGetContactPoints(MBCSolver s, PetscInt *n, const PetscRe
   PetscFunctionReturn(0);
 }
 
+/* The bond of each point of the last step's contact points (couple order, every rank): bonded 1
+   while it holds, 0 once broken or on an unbonded couple, and the time it broke (NaN if it did
+   not); both NULL without bonded couples (a couple's cohesion, docs/dam.md). */
+PetscErrorCode MBCSolverGetContactJoints(MBCSolver s, PetscInt *n, const PetscInt *bonded[], const PetscReal *break_time[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, MBC_SOLVER_CLASSID, 1);
+  *n = s->cpts.n;
+  if (bonded) *bonded = s->cpts.bonded;
+  if (break_time) *break_time = s->cpts.tbreak;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSolverSetOptionsPrefix(MBCSolver s, const char prefix[])
 {
   PetscFunctionBegin;

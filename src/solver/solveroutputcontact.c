@@ -48,6 +48,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   PetscReal *lam, *x, *x0, *slip, *nrm, *force, *pressure, *traction, *gap, *area;
   int       *couple, *istate, *bonded = NULL;
   PetscReal *tbreak = NULL;
+  PetscInt  *jbonded = NULL; /* bonded, for MBCSolverGetContactJoints */
   PetscBool  joints = (PetscBool)(c && MBCInterfaceHasJoints(ifc));
 
   PetscFunctionBegin;
@@ -56,7 +57,11 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   PetscCall(PetscCalloc6(3 * np + 1, &lam, 3 * np + 1, &x, 3 * np + 1, &nrm, 3 * np + 1, &force, 3 * np + 1, &traction, np + 1, &state));
   PetscCall(PetscCalloc5(np + 1, &pressure, np + 1, &gap, np + 1, &area, np + 1, &couple, np + 1, &istate));
   PetscCall(PetscCalloc2(3 * np + 1, &x0, 3 * np + 1, &slip));
-  if (joints) PetscCall(PetscCalloc2(np + 1, &bonded, np + 1, &tbreak));
+  if (joints) { /* tbreak and jbonded are kept for MBCSolverGetContactJoints, bonded (int) is the file's */
+    PetscCall(PetscCalloc1(np + 1, &bonded));
+    PetscCall(PetscCalloc1(np + 1, &tbreak));
+    PetscCall(PetscCalloc1(np + 1, &jbonded));
+  }
   if (np == ifc->ncontact) PetscCall(MBCInterfaceStates(ifc, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
@@ -88,8 +93,9 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       maxopen = PetscMax(maxopen, gap[k]);
       pressure[k] = area[k] > 0 ? z[0] / area[k] : 0;
       if (joints) {
-        bonded[k] = (int)(MBCInterfaceJointPoint(ifc, i, j, &tbreak[k]) == 1);
-        nbonded += bonded[k];
+        jbonded[k] = MBCInterfaceJointPoint(ifc, i, j, &tbreak[k]) == 1;
+        bonded[k]  = (int)jbonded[k];
+        nbonded += jbonded[k];
       }
       sum[1 + state[k]] += 1;
       sum[4] += z[0];
@@ -128,12 +134,13 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     PetscCall(MBCH5GroupClose(&g));
     s->output_npoints[s->noutputs] = np;
   }
-  PetscCall(PetscFree2(bonded, tbreak));
+  PetscCall(PetscFree(bonded));
   PetscCall(MBCSolverContactPointsFree(s)); /* keep this step's points for MBCSolverGetContactPoints */
   s->cpts.n = np;
   s->cpts.lam = lam, s->cpts.x = x, s->cpts.nrm = nrm, s->cpts.force = force, s->cpts.traction = traction, s->cpts.state = state;
   s->cpts.pressure = pressure, s->cpts.gap = gap, s->cpts.area = area, s->cpts.couple = couple, s->cpts.istate = istate;
   s->cpts.x0 = x0, s->cpts.slip = slip;
+  s->cpts.bonded = jbonded, s->cpts.tbreak = tbreak; /* NULL without bonded couples */
   PetscFunctionReturn(0);
 }
 
@@ -144,6 +151,8 @@ PetscErrorCode MBCSolverContactPointsFree(MBCSolver s)
   PetscCall(PetscFree6(s->cpts.lam, s->cpts.x, s->cpts.nrm, s->cpts.force, s->cpts.traction, s->cpts.state));
   PetscCall(PetscFree5(s->cpts.pressure, s->cpts.gap, s->cpts.area, s->cpts.couple, s->cpts.istate));
   PetscCall(PetscFree2(s->cpts.x0, s->cpts.slip));
+  PetscCall(PetscFree(s->cpts.tbreak));
+  PetscCall(PetscFree(s->cpts.bonded));
   s->cpts.n = 0;
   PetscFunctionReturn(0);
 }

@@ -1,19 +1,20 @@
 """The joint law of a bonded couple (docs/dam.md, "Bonded joints"): cohesion c, tensile strength
 f_t <= c/mu, brittle break point by point to residual friction mu_r.
 
-The scenes are a block of one hex8 cell (1 x 1 x 0.5, nu = 0) on a larger base (3 x 3, one cell)
-held at every node. The block is the master side, so its four bottom corners are the contact points, each of area 1/4;
-the loads act on those nodes (the push, the pull) and as a uniform pressure on its top, so every
+The scenes are a block of one hex8 cell (1 x 1 x 0.5, nu = 0) on a larger base (3 x 3, one
+cell) held at every node. The block is the master side, so its four bottom corners are the contact
+points, each of area 1/4; the loads act on those nodes (the push, the pull) and as a uniform pressure on its top, so every
 point carries the same traction (nu = 0: the pressure reaches the base unchanged, no Poisson
 shear): the bond of all four points reaches the cone's boundary at the same load, the resultant's
 capacity c A + mu N, and the law can be checked against that number to the solver's tolerance."""
+import os
 import re
 import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import PREP, env, prep, result, solve
+from conftest import BUILD, PREP, ROOT, env, prep, result, solve
 from mbcontact import meshgen
 from mbcontact.results import output_times, read_contact, read_csv
 
@@ -370,3 +371,37 @@ def test_joint_option_errors(tmp_path, option, value, message):
     h5 = prep(tmp_path, scene(tmp_path, push=1.0))
     r = solve(h5, option, value, check=False)
     assert r.returncode != 0 and option in r.stderr and message in r.stderr, r.stderr
+
+
+def test_python_api_reports_the_bonds(tmp_path):
+    """Solver.getContactPoints() has bonded and break_time with bonded couples (the C API's
+    MBCSolverGetContactJoints), as the result file does: the pushed block of
+    test_bonded_block_pushed_without_pressure_dynamic stepped from Python to 0.52 s."""
+    import sys
+    sc = scene(tmp_path, push=C * A / 0.505, pressure=0.0)
+    sc["analysis"] = {"type": "dynamic", "dt": 0.01, "final_time": 0.52}
+    h5 = prep(tmp_path, sc)
+    script = tmp_path / "drive.py"
+    script.write_text(f"""
+from petsc4py import PETSc
+import mbcontact
+opts = PETSc.Options()
+opts["mbc_output"] = {str(tmp_path / "py")!r}
+scene = mbcontact.Scene().load({str(h5)!r})
+solver = mbcontact.Solver().create()
+solver.setScene(scene)
+solver.setFromOptions()
+solver.setUp()
+rows = []
+while not solver.done:
+    solver.step()
+    cp = solver.getContactPoints()
+    rows.append((int(cp["bonded"].sum()), float(cp["break_time"].max()) if (cp["bonded"] == 0).any() else -1))
+print("ROWS", rows)
+""")
+    e = env()
+    e["PYTHONPATH"] = os.pathsep.join([os.path.join(ROOT, "python"), os.path.join(BUILD, "python")])
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=e, timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    rows = eval(r.stdout.split("ROWS", 1)[1])
+    assert rows[-3][0] == 4 and rows[-2] == (0, pytest.approx(0.51)) and rows[-1] == (0, pytest.approx(0.51)), rows

@@ -132,6 +132,8 @@ struct _n_MBCSolver {
     PetscReal *lam, *x, *nrm, *force, *traction, *pressure, *gap, *area, *x0, *slip;
     PetscInt  *state;
     int       *couple, *istate;
+    PetscInt  *bonded; /* bonded couples (else NULL): 1 while the point's bond holds */
+    PetscReal *tbreak; /*   and the time it broke, NaN if it did not */
   } cpts;
 
   /* energy bookkeeping (dynamic) */
