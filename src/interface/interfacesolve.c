@@ -400,7 +400,8 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
    does not (its traction then lies in the cone, or on it about to slip). The merit's bound, |u_t|
    <= 2 rtol |q| at a sticking point (the natural map's residual there is u_t; the merit is it over
    1 + sqrt|q| with |q| scaled to 1), summed over the step's solves, is that resolution (stepres);
-   a frictionless point in contact is "slip". (The state used to be read from the traction, inside
+   a frictionless point in contact is "slip"; a bonded point (interfacejoint.c) is never separated,
+   its bond holding it in tension too. (The state used to be read from the traction, inside
    the cone by 1e-6 or not: points that slid in the step with their mean force inside the cone, a
    reversal or the trapezoidal rule's period-2 oscillation, were "stick".) */
 PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt state[], PetscReal lambda[])
@@ -416,7 +417,7 @@ PetscErrorCode MBCInterfaceStates(MBCInterface ifc, PetscInt count[3], PetscInt 
       PetscReal      lam[3] = {0, 0, 0};
       PetscInt       st;
       for (PetscInt d = 0; d < dim; d++) lam[d] = ifc->held[k] & (1 << d) ? 0 : ifc->theta * ifc->rall[o + d] / ifc->dscale; /* a held direction's r acts on no body */
-      if (!(lam[0] > 0)) st = MBC_CONTACT_SEPARATED;
+      if (!(lam[0] > 0) && MBCInterfaceJointPoint(ifc, i, j, NULL) != 1) st = MBC_CONTACT_SEPARATED; /* a bond holds in tension, or unloaded: not separated */
       else if (dim == 3 && PetscSqrtReal(PetscSqr(ifc->stepslip[3 * k + 1]) + PetscSqr(ifc->stepslip[3 * k + 2])) <= ifc->stepres) st = MBC_CONTACT_STICK;
       else st = MBC_CONTACT_SLIP;
       count[st]++;

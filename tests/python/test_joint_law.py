@@ -149,13 +149,14 @@ def test_bonded_block_pushed_without_pressure_dynamic(tmp_path, mtype):
 @pytest.mark.parametrize("nproc", [1, 2])
 def test_bonded_block_pulled_holds_below_tensile_strength(tmp_path, nproc):
     """Static, no pressure, pulled up to F = 0.9 f_t A with f_t = c/(2 mu), half the cone's apex (the
-    cut-off is judged after the solve of the shifted cone): every bond holds in tension, p = -F/A."""
+    cut-off is judged after the solve of the shifted cone): every bond holds in tension, p = -F/A,
+    and the points are "stick" (a bond in tension is not a separated point)."""
     ft = 0.5 * C / MU
     h5 = prep(tmp_path, scene(tmp_path, pull=0.9 * ft * A, pressure=0.0,
                               joint={"cohesion": C, "tensile_strength": ft}))
     solve(h5, "-mbc_multiplier_rtol", "1e-10", nproc=nproc)
     for q in steps(h5):
-        assert np.all(q["bonded"] == 1)
+        assert np.all(q["bonded"] == 1) and np.all(q["state"] == 1)  # held in tension: stick, not separated
         assert np.allclose(q["pressure"], -0.9 * ft * q["time"], rtol=1e-6, atol=1e-3), (q["time"], q["pressure"])
 
 
