@@ -406,3 +406,25 @@ print("ROWS", rows)
     assert r.returncode == 0, r.stdout + r.stderr
     rows = eval(r.stdout.split("ROWS", 1)[1])
     assert rows[-3][0] == 4 and rows[-2] == (0, pytest.approx(0.51)) and rows[-1] == (0, pytest.approx(0.51)), rows
+
+
+@pytest.mark.parametrize("scheme", [{"scheme": "generalized_alpha", "rho_inf": 0.8}, {"scheme": "hht", "alpha": -0.1},
+                                    {"newmark": {"beta": 0.3025, "gamma": 0.6}}])
+def test_break_under_other_time_schemes(tmp_path, scheme):
+    """The bonded cone is imposed on the step's mean contact force z = theta lambda_n+1 + (1 - theta)
+    lambda_n, whose theta each scheme sets (docs/design.md): the shift in the problem's units is
+    (c/mu) A / theta. Under generalized-alpha (rho_inf 0.8), HHT (alpha -0.1) and the dissipative
+    Newmark the pushed block holds with all four bonds to 1.50 s, breaks in the step ending at
+    1.51 s, and slides with |t| = mu_r p."""
+    cap = C * A + MU * P * A
+    sc = scene(tmp_path, push=cap / 0.505, dynamic=0.01, final_time=1.54)
+    sc["stages"][1]["analysis"].update(scheme)
+    h5 = prep(tmp_path, sc)
+    solve(h5, "-mbc_multiplier_rtol", "1e-10")
+    for q in steps(h5)[2:]:
+        if q["time"] < 1.505:
+            assert np.all(q["bonded"] == 1) and np.all(q["state"] == 1), q["time"]
+        else:
+            ratio = np.linalg.norm(q["traction"], axis=1) / q["pressure"]
+            assert np.all(q["bonded"] == 0) and np.allclose(q["break_time"], 1.51), q["time"]
+            assert len(ratio) == 4 and np.allclose(ratio, MU_R, rtol=1e-6), (q["time"], ratio)
