@@ -100,7 +100,7 @@ def _print_summary(output, check_only, scene, bodies, face_counts, exclude, noda
     for c in scene.couples:
         out = f", {len(exclude[scene.couples.index(c)])} master nodes out of contact" if c.exclude else ""
         joint = (f", bonded: cohesion={c.cohesion:g} tensile_strength={c.tensile_strength:g} "
-                 f"mu_residual={c.mu_residual:g}") if c.cohesion > 0 else ""
+                 f"mu_residual={c.mu_residual:g}" + (f" softening_displacement={c.softening:g}" if c.softening else "")) if c.cohesion > 0 else ""
         print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{joint}{out}")
     if nodal:
         for i, rows in enumerate(nodal["dirichlet"]):
@@ -361,6 +361,8 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
                    master_faces=side_faces(c, 1), slave_faces=side_faces(c, 2))
             if c.cohesion > 0:  # the joint law, only on bonded couples (older scenes' files stay as they were)
                 _attrs(g, cohesion=c.cohesion, tensile_strength=c.tensile_strength, mu_residual=c.mu_residual)
+                if c.softening > 0:
+                    _attrs(g, softening_displacement=c.softening)
             if exclude is not None and len(exclude[i]):  # (body, vertex) of the master nodes out of contact
                 g.create_dataset("exclude", data=exclude[i].astype(np.int32))
 

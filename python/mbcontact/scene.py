@@ -296,6 +296,7 @@ class Couple:
     cohesion: float = 0.0          # joint law (docs/dam.md): 0 = unbonded Coulomb contact
     tensile_strength: float = 0.0  # resolved: cohesion / mu when not given
     mu_residual: float = 0.0       # resolved: mu when not given
+    softening: float = 0.0         # softening_displacement: 0 = brittle
 
 
 @dataclass
@@ -593,7 +594,8 @@ def _couples(value):
     couples, seen = [], {}
     for i, spec in enumerate(entries(value, "couples")):
         where = f"couples[{i}]"
-        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude", "cohesion", "tensile_strength", "mu_residual"),
+        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude", "cohesion", "tensile_strength", "mu_residual",
+                                        "softening_displacement"),
                        required=("master", "slave"))
         k = integer(spec.get("k", i + 1), f"{where}.k", ge=1)
         if k in seen:
@@ -613,15 +615,15 @@ def _couples(value):
 def _joint_law(c, spec, where):
     """The bonded joint's keys (docs/dam.md): cohesion c, tensile strength f_t <= c / mu (the apex of
     the Mohr-Coulomb cone), residual friction after the bond breaks."""
-    for key in ("tensile_strength", "mu_residual"):
+    for key in ("tensile_strength", "mu_residual", "softening_displacement"):
         if key in spec and "cohesion" not in spec:
             raise InputError(f"{where}.{key} (couple k={c.k}): a joint law's key needs cohesion (> 0) on the couple")
     c.cohesion = real(spec.get("cohesion", 0.0), f"{where}.cohesion (couple k={c.k})", ge=0)
     c.mu_residual = real(spec.get("mu_residual", c.mu), f"{where}.mu_residual (couple k={c.k})", ge=0)
     if c.cohesion == 0:
-        if "tensile_strength" in spec or "mu_residual" in spec:
-            raise InputError(f"{where} (couple k={c.k}): tensile_strength and mu_residual belong to a bonded joint: "
-                             f"give cohesion > 0, or leave them out")
+        if "tensile_strength" in spec or "mu_residual" in spec or "softening_displacement" in spec:
+            raise InputError(f"{where} (couple k={c.k}): tensile_strength, mu_residual and softening_displacement belong "
+                             f"to a bonded joint: give cohesion > 0, or leave them out")
         c.tensile_strength, c.mu_residual = 0.0, c.mu
         return
     if c.mu == 0:
@@ -633,6 +635,7 @@ def _joint_law(c, spec, where):
         raise InputError(f"{where}.tensile_strength (couple k={c.k}): {c.tensile_strength:g} exceeds cohesion / mu = "
                          f"{c.cohesion:g} / {c.mu:g} = {apex:g}, the apex of the Mohr-Coulomb cone")
     c.tensile_strength = min(c.tensile_strength, apex)
+    c.softening = real(spec.get("softening_displacement", 0.0), f"{where}.softening_displacement (couple k={c.k})", ge=0)
     if c.mu_residual > MAX_MU:
         raise InputError(f"{where}.mu_residual (couple k={c.k}): {c.mu_residual:g} is not a friction coefficient "
                          f"(at most {MAX_MU:g})")

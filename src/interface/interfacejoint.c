@@ -31,12 +31,13 @@ static PetscErrorCode JointSetUp(MBCInterface ifc)
 
   PetscFunctionBegin;
   if (ifc->jbreak) PetscFunctionReturn(0);
-  PetscCall(PetscCalloc2(c->ncouples, &ifc->jbreak, c->ncouples, &ifc->jsave));
+  PetscCall(PetscCalloc3(c->ncouples, &ifc->jbreak, c->ncouples, &ifc->jsave, c->ncouples, &ifc->jsoft));
   for (PetscInt i = 0; i < c->ncouples; i++) {
     const PetscInt n = c->couples[i].master.nnodes;
     if (!(JointDesc(ifc, i)->cohesion > 0)) continue;
     PetscCall(PetscMalloc2(n + 1, &ifc->jbreak[i], n + 1, &ifc->jsave[i]));
     for (PetscInt m = 0; m <= n; m++) ifc->jbreak[i][m] = ifc->jsave[i][m] = PETSC_MAX_REAL;
+    if (JointDesc(ifc, i)->softening > 0) PetscCall(PetscCalloc1(4 * n + 4, &ifc->jsoft[i]));
   }
   ifc->jtol  = 1e-6;
   ifc->jfrac = 1;
@@ -60,8 +61,11 @@ PetscErrorCode MBCInterfaceJointDestroy(MBCInterface ifc)
 {
   PetscFunctionBegin;
   if (!ifc->jbreak) PetscFunctionReturn(0);
-  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) PetscCall(PetscFree2(ifc->jbreak[i], ifc->jsave[i]));
-  PetscCall(PetscFree2(ifc->jbreak, ifc->jsave));
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) {
+    PetscCall(PetscFree2(ifc->jbreak[i], ifc->jsave[i]));
+    PetscCall(PetscFree(ifc->jsoft[i]));
+  }
+  PetscCall(PetscFree3(ifc->jbreak, ifc->jsave, ifc->jsoft));
   PetscFunctionReturn(0);
 }
 
@@ -79,11 +83,33 @@ PetscInt MBCInterfaceJointPoint(MBCInterface ifc, PetscInt i, PetscInt j, PetscR
   return 0;
 }
 
-/* The friction coefficient of point k (couple order): the couple's mu, mu_residual once broken. */
+PetscBool MBCInterfaceHasSoftening(MBCInterface ifc)
+{
+  if (!ifc) return PETSC_FALSE;
+  for (PetscInt i = 0; i < ifc->scene->ncouples; i++)
+    if (JointDesc(ifc, i)->cohesion > 0 && JointDesc(ifc, i)->softening > 0) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/* Point j of couple i: its damage D (softening: the bond's strength is (1 - D) of the intact one's),
+   0 while a brittle bond holds, 1 once broken; 0 on an unbonded couple. */
+PetscReal MBCInterfaceJointDamage(MBCInterface ifc, PetscInt i, PetscInt j)
+{
+  const PetscInt b = MBCInterfaceJointPoint(ifc, i, j, NULL);
+  if (b < 0) return 0;
+  if (!b) return 1;
+  return ifc->jsoft && ifc->jsoft[i] ? ifc->jsoft[i][4 * ifc->contact->couples[i].points[j].master] : 0;
+}
+
+/* The friction coefficient of point k (couple order): the couple's mu, mu_residual once broken,
+   in between while it softens (mu + D (mu_r - mu)). */
 PetscReal MBCInterfaceJointMu(MBCInterface ifc, PetscInt k)
 {
-  const PetscInt i = ifc->kcouple[k];
-  return MBCInterfaceJointPoint(ifc, i, ifc->kpoint[k], NULL) == 0 ? JointDesc(ifc, i)->mu_residual : ifc->contact->couples[i].mu;
+  const PetscInt  i = ifc->kcouple[k], b = MBCInterfaceJointPoint(ifc, i, ifc->kpoint[k], NULL);
+  const PetscReal mu = ifc->contact->couples[i].mu;
+  if (b < 0) return mu;
+  if (!b) return JointDesc(ifc, i)->mu_residual;
+  return mu + MBCInterfaceJointDamage(ifc, i, ifc->kpoint[k]) * (JointDesc(ifc, i)->mu_residual - mu);
 }
 
 /* Bonded points among the points of the last build (for the monitor and the CSV). */
@@ -101,6 +127,10 @@ static PetscReal JointShift(MBCInterface ifc, PetscInt k)
   const PetscInt       i = ifc->kcouple[k];
   const MBCCoupleDesc *d = JointDesc(ifc, i);
   if (MBCInterfaceJointPoint(ifc, i, ifc->kpoint[k], NULL) != 1) return 0;
+  if (ifc->jsoft && ifc->jsoft[i]) { /* softening: the cone of (1 - D) c with mu(D) */
+    const PetscReal D = MBCInterfaceJointDamage(ifc, i, ifc->kpoint[k]);
+    return ifc->dscale * (1 - D) * d->cohesion / MBCInterfaceJointMu(ifc, k) * ifc->contact->couples[i].points[ifc->kpoint[k]].area / ifc->theta;
+  }
   return ifc->dscale * d->cohesion / d->mu * ifc->contact->couples[i].points[ifc->kpoint[k]].area / ifc->theta;
 }
 
@@ -134,6 +164,11 @@ static PetscReal JointExceedance(MBCInterface ifc, PetscInt k)
   const MBCCoupleDesc *d = JointDesc(ifc, i);
   const PetscReal      A = ifc->contact->couples[i].points[ifc->kpoint[k]].area, f = ifc->theta / ifc->dscale, F = d->cohesion / d->mu * A;
   const PetscReal      zn = f * ifc->rall[o], zt = f * PetscSqrtReal(PetscSqr(ifc->rall[o + 1]) + PetscSqr(ifc->rall[o + 2]));
+  if (ifc->jsoft && ifc->jsoft[i]) { /* softening: the cone's boundary softens the bond (MBCInterfaceJointSoften); only a cut-off below the apex breaks */
+    const PetscReal D = MBCInterfaceJointDamage(ifc, i, ifc->kpoint[k]);
+    if (!(d->tensile < d->cohesion / d->mu * (1 - 1e-12))) return -1;
+    return (-zn - (1 - D) * d->tensile * A) / F;
+  }
   return PetscMax(-zn - d->tensile * A, (zt - d->cohesion * A - d->mu * zn) / d->mu) / F;
 }
 
@@ -168,6 +203,51 @@ PetscErrorCode MBCInterfaceJointBreak(MBCInterface ifc, PetscReal time, PetscInt
       (*nnew)++;
     }
   }
+  PetscFunctionReturn(0);
+}
+
+/* Softening couples, after a solve (rall, uall of every point): each bonded point's damage from its
+   relative displacement, D = max(D_base, min(1, (S_base + |u_t| + max(u_n, 0)) / delta_s)): the slip
+   summed where the step began plus this step's slip (u_t: from the step's start, static: the load
+   step's) and the opening (u_n: the gap after the step); a point that reaches D = 1 breaks at `time`.
+   *nnew: the breaks, *dmax: the largest change of D (the caller solves again until it is small:
+   a fixed point in D, increasing since more damage means more slip, so it converges, to D = 1
+   where the bond has no state short of breaking). */
+PetscErrorCode MBCInterfaceJointSoften(MBCInterface ifc, PetscReal time, PetscInt *nnew, PetscReal *dmax)
+{
+  PetscFunctionBegin;
+  *nnew = 0, *dmax = 0;
+  PetscCall(JointSetUp(ifc));
+  for (PetscInt k = 0; k < ifc->ncontact; k++) {
+    const PetscInt i = ifc->kcouple[k], j = ifc->kpoint[k], o = ifc->coff[k];
+    PetscReal     *st, ut, D;
+    if (!ifc->jsoft[i] || MBCInterfaceJointPoint(ifc, i, j, NULL) != 1 || !(ifc->contact->couples[i].points[j].area > 0)) continue;
+    st    = &ifc->jsoft[i][4 * ifc->contact->couples[i].points[j].master];
+    ut    = PetscSqrtReal(PetscSqr(ifc->uall[o + 1]) + PetscSqr(ifc->uall[o + 2]));
+    D     = PetscMax(st[1], PetscMin(1, (st[2] + ut + PetscMax(ifc->uall[o], 0)) / JointDesc(ifc, i)->softening));
+    *dmax = PetscMax(*dmax, PetscAbsReal(D - st[0]));
+    st[0] = D, st[3] = ut;
+    if (D >= 1 - 1e-12) {
+      ifc->jbreak[i][ifc->contact->couples[i].points[j].master] = time;
+      (*nnew)++;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Softening couples: the step's damage and slip become the base of the next step (a dynamic step
+   that succeeded, or a static load step that begins: commit), or the step is abandoned (its damage
+   undone). */
+PetscErrorCode MBCInterfaceJointCommit(MBCInterface ifc, PetscBool commit)
+{
+  PetscFunctionBegin;
+  for (PetscInt i = 0; ifc->jsoft && i < ifc->contact->ncouples; i++)
+    for (PetscInt m = 0; ifc->jsoft[i] && m < ifc->contact->couples[i].master.nnodes; m++) {
+      PetscReal *st = &ifc->jsoft[i][4 * m];
+      if (commit) st[1] = st[0], st[2] += st[3];
+      else st[0] = st[1];
+      st[3] = 0;
+    }
   PetscFunctionReturn(0);
 }
 
@@ -207,6 +287,11 @@ PetscErrorCode MBCInterfaceJointGetState(MBCInterface ifc, PetscInt *n, PetscRea
     if (t) PetscCall(PetscArraycpy(t + *n, ifc->jbreak[i], ifc->contact->couples[i].master.nnodes));
     *n += ifc->contact->couples[i].master.nnodes;
   }
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) { /* softening: D and the slip summed, the step's included */
+    if (!ifc->jsoft[i]) continue;
+    for (PetscInt m = 0; t && m < ifc->contact->couples[i].master.nnodes; m++) t[*n + 2 * m] = ifc->jsoft[i][4 * m], t[*n + 2 * m + 1] = ifc->jsoft[i][4 * m + 2] + ifc->jsoft[i][4 * m + 3];
+    *n += 2 * ifc->contact->couples[i].master.nnodes;
+  }
   PetscFunctionReturn(0);
 }
 
@@ -216,13 +301,21 @@ PetscErrorCode MBCInterfaceJointSetState(MBCInterface ifc, PetscInt n, const Pet
 
   PetscFunctionBegin;
   PetscCall(MBCInterfaceJointGetState(ifc, &m, NULL));
-  PetscCheck(m == n, ifc->comm, PETSC_ERR_FILE_UNEXPECTED, "Checkpoint: %" PetscInt_FMT " joint break times where the scene's bonded couples have %" PetscInt_FMT " master nodes", n, m);
+  PetscCheck(m == n, ifc->comm, PETSC_ERR_FILE_UNEXPECTED, "Checkpoint: %" PetscInt_FMT " joint values (break times, and damage and slip where softening) where the scene's bonded couples need %" PetscInt_FMT, n, m);
   m = 0;
   for (PetscInt i = 0; i < ifc->contact->ncouples; i++) {
     if (!ifc->jbreak[i]) continue;
     PetscCall(PetscArraycpy(ifc->jbreak[i], t + m, ifc->contact->couples[i].master.nnodes));
     PetscCall(PetscArraycpy(ifc->jsave[i], t + m, ifc->contact->couples[i].master.nnodes));
     m += ifc->contact->couples[i].master.nnodes;
+  }
+  for (PetscInt i = 0; i < ifc->contact->ncouples; i++) {
+    if (!ifc->jsoft[i]) continue;
+    for (PetscInt l = 0; l < ifc->contact->couples[i].master.nnodes; l++) {
+      PetscReal *st = &ifc->jsoft[i][4 * l];
+      st[0] = st[1] = t[m + 2 * l], st[2] = t[m + 2 * l + 1], st[3] = 0;
+    }
+    m += 2 * ifc->contact->couples[i].master.nnodes;
   }
   PetscFunctionReturn(0);
 }

@@ -238,8 +238,9 @@ static PetscErrorCode InterfaceSolveScaled(MBCInterface ifc, PetscInt step, Pets
    problem. */
 static PetscErrorCode InterfaceSolveJoints(MBCInterface ifc, PetscInt step, PetscReal time, PetscBool may_fail, PetscReal *qnorm)
 {
-  Vec      q0, s;
-  PetscInt nnew, total = 0, nsolves = 0;
+  Vec             q0, s;
+  PetscInt        nnew, total = 0, nsolves = 0;
+  const PetscBool soft = MBCInterfaceHasSoftening(ifc);
 
   PetscFunctionBegin;
   PetscCall(VecDuplicate(ifc->fp.q, &q0));
@@ -257,10 +258,26 @@ static PetscErrorCode InterfaceSolveJoints(MBCInterface ifc, PetscInt step, Pets
     if (ifc->mult->reason < 0) break;
     PetscCall(MBCInterfaceGather(ifc, ifc->lambda, ifc->rall));
     PetscCall(MBCInterfaceJointBreak(ifc, time, &nnew));
+    if (soft) { /* the damage of the softening bonds from this solve's relative displacements: a fixed point in D */
+      PetscInt  ns;
+      PetscReal dmax;
+      PetscCall(MBCInterfaceGather(ifc, ifc->ucontact, ifc->uall));
+      PetscCall(MBCInterfaceJointSoften(ifc, time, &ns, &dmax));
+      total += nnew + ns;
+      if (!nnew && !ns && dmax <= ifc->jtol) break;
+      if (nsolves >= 200) { /* a bond near its snap-back can creep: say so, keep the last state */
+        PetscCall(PetscInfo(NULL, "step %" PetscInt_FMT " (t = %g): the softening bonds' damage still changed by %g after %" PetscInt_FMT " solves\n", step, (double)time, (double)dmax, nsolves));
+        break;
+      }
+      continue;
+    }
     if (!nnew) break;
     total += nnew;
   }
-  if (ifc->mult->reason < 0 && may_fail) PetscCall(MBCInterfaceJointUnbreak(ifc, time)); /* the step is cut: its breaks are undone */
+  if (ifc->mult->reason < 0 && may_fail) { /* the step is cut: its breaks and damage are undone */
+    PetscCall(MBCInterfaceJointUnbreak(ifc, time));
+    PetscCall(MBCInterfaceJointCommit(ifc, PETSC_FALSE));
+  } else if (soft && ifc->analysis != MBC_ANALYSIS_STATIC) PetscCall(MBCInterfaceJointCommit(ifc, PETSC_TRUE)); /* a static load step's damage counts from its start, committed when the next begins */
   if (total) PetscCall(PetscInfo(NULL, "step %" PetscInt_FMT " (t = %g): %" PetscInt_FMT " bonds broke, %" PetscInt_FMT " multiplier solves\n", step, (double)time, total, nsolves));
   ifc->jbroke = ifc->mult->reason < 0 && may_fail ? 0 : total, ifc->jsolves = nsolves;
   PetscCall(VecCopy(q0, ifc->fp.q));
@@ -310,6 +327,7 @@ PetscErrorCode MBCInterfaceLoadStepBegin(MBCInterface ifc)
   if (ifc->cutslip) PetscCall(PetscArraycpy(ifc->cutslip, ifc->stepslip, 3 * ifc->ncontact));
   ifc->cutres = ifc->stepres;
   PetscCall(MBCInterfaceJointSave(ifc, PETSC_FALSE));
+  PetscCall(MBCInterfaceJointCommit(ifc, PETSC_TRUE)); /* the softening bonds' damage of the load step before */
   PetscFunctionReturn(0);
 }
 
@@ -323,6 +341,7 @@ PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
   }
   ifc->stepres = ifc->cutres;
   PetscCall(MBCInterfaceJointSave(ifc, PETSC_TRUE)); /* and the bonds it broke */
+  PetscCall(MBCInterfaceJointCommit(ifc, PETSC_FALSE)); /* and the damage it did */
   PetscFunctionReturn(0);
 }
 

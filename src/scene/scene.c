@@ -299,13 +299,15 @@ static PetscErrorCode ReadRealDataset(H5Node *entry, const char *name, PetscInt 
 static PetscErrorCode ReadCoupleJoint(H5Node *e, MBCScene s, MBCCoupleDesc *c)
 {
   PetscFunctionBegin;
-  c->cohesion = 0, c->tensile = -1, c->mu_residual = -1;
+  c->cohesion = 0, c->tensile = -1, c->mu_residual = -1, c->softening = 0;
   PetscCall(H5ReadReal(e, "cohesion", &c->cohesion, PETSC_TRUE));
+  PetscCall(H5ReadReal(e, "softening_displacement", &c->softening, PETSC_TRUE));
+  PetscCheck(c->softening >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": softening_displacement %g < 0", s->filename, c->k, (double)c->softening);
   PetscCall(H5ReadReal(e, "tensile_strength", &c->tensile, PETSC_TRUE));
   PetscCall(H5ReadReal(e, "mu_residual", &c->mu_residual, PETSC_TRUE));
   PetscCheck(c->cohesion >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": cohesion %g < 0", s->filename, c->k, (double)c->cohesion);
   if (c->cohesion == 0) {
-    PetscCheck(c->tensile <= 0 && c->mu_residual < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": tensile_strength and mu_residual belong to a bonded joint (cohesion > 0)", s->filename, c->k);
+    PetscCheck(c->tensile <= 0 && c->mu_residual < 0 && c->softening == 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT ": tensile_strength and mu_residual belong to a bonded joint (cohesion > 0)", s->filename, c->k);
     c->tensile = 0, c->mu_residual = c->mu;
     PetscFunctionReturn(0);
   }

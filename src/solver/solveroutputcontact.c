@@ -49,6 +49,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   int       *couple, *istate, *bonded = NULL;
   PetscReal *tbreak = NULL;
   PetscInt  *jbonded = NULL; /* bonded, for MBCSolverGetContactJoints */
+  PetscReal *damage  = NULL;
   PetscBool  joints = (PetscBool)(c && MBCInterfaceHasJoints(ifc));
 
   PetscFunctionBegin;
@@ -61,6 +62,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     PetscCall(PetscCalloc1(np + 1, &bonded));
     PetscCall(PetscCalloc1(np + 1, &tbreak));
     PetscCall(PetscCalloc1(np + 1, &jbonded));
+    if (MBCInterfaceHasSoftening(ifc)) PetscCall(PetscCalloc1(np + 1, &damage)); /* softening couples: the damage of each point */
   }
   if (np == ifc->ncontact) PetscCall(MBCInterfaceStates(ifc, count, state, lam)); /* else: no forces yet */
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
@@ -94,6 +96,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       pressure[k] = area[k] > 0 ? z[0] / area[k] : 0;
       if (joints) {
         jbonded[k] = MBCInterfaceJointPoint(ifc, i, j, &tbreak[k]) == 1;
+        if (damage) damage[k] = MBCInterfaceJointDamage(ifc, i, j);
         bonded[k]  = (int)jbonded[k];
         nbonded += jbonded[k];
       }
@@ -130,11 +133,13 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
     if (joints) { /* bonded couples: per point 1 while its bond holds, and the time it broke (NaN: it did not, or no bond) */
       PetscCall(MBCH5WriteRows(g, "bonded", H5T_NATIVE_INT, np, 1, r0, nr, bonded + r0));
       PetscCall(MBCH5WriteRows(g, "break_time", H5T_NATIVE_DOUBLE, np, 1, r0, nr, tbreak + r0));
+      if (damage) PetscCall(MBCH5WriteRows(g, "damage", H5T_NATIVE_DOUBLE, np, 1, r0, nr, damage + r0));
     }
     PetscCall(MBCH5GroupClose(&g));
     s->output_npoints[s->noutputs] = np;
   }
   PetscCall(PetscFree(bonded));
+  PetscCall(PetscFree(damage));
   PetscCall(MBCSolverContactPointsFree(s)); /* keep this step's points for MBCSolverGetContactPoints */
   s->cpts.n = np;
   s->cpts.lam = lam, s->cpts.x = x, s->cpts.nrm = nrm, s->cpts.force = force, s->cpts.traction = traction, s->cpts.state = state;

@@ -84,6 +84,8 @@ struct _n_MBCInterface {
   PetscReal  stepres, cutres; /* what the step's multiplier solves resolve of stepslip, 2 rtol |q| summed over its (cut) steps (MBCInterfaceStates); stepres where the load step under way began */
   PetscReal **jbreak, **jsave; /* per couple with cohesion (NULL otherwise), per master node: the time its bond broke, PETSC_MAX_REAL while
                                  bonded; saved where a static load step begins (interfacejoint.c) */
+  PetscReal **jsoft;      /* per couple with softening_displacement (NULL otherwise), 4 per master node: damage D, D and the slip summed
+                             where the step began (the base), this step's slip; interfacejoint.c */
   PetscReal  jtol;        /* -mbc_joint_break_rtol: a bond breaks within this fraction of its apex force (c/mu) A of the cone's boundary */
   PetscInt   jbroke, jsolves; /* the last MBCInterfaceSolve: the bonds it broke and its multiplier solves (the monitor's) */
   PetscReal  jfrac;       /* -mbc_joint_break_fraction: a solve breaks the points within this fraction of the largest excess (1: all beyond the cone) */
@@ -153,6 +155,10 @@ PETSC_INTERN PetscErrorCode MBCInterfaceJointProblem(MBCInterface, Vec);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointBreak(MBCInterface, PetscReal, PetscInt *);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointSave(MBCInterface, PetscBool);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointUnbreak(MBCInterface, PetscReal);
+PETSC_INTERN PetscBool      MBCInterfaceHasSoftening(MBCInterface);
+PETSC_INTERN PetscReal      MBCInterfaceJointDamage(MBCInterface, PetscInt, PetscInt);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointSoften(MBCInterface, PetscReal, PetscInt *, PetscReal *);
+PETSC_INTERN PetscErrorCode MBCInterfaceJointCommit(MBCInterface, PetscBool);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointGetState(MBCInterface, PetscInt *, PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceJointSetState(MBCInterface, PetscInt, const PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCInterfaceSetJointBreak(MBCInterface, PetscReal, PetscReal);

@@ -66,6 +66,7 @@ typedef struct {
   PetscInt  k;
   PetscReal mu;
   PetscReal cohesion, tensile, mu_residual; /* the joint law (docs/dam.md): cohesion 0 = unbonded Coulomb contact */
+  PetscReal softening; /* softening_displacement: the relative displacement over which the bond softens linearly (0: brittle) */
   char     *master, *slave; /* surface names joined by "," */
   PetscReal *master_faces, *slave_faces; /* per body: its faces on each side (weights of the decomposition) */
   PetscInt   nexclude, *exclude; /* master nodes taken out of contact: (body, vertex in scene order) each */
