@@ -6,8 +6,9 @@
    solve's own problem in r' (the solvers are untouched). A point whose traction the solve puts on
    the cone's boundary (slip, or the tension cut-off p = -f_t) breaks; the problem then changes
    (no shift, mu_residual) and is solved again until no point breaks (MBCInterfaceSolve). The
-   break times are this module's state; the interface keeps them per (couple, master node), which
-   the re-search and the rebuilds of H keep, and the checkpoint carries them. */
+   break times (and a softening bond's damage, MBCInterfaceJointSoften) are this module's state;
+   the interface keeps them per (couple, master node), which the re-search and the rebuilds of H
+   keep, and the checkpoint carries them. */
 #include <mbc/private/interfaceimpl.h>
 
 /* A couple's scene description (the contact's couples are the scene's, in its order). */
@@ -24,7 +25,8 @@ PetscBool MBCInterfaceHasJoints(MBCInterface ifc)
   return PETSC_FALSE;
 }
 
-/* The arrays of break times, every bond intact (PETSC_MAX_REAL): made at the first use. */
+/* The arrays of break times, every bond intact (PETSC_MAX_REAL), and the softening couples' damage
+   and slip (0): made at the first use. */
 static PetscErrorCode JointSetUp(MBCInterface ifc)
 {
   MBCContact c = ifc->contact;
@@ -39,12 +41,6 @@ static PetscErrorCode JointSetUp(MBCInterface ifc)
     for (PetscInt m = 0; m <= n; m++) ifc->jbreak[i][m] = ifc->jsave[i][m] = PETSC_MAX_REAL;
     if (JointDesc(ifc, i)->softening > 0) PetscCall(PetscCalloc1(4 * n + 4, &ifc->jsoft[i]));
   }
-  ifc->jtol  = 1e-6;
-  ifc->jfrac = 1;
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-mbc_joint_break_rtol", &ifc->jtol, NULL));
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-mbc_joint_break_fraction", &ifc->jfrac, NULL));
-  PetscCheck(ifc->jfrac >= 0 && ifc->jfrac <= 1, ifc->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_joint_break_fraction %g must lie in [0, 1]", (double)ifc->jfrac);
-  PetscCheck(ifc->jtol >= 0 && ifc->jtol < 1, ifc->comm, PETSC_ERR_ARG_OUTOFRANGE, "-mbc_joint_break_rtol %g must lie in [0, 1)", (double)ifc->jtol);
   PetscFunctionReturn(0);
 }
 
