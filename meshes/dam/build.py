@@ -6,7 +6,8 @@ is z = 0). Every monolith is a body with a gravity-dam cross-section: vertical u
 crest of width `crest`, downstream face of slope `slope` (H:V) from the knee down to the toe,
 base width B = crest + slope z_knee (z_knee = H - crest / slope). Neighbouring monoliths touch at
 contraction joints (couples 2, 3, ..., friction `mu_joint`); the monoliths' bases rest on the
-foundation block (couple 1, friction `mu_base`). The foundation extends `upstream` H upstream,
+foundation block (couple 1, friction `mu_base`); in dynamic and staged analyses every couple slides
+small (`sliding`: the pairs fixed per stage, docs/dam.md). The foundation extends `upstream` H upstream,
 `downstream` H downstream, `abutment` H beyond the end monoliths and `depth` H down, graded away
 from the dam; its bottom is fixed, its sides on rollers (`sides`). Loads: the monoliths'
 self-weight (the foundation's own weight is its in-situ state and is left out), the reservoir's
@@ -25,7 +26,7 @@ thousand to millions).
   meshes/dam/build.py OUTDIR [--h 5 | --dofs 1e6] [--monoliths 4] [--mu-base 0.8] [--mu-joint 0.8]
                       [--level 95] [--dynamic [--eq-duration 20] | --quasi-static | --staged | --modal] [--[no-]joints]
                       [--added-mass] [--foundation massed|massless|radiating] [--components x|xy|xyz]
-                      [--at2 X.AT2 [Y.AT2 [Z.AT2]]] [--binary]
+                      [--at2 X.AT2 [Y.AT2 [Z.AT2]]] [--sliding small|finite] [--binary]
 
 writes dam.msh, dam.yaml, dam.json (parameters, W, T for report.py), ground_motion.csv when
 dynamic, and dam.h5 (mbcontact-prep); then
@@ -74,6 +75,7 @@ class Dam:
     ring: int = 2                 # foundation contact surface: elements beyond the dam's footprint
     joints: bool = None           # contraction joints as contact couples (default: dynamic only, docs/dam.md)
     joint_base_rows: int = 1      # element rows above the base left out of the joint surfaces (see monolith())
+    sliding: str = None           # the couples' sliding: small | finite (default: small in dynamic and staged analyses, docs/dam.md)
     sides: str = "normal"         # foundation sides: normal (rollers) | all | none
     floor: bool = True            # hydrostatic pressure on the reservoir floor too
     E: float = 25e9               # concrete
@@ -352,6 +354,8 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
     if p.joints:  # joint k between monoliths k and k + 1: the odd (coarser) one is the master
         couples += [{"k": 1 + k, "master": f"m{k}_ymax" if k % 2 else f"m{k + 1}_ymin",
                      "slave": f"m{k + 1}_ymin" if k % 2 else f"m{k}_ymax", "mu": p.mu_joint} for k in range(1, n)]
+    for c in couples:
+        c["sliding"] = p.sliding
     dirichlet = [{"surface": "foundation_bottom", "components": "all"}]
     if p.sides == "normal":
         dirichlet += [{"surface": "foundation_xsides", "components": ["x"]}, {"surface": "foundation_ysides", "components": ["y"]}]
@@ -442,6 +446,10 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     p = Dam(**params).check()
     if p.joints is None:  # a static analysis with contact between two bodies held only by contact does not converge yet
         p = replace(p, joints=analysis in ("dynamic", "modal"))
+    if p.sliding is None:  # an earthquake slides the joints by millimetres under faces of metres (docs/dam.md)
+        p = replace(p, sliding="small" if analysis in ("dynamic", "staged") else "finite")
+    if p.sliding not in ("small", "finite"):
+        raise ValueError(f"sliding {p.sliding!r}: small or finite")
     if target_dofs:
         p = replace(p, h=size_for_dofs(p, target_dofs))
     os.makedirs(outdir, exist_ok=True)
@@ -492,6 +500,8 @@ if __name__ == "__main__":
     ap.add_argument("--eq-duration", type=float, default=20.0, help="s of the record to run")
     ap.add_argument("--joints", action=argparse.BooleanOptionalAction, default=None,
                     help="contraction joints as contact couples (default: in dynamic analyses only)")
+    ap.add_argument("--sliding", choices=("small", "finite"), default=None,
+                    help="the couples' sliding (default: small in dynamic and staged analyses, finite in static ones)")
     ap.add_argument("--binary", action="store_true", default=None, help="binary Gmsh file (default above 200k DOFs)")
     ap.add_argument("--modal", action="store_true", help="the first 10 natural frequencies and modes (couples tied)")
     ap.add_argument("--added-mass", action="store_true", help="the reservoir's Westergaard added mass on the upstream faces")
@@ -502,7 +512,7 @@ if __name__ == "__main__":
     ap.add_argument("--at2", nargs="+", default=(), help="PEER .AT2 records for x (and y, z) instead of the synthetic ones")
     a = ap.parse_args()
     params = dict(monoliths=a.monoliths, height=a.height, crest=a.crest, slope=a.slope, width=a.width, level=a.level,
-                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints,
+                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints, sliding=a.sliding,
                   added_mass=a.added_mass, foundation_model=a.foundation, components=a.components, at2=tuple(a.at2))
     if a.h:
         params["h"] = a.h

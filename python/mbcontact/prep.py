@@ -99,7 +99,7 @@ def _print_summary(output, check_only, scene, bodies, face_counts, exclude, noda
         print(f"  surface {sid} {name}: {count} faces")
     for c in scene.couples:
         out = f", {len(exclude[scene.couples.index(c)])} master nodes out of contact" if c.exclude else ""
-        print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{out}")
+        print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{', ' + c.sliding + ' sliding' if c.sliding else ''}{out}")
     if nodal:
         for i, rows in enumerate(nodal["dirichlet"]):
             if rows is not None:
@@ -357,6 +357,8 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
             i, c = item
             _attrs(g, k=c.k, mu=c.mu, master=",".join(c.master), slave=",".join(c.slave),
                    master_faces=side_faces(c, 1), slave_faces=side_faces(c, 2))
+            if c.sliding:
+                _attrs(g, sliding=c.sliding)
             if exclude is not None and len(exclude[i]):  # (body, vertex) of the master nodes out of contact
                 g.create_dataset("exclude", data=exclude[i].astype(np.int32))
 

@@ -293,6 +293,7 @@ class Couple:
     slave: list
     mu: float
     exclude: list = field(default_factory=list)  # regions whose nodes carry no contact point
+    sliding: str = ""     # "small" (pairs fixed per stage) or "finite"; "": -mbc_contact_sliding's default
 
 
 @dataclass
@@ -590,7 +591,7 @@ def _couples(value):
     couples, seen = [], {}
     for i, spec in enumerate(entries(value, "couples")):
         where = f"couples[{i}]"
-        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude"), required=("master", "slave"))
+        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude", "sliding"), required=("master", "slave"))
         k = integer(spec.get("k", i + 1), f"{where}.k", ge=1)
         if k in seen:
             raise InputError(f"{where}.k: couple k={k} is already defined by couples[{seen[k]}]")
@@ -598,7 +599,8 @@ def _couples(value):
         couples.append(Couple(k, name_list(spec["master"], f"{where}.master (couple k={k})"),
                               name_list(spec["slave"], f"{where}.slave (couple k={k})"),
                               real(spec.get("mu", 0.0), f"{where}.mu", ge=0),
-                              name_list(spec["exclude"], f"{where}.exclude (couple k={k})") if "exclude" in spec else []))
+                              name_list(spec["exclude"], f"{where}.exclude (couple k={k})") if "exclude" in spec else [],
+                              string(spec["sliding"], f"{where}.sliding", ("finite", "small")) if "sliding" in spec else ""))
         if couples[-1].mu > MAX_MU:
             raise InputError(f"{where}.mu: {couples[-1].mu:g} is not a friction coefficient (at most "
                              f"{MAX_MU:g}, a friction angle of 89.94 degrees)")

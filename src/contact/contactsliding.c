@@ -1,4 +1,4 @@
-/* Small sliding (-mbc_contact_sliding small): the pairs, the constraints' weights and the frames
+/* Small sliding (a couple's `sliding: small`, or -mbc_contact_sliding small): the pairs, the constraints' weights and the frames
    of a search are kept, and a later update only gathers the nodes' coordinates and moves each
    point's gaps by the motion since that search, along its normal: the gap the constraint's
    weights give, n . (sum mw dx_m - sum sw dx_s) (H's normal column, so the gap is the one the
@@ -35,6 +35,7 @@ PetscErrorCode MBCContactSlidingFreeze(MBCContact c)
   for (PetscInt i = 0; i < c->ncouples; i++) {
     MBCCouple  *cp = &c->couples[i];
     MBCSurface *sl = &cp->slave;
+    if (!cp->small_sliding) continue;
     PetscCall(MBCCoupleSlidingDestroy(cp));
     cp->nref_m = cp->master.nnodes, cp->nref_s = sl->nnodes, cp->nref_p = cp->npoints;
     PetscCall(PetscMalloc5(3 * cp->nref_m + 1, &cp->xref_m, 3 * cp->nref_s + 1, &cp->xref_s, cp->nref_p + 1, &cp->gref, cp->nref_p + 1, &cp->igref, cp->nref_p + 1, &cp->slide_max));
@@ -68,6 +69,7 @@ PetscErrorCode MBCContactSlidingUpdate(MBCContact c, PetscBool *repair)
     const MBCSurface *m = &cp->master, *sl = &cp->slave;
     PetscInt         nbeyond = 0, worst = -1;
     PetscReal        most = 0;
+    if (!cp->small_sliding) continue;
     PetscCheck(m->nnodes == cp->nref_m && sl->nnodes == cp->nref_s && cp->npoints == cp->nref_p, c->comm, PETSC_ERR_PLIB, "Couple k = %" PetscInt_FMT ": its surfaces changed under small sliding", cp->k);
     for (PetscInt k = 0; k < cp->npoints; k++) {
       MBCContactPoint *p = &cp->points[k];
@@ -94,7 +96,7 @@ PetscErrorCode MBCContactSlidingUpdate(MBCContact c, PetscBool *repair)
     if (c->slide_repair) *repair = PETSC_TRUE;
     else { /* reported once per couple and reference */
       const PetscReal *x = &m->x[3 * cp->points[worst].master];
-      PetscCall(PetscPrintf(c->comm, "mbcontact: warning: small sliding, couple k = %" PetscInt_FMT ": %" PetscInt_FMT " of its %" PetscInt_FMT " contact points slid more than -mbc_contact_slide_limit %g of their slave face's shortest edge since their pairs were fixed (the most %.3g edges, at the master node now at (%g, %g, %g)): their gaps are extrapolated beyond the faces they were paired with; search again there with -mbc_contact_slide_repair, or use -mbc_contact_sliding finite\n", cp->k, nbeyond, cp->npoints, (double)c->slide_limit, (double)(most * c->slide_limit), (double)x[0], (double)x[1], (double)x[2]));
+      PetscCall(PetscPrintf(c->comm, "mbcontact: warning: small sliding, couple k = %" PetscInt_FMT ": %" PetscInt_FMT " of its %" PetscInt_FMT " contact points slid more than -mbc_contact_slide_limit %g of their slave face's shortest edge since their pairs were fixed (the most %.3g edges, at the master node now at (%g, %g, %g)): their gaps are extrapolated beyond the faces they were paired with; search again there with -mbc_contact_slide_repair, or give the couple `sliding: finite`\n", cp->k, nbeyond, cp->npoints, (double)c->slide_limit, (double)(most * c->slide_limit), (double)x[0], (double)x[1], (double)x[2]));
       for (PetscInt k = 0; k < cp->npoints; k++) cp->slide_max[k] = PETSC_MAX_REAL;
     }
   }

@@ -723,6 +723,12 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCheck(c->k >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple %s has real constant k = %" PetscInt_FMT "; k must be at least 1", s->filename, e.path, c->k);
     PetscCheck(c->mu >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g < 0", s->filename, c->k, (double)c->mu);
     PetscCall(ReadCoupleExclude(&e, s, c));
+    {
+      char sliding[16];
+      PetscCall(H5ReadString(&e, "sliding", sliding, sizeof(sliding), NULL, PETSC_TRUE));
+      c->sliding = !sliding[0] ? -1 : !strcmp(sliding, "small") ? 1 : !strcmp(sliding, "finite") ? 0 : -2;
+      PetscCheck(c->sliding >= -1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT " has sliding '%s'; it must be finite or small", s->filename, c->k, sliding);
+    }
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));

@@ -68,6 +68,7 @@ typedef struct {
   char     *master, *slave; /* surface names joined by "," */
   PetscReal *master_faces, *slave_faces; /* per body: its faces on each side (weights of the decomposition) */
   PetscInt   nexclude, *exclude; /* master nodes taken out of contact: (body, vertex in scene order) each */
+  PetscInt   sliding; /* its `sliding`: 1 small, 0 finite, -1 not given (-mbc_contact_sliding's default) */
 } MBCCoupleDesc;
 
 typedef struct {
