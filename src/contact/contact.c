@@ -489,16 +489,17 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
 
   PetscFunctionBegin;
   if (!c->reference_done) PetscCall(ContactReference(c, nbodies, bodies));
-  PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
   if (c->small_sliding && c->frozen && !force) { /* the small-sliding couples' gaps moved; the others searched below */
-    PetscBool repair, finite = PETSC_FALSE;
-    for (PetscInt i = 0; i < c->ncouples; i++) {
-      if (!c->couples[i].small_sliding) {
-        finite = PETSC_TRUE;
-        continue;
+    PetscBool repair, finite = PETSC_FALSE, done = PETSC_FALSE;
+    for (PetscInt i = 0; i < c->ncouples; i++) finite = (PetscBool)(finite || !c->couples[i].small_sliding);
+    if (!finite) PetscCall(MBCContactSlidingGather(c, nbodies, bodies, &done));
+    if (!done) {
+      PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
+      for (PetscInt i = 0; i < c->ncouples; i++) {
+        if (!c->couples[i].small_sliding) continue;
+        PetscCall(SurfaceFromRecords(&c->couples[i].master, rec, nrec, i, 0));
+        PetscCall(SurfaceFromRecords(&c->couples[i].slave, rec, nrec, i, 1));
       }
-      PetscCall(SurfaceFromRecords(&c->couples[i].master, rec, nrec, i, 0));
-      PetscCall(SurfaceFromRecords(&c->couples[i].slave, rec, nrec, i, 1));
     }
     PetscCall(MBCContactSlidingUpdate(c, &repair));
     if (!repair && !finite) {
@@ -509,6 +510,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     }
     keep = (PetscBool)!repair;
   }
+  if (!rec) PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
   /* a search of small-sliding couples is global (a restart's replay of the last global search
      restores their reference); a global search takes them along (so the last one is their reference) */
   global = (PetscBool)(force || c->nsearches == 0 || (c->small_sliding && !keep));

@@ -102,3 +102,65 @@ PetscErrorCode MBCContactSlidingUpdate(MBCContact c, PetscBool *repair)
   }
   PetscFunctionReturn(0);
 }
+
+/* Every couple sliding small and frozen: the surfaces' coordinates x = x0 + u straight from the
+   rows each rank owns (a node's body and first row are its surface's), one Allgatherv of (node,
+   u) over the ranks, instead of the faces' records gathered, sorted and made into surfaces again
+   (their order and set-up do not change while the pairs are kept). The same x, bit for bit.
+   *done false: a node without an owner's value (a body without displacements), the records then. */
+PetscErrorCode MBCContactSlidingGather(MBCContact c, PetscInt nbodies, MBCBody bodies[], PetscBool *done)
+{
+  PetscInt            n = 0, nmine = 0, idx = 0, *rs, *re;
+  PetscReal          *mine, *all, **x, **x0;
+  const PetscScalar **u;
+  PetscMPIInt         size, count, *counts, *displs;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(MBC_RankWait, 0, 0, 0, 0));
+  PetscCallMPI(MPI_Barrier(c->comm));
+  PetscCall(PetscLogEventEnd(MBC_RankWait, 0, 0, 0, 0));
+  PetscCall(PetscLogEventBegin(MBC_ContactGather, 0, 0, 0, 0));
+  for (PetscInt i = 0; i < c->ncouples; i++) n += c->couples[i].master.nnodes + c->couples[i].slave.nnodes;
+  PetscCall(PetscMalloc5(4 * n + 1, &mine, nbodies, &u, nbodies, &rs, nbodies, &re, 2 * n + 1, &x));
+  x0 = x + n;
+  for (PetscInt b = 0; b < nbodies; b++) {
+    u[b] = NULL;
+    if (!bodies[b] || !bodies[b]->u) continue;
+    PetscCall(VecGetOwnershipRange(bodies[b]->u, &rs[b], &re[b]));
+    PetscCall(VecGetArrayRead(bodies[b]->u, &u[b]));
+  }
+  for (PetscInt i = 0; i < c->ncouples; i++)
+    for (PetscInt side = 0; side < 2; side++) {
+      MBCSurface *s = side ? &c->couples[i].slave : &c->couples[i].master;
+      for (PetscInt v = 0; v < s->nnodes; v++, idx++) {
+        const PetscInt b = s->nbody[v], r = s->nrow[v];
+        x[idx] = &s->x[3 * v], x0[idx] = &s->x0[3 * v];
+        if (b < 0 || b >= nbodies || !u[b] || r < rs[b] || r >= re[b]) continue;
+        mine[4 * nmine] = idx;
+        for (PetscInt d = 0; d < 3; d++) mine[4 * nmine + 1 + d] = PetscRealPart(u[b][r - rs[b] + d]);
+        nmine++;
+      }
+    }
+  for (PetscInt b = 0; b < nbodies; b++)
+    if (u[b]) PetscCall(VecRestoreArrayRead(bodies[b]->u, &u[b]));
+  PetscCallMPI(MPI_Comm_size(c->comm, &size));
+  PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
+  PetscCall(PetscMPIIntCast(4 * nmine, &count));
+  PetscCallMPI(MPI_Allgather(&count, 1, MPI_INT, counts, 1, MPI_INT, c->comm));
+  displs[0] = 0;
+  for (PetscMPIInt r = 0; r < size; r++) displs[r + 1] = displs[r] + counts[r];
+  *done = (PetscBool)(displs[size] == 4 * n); /* the same on every rank */
+  if (*done) {
+    PetscCall(PetscMalloc1(4 * n + 1, &all));
+    PetscCallMPI(MPI_Allgatherv(mine, count, MPIU_REAL, all, counts, displs, MPIU_REAL, c->comm));
+    for (PetscInt k = 0; k < n; k++) {
+      const PetscInt j = (PetscInt)all[4 * k];
+      for (PetscInt d = 0; d < 3; d++) x[j][d] = x0[j][d] + all[4 * k + 1 + d];
+    }
+    PetscCall(PetscFree(all));
+  }
+  PetscCall(PetscFree2(counts, displs));
+  PetscCall(PetscFree5(mine, u, rs, re, x));
+  PetscCall(PetscLogEventEnd(MBC_ContactGather, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}

@@ -159,6 +159,7 @@ PETSC_INTERN PetscErrorCode MBCContactSetPreferredFaces(MBCContact, PetscInt, co
 PETSC_INTERN PetscErrorCode MBCContactSetExcluded(MBCContact, PetscInt, PetscInt, const PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCContactSlidingFreeze(MBCContact);
 PETSC_INTERN PetscErrorCode MBCContactSlidingUpdate(MBCContact, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCContactSlidingGather(MBCContact, PetscInt, MBCBody[], PetscBool *);
 PETSC_INTERN PetscErrorCode MBCContactSlidingReset(MBCContact);
 PETSC_INTERN PetscErrorCode MBCCoupleSlidingDestroy(MBCCouple *);
 
