@@ -361,6 +361,18 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
                 _attrs(g, sliding=c.sliding)
             if exclude is not None and len(exclude[i]):  # (body, vertex) of the master nodes out of contact
                 g.create_dataset("exclude", data=exclude[i].astype(np.int32))
+            u = c.uplift
+            if u is not None:  # the law's or the table's keys, settled by the parse (docs/scene-h5.md)
+                table = u["table"]
+                _attrs(g, uplift=1, uplift_origin=u["origin"], uplift_direction=u["direction"],
+                       uplift_length=u["length"], uplift_unit_weight=u["unit_weight"],
+                       uplift_heel_head=u.get("heel_head", 0.0), uplift_tail_head=u.get("tail_head", 0.0),
+                       uplift_drain=u.get("drain", -1.0), uplift_efficiency=u.get("drain_efficiency", 0.0),
+                       uplift_penetration=int(u["penetration"]), uplift_level=u["level"],
+                       uplift_threshold=u["threshold"], uplift_axis=int(u["axis"]),
+                       uplift_table_rows=0 if table is None else len(table))
+                if table is not None:
+                    g.create_dataset("uplift_table", data=np.asarray(table, dtype=np.float64))
 
         _list(root, "couples", enumerate(scene.couples), couple)
 
@@ -396,7 +408,8 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
                       if load.kind == "hydrostatic" else {}),
                    **(dict(velocity_function=time_function(Time("table", load.velocity)),
                            displacement_function=time_function(Time("table", load.displacement)))
-                      if load.kind == "ground_acceleration" else {}))
+                      if load.kind == "ground_acceleration" else {}),
+                   **(dict(couple=load.couple, side=load.side) if load.kind == "uplift" else {}))
 
         _list(root, "loads", enumerate(scene.loads), load)
 
