@@ -75,6 +75,7 @@ def _run(args):
     sets = build_node_sets(scene, bodies)
     exclude = couple_exclusions(scene, bodies, labels, sets)
     _reservoir_floors(scene, bodies)
+    _uplift_extent(scene, bodies)
     nodal = _nodal_inputs(scene, bodies, sets)
 
     if not args.check:
@@ -122,6 +123,39 @@ def _reservoir_floors(scene, bodies):
                              f"below the reservoir's floor {m.bottom:g}")
         if not m.level > m.bottom:
             raise InputError(f"added_mass[{i}].level: {m.level:g} is not above the reservoir's floor {m.bottom:g}")
+
+
+def _uplift_extent(scene, bodies):
+    """A couple's uplift acts where its master faces are, across the direction too: the joint's
+    plane from the master faces' mean normal n, the lateral axis t = n x direction, and the master
+    vertices' range along t (the slave side, a foundation reaching beyond the footprint, is loaded
+    only under the joint)."""
+    for c in scene.couples:
+        u = c.uplift
+        if u is None:
+            continue
+        nrm, ts = np.zeros(3), []
+        for name in c.master:
+            for b, index in surface_faces(name, scene.surfaces[name], bodies).items():
+                body = bodies[b]
+                for f in index:
+                    nv = body.face_corners(body.boundary_faces[f:f + 1], body.boundary_nv[f:f + 1])[0]
+                    x = body.coords[body.boundary_faces[f, :nv]]
+                    nrm += 0.5 * sum(np.cross(x[k], x[(k + 1) % nv]) for k in range(nv))
+                    ts.append(x)
+        nn = np.linalg.norm(nrm)
+        if not nn > 0:
+            raise InputError(f"{u['where']}: the master surfaces have no mean normal (a closed surface?): "
+                             "the uplift needs a plane joint")
+        nrm /= nn
+        if abs(nrm @ u["direction"]) > 0.1:
+            raise InputError(f"{u['where']}.direction: {list(u['direction'])} is not along the joint (the master "
+                             f"faces' normal is [{nrm[0]:.3g}, {nrm[1]:.3g}, {nrm[2]:.3g}]): give the heel-to-toe "
+                             "direction in the joint's plane")
+        t = np.cross(nrm, u["direction"])
+        t /= np.linalg.norm(t)
+        y = (np.concatenate(ts) - u["origin"]) @ t
+        u["lateral"] = np.array([*t, y.min(), y.max()])
 
 
 def _nodal_inputs(scene, bodies, sets):
@@ -370,7 +404,8 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
                        uplift_drain=u.get("drain", -1.0), uplift_efficiency=u.get("drain_efficiency", 0.0),
                        uplift_penetration=int(u["penetration"]), uplift_level=u["level"],
                        uplift_threshold=u["threshold"], uplift_axis=int(u["axis"]),
-                       uplift_table_rows=0 if table is None else len(table))
+                       uplift_table_rows=0 if table is None else len(table),
+                       uplift_lateral=u.get("lateral", np.array([0, 0, 0, -1e300, 1e300])))
                 if table is not None:
                     g.create_dataset("uplift_table", data=np.asarray(table, dtype=np.float64))
 

@@ -307,6 +307,7 @@ static PetscErrorCode ReadCoupleUplift(H5Node *e, MBCScene s, MBCCoupleDesc *c)
   PetscCall(H5ReadReals(e, "uplift_origin", 3, u->origin, PETSC_FALSE));
   PetscCall(H5ReadReals(e, "uplift_direction", 3, u->direction, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "uplift_length", &u->length, PETSC_FALSE));
+  PetscCall(H5ReadReals(e, "uplift_lateral", 5, u->lateral, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "uplift_unit_weight", &u->unit_weight, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "uplift_heel_head", &u->heel_head, PETSC_FALSE));
   PetscCall(H5ReadReal(e, "uplift_tail_head", &u->tail_head, PETSC_FALSE));

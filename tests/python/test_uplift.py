@@ -1,0 +1,121 @@
+"""Uplift on a couple's faces (docs/scene.md, Couples, `uplift`; docs/dam.md, Uplift): a 4 x 2 m
+block on a base, the joint z = 0 from the heel x = 0 to the toe x = 4.
+
+- The law with a drain line: heads H1 = 10 m, H2 = 2 m, drains at X = 1 m of efficiency 0.5:
+  H3 = H2 + (1 - E)(H1 - H2)(L - X)/L = 5 m; int h ds = 18 m^2 and int h s ds = 27.333 m^3, so
+  U = gamma b 18 = 353 160 N at x = 1.5185 m, up on the block (master), down on the base (slave).
+- A block on a base under that uplift: the contact's normal resultant is W - U (equilibrium of
+  the block held only by contact, to the static tolerance).
+- A block pushed over by the water on its upstream face, the heel opening: with `penetration`
+  the reservoir's pressure gamma (level - z) fills the open part from the heel, the law starts at
+  the crack's tip; repeated load steps at the same load converge to the cracked state, whose
+  uplift is gamma b (H1 w + H1 (L - w) / 2) with w the wet length.
+"""
+import re
+
+import numpy as np
+import pytest
+
+from conftest import prep, result, solve
+from mbcontact import meshgen
+from mbcontact.results import read_contact, read_csv
+
+GAMMA = 9810.0
+B = 2.0  # the joint's width along y
+L = 4.0
+
+
+def resultants(stdout):
+    """{load index: (kind, F (3,), M (3,))} from the -mbc_view lines."""
+    out = {}
+    for m in re.finditer(r"load (\d+) \((\w+)\): resultant (\S+) (\S+) (\S+), moment about the origin (\S+) (\S+) (\S+)", stdout):
+        v = np.array([float(x) for x in m.groups()[2:]])
+        out.setdefault(int(m.group(1)), []).append((m.group(2), v[:3], v[3:]))
+    return out
+
+
+def block_scene(tmp_path, uplift, height=4.0, loads=(), mu=0.8, steps=1, density=2400.0):
+    """The block (8 x 2 x 4 elements: a node on the drain line x = 1) on a base of other
+    elements (6 x 3 x 1: the drain line and the crack's tip cross its faces)."""
+    meshgen.boxes(str(tmp_path / "m.msh"), [
+        dict(lo=(0, 0, 0), hi=(L, B, height), n=(8, 2, 4), name="block"),
+        dict(lo=(-0.5, -0.25, -1), hi=(L + 0.5, B + 0.25, 0), n=(6, 3, 1), name="base")])
+    return {"meshes": {"m": "m.msh"},
+            "bodies": {"block": {"mesh": "m", "regions": "block", "material": {"E": 2.5e10, "nu": 0.2, "density": density}},
+                       "base": {"mesh": "m", "regions": "base", "material": {"E": 2.0e10, "nu": 0.25}}},
+            "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": mu, "uplift": uplift}],
+            "dirichlet": [{"surface": "base_zmin"}],
+            "loads": [{"kind": "gravity", "vector": [0, 0, -9.81], "bodies": "block"}, *loads],
+            "analysis": {"type": "static", "dt": 1.0, "final_time": float(steps)}}
+
+
+DRAINED = {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": L, "heel_head": 10.0, "tail_head": 2.0,
+           "drain": 1.0, "drain_efficiency": 0.5, "unit_weight": GAMMA}
+U_DRAINED = GAMMA * B * 18.0
+X_DRAINED = 27.0 + 1.0 / 3.0  # int h s ds
+X_DRAINED /= 18.0
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_drained_law_resultant_and_point_of_action(tmp_path, nproc):
+    """The assembled nodal loads (-mbc_view) and the contact CSV's uplift against the law's
+    integral: on the block (a node on the drain line: exact, 1e-12), on the base (the drain line
+    crosses its faces: 12 x 12 sub-cells, measured 2e-6, asserted 1e-4), equal and opposite."""
+    h5 = prep(tmp_path, block_scene(tmp_path, DRAINED))
+    r = solve(h5, "-mbc_view", nproc=nproc)
+    loads = [v for k in sorted(resultants(r.stdout)) for v in resultants(r.stdout)[k] if v[0] == "uplift"]
+    assert len(loads) == 2
+    (_, Fm, Mm), (_, Fs, Ms) = loads  # block (master), base (slave)
+    assert np.allclose(Fm, [0, 0, U_DRAINED], rtol=0, atol=1e-12 * U_DRAINED)
+    # moment about the origin of (0, 0, U) at (x, 1, 0): (U y, -U x, 0)
+    assert np.allclose(Mm, [U_DRAINED * 1.0, -U_DRAINED * X_DRAINED, 0], rtol=0, atol=1e-11 * U_DRAINED)
+    assert np.allclose(Fs, -Fm, rtol=0, atol=1e-11 * U_DRAINED)
+    assert np.allclose(Ms, -Mm, rtol=0, atol=1e-11 * U_DRAINED)
+    c = read_csv(result(h5, "_contact.csv"))
+    assert abs(c["uplift"][-1] - U_DRAINED) < 1e-12 * U_DRAINED
+    assert abs(c["uplift_x"][-1] - X_DRAINED) < 1e-12 and abs(c["uplift_y"][-1] - 1.0) < 1e-12
+    assert abs(c["uplift_z"][-1]) < 1e-12 and c["wet_length"][-1] == 0
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_block_normal_resultant_is_weight_minus_uplift(tmp_path, nproc):
+    """The block (W = 2400 g 32 = 753 408 N) under the drained law: N = W - U to the static
+    tolerance (1e-6 asserted, with the block held by contact alone), no tangential force."""
+    h5 = prep(tmp_path, block_scene(tmp_path, DRAINED))
+    solve(h5, nproc=nproc)
+    c = read_csv(result(h5, "_contact.csv"))
+    W = 2400 * 9.81 * L * B * 4.0
+    assert abs(c["fz"][-1] - (W - U_DRAINED)) < 1e-6 * W
+    assert abs(c["normal_force"][-1] - (W - U_DRAINED)) < 1e-6 * W
+    assert abs(c["fx"][-1]) < 1e-6 * W and abs(c["fy"][-1]) < 1e-6 * W
+    assert c["separated"][-1] == 0
+
+
+LEVEL = 5.0  # the reservoir against the block's upstream face, and its head at the heel
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_open_joint_takes_the_reservoir_pressure(tmp_path, nproc):
+    """The water on the upstream face (5 m, the block 4 m high) tilts the block about its toe:
+    the heel opens. With penetration the open part from the heel carries gamma (level - z) =
+    gamma 5 on both faces, the law (no drains: H1 -> 0) from the tip on. Load steps at the same
+    load iterate the wet length to the cracked state: the last two steps agree; the points before
+    the wet length are open, the one at it closed; the uplift is the law's integral with that
+    wet length (the master's kink at a node: 1e-10)."""
+    up = {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": L, "tail_head": 0.0, "penetration": True}
+    water = {"kind": "hydrostatic", "surface": "block_xmin", "level": LEVEL, "unit_weight": GAMMA}
+    h5 = prep(tmp_path, block_scene(tmp_path, up, loads=[water], steps=8))
+    solve(h5, nproc=nproc)
+    c = read_csv(result(h5, "_contact.csv"))
+    w = c["wet_length"]
+    assert w[-1] > 0 and w[-1] == w[-2], w
+    U = GAMMA * B * (LEVEL * w[-1] + LEVEL * (L - w[-1]) / 2)
+    assert abs(c["uplift"][-1] - U) < 1e-10 * U
+    pts = read_contact(str(result(h5, ".h5")), step=-1)
+    x, p = pts["reference"][:, 0], pts["pressure"]
+    assert np.all(p[x < w[-1] - 1e-9] <= 0)
+    assert np.any(p[np.abs(x - w[-1]) < 1e-9] > 0)  # the front stops at the first closed point
+    # the block's equilibrium: vertical W - U, horizontal the water's thrust on its face
+    W = 2400 * 9.81 * L * B * 4.0
+    T = GAMMA * B * (LEVEL * 4.0 - 8.0)
+    assert abs(c["fz"][-1] - (W - U)) < 1e-6 * W and abs(c["fx"][-1] + T) < 1e-6 * W
