@@ -119,3 +119,61 @@ def test_open_joint_takes_the_reservoir_pressure(tmp_path, nproc):
     W = 2400 * 9.81 * L * B * 4.0
     T = GAMMA * B * (LEVEL * 4.0 - 8.0)
     assert abs(c["fz"][-1] - (W - U)) < 1e-6 * W and abs(c["fx"][-1] + T) < 1e-6 * W
+
+
+def prep_error(tmp_path, scene):
+    """mbcontact-prep on a scene that must be refused: exit status non-zero, one message."""
+    import subprocess
+
+    import yaml
+
+    from conftest import PREP, env
+    yml = tmp_path / "bad.yaml"
+    yml.write_text(yaml.safe_dump(scene, sort_keys=False))
+    r = subprocess.run([PREP, str(yml), "-o", str(tmp_path / "bad.h5")], capture_output=True, text=True, env=env())
+    assert r.returncode != 0, r.stdout
+    assert "Traceback" not in r.stderr, r.stderr
+    return r.stderr
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(drain=5.0), ["couples[0].uplift (couple k=1).drain", "within the joint"]),
+    (dict(drain_efficiency=1.5), ["drain_efficiency", "[0, 1]"]),
+    (dict(drain_efficiency=None), ["drain_efficiency", "required with a drain line"]),
+    (dict(direction=[0, 0, 1]), ["direction", "not along the joint"]),
+    (dict(direction=[0, 0, 0]), ["direction", "must not be zero"]),
+    (dict(length=0), ["length", "must be > 0"]),
+    (dict(tail_head=12.0), ["tail_head", "above heel_head"]),
+    (dict(table=[[0, 1e5], [4, 2e4]]), ["heel_head", "a table gives the pressure by itself"]),
+    (dict(unit_weight=None), ["unit_weight", "required", "no hydrostatic load"]),
+    (dict(heel_head=None), ["level", "required", "no hydrostatic load"]),
+    (dict(penetration=True), ["level", "required", "no hydrostatic load"]),
+    (dict(colour="blue"), ["couples[0].uplift (couple k=1)", "colour"]),
+    (dict(origin=None), ["couples[0].uplift (couple k=1)", "origin"]),
+])
+def test_input_errors(tmp_path, change, words):
+    up = dict(DRAINED)
+    for key, value in change.items():
+        if value is None:
+            up.pop(key, None)
+        else:
+            up[key] = value
+    err = prep_error(tmp_path, block_scene(tmp_path, up))
+    for w in words:
+        assert w in err, (w, err)
+
+
+def test_table_and_levels_from_the_hydrostatic_load(tmp_path):
+    """A table p(s) (the drained law's pressures at its kinks: the same resultant), and a law whose
+    level, unit weight and heel head come from the scene's hydrostatic load (heel head = level -
+    the heel's height)."""
+    table = {"origin": [0, 0, 0], "direction": [2, 0, 0], "length": L,
+             "table": [[0, GAMMA * 10], [1, GAMMA * 5], [4, GAMMA * 2]]}
+    water = {"kind": "hydrostatic", "surface": "base_xmin", "level": 10.0, "unit_weight": GAMMA}  # on the fixed base
+    law = {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": L, "tail_head": 2.0, "drain": 1.0,
+           "drain_efficiency": 0.5}
+    for up in (table, law):
+        h5 = prep(tmp_path, block_scene(tmp_path, up, loads=[water]))
+        r = solve(h5, "-mbc_view")
+        F = [v for k in sorted(resultants(r.stdout)) for v in resultants(r.stdout)[k] if v[0] == "uplift"][0][1]
+        assert abs(F[2] - U_DRAINED) < 1e-12 * U_DRAINED, (up, F)
