@@ -232,6 +232,14 @@ def lift_name(k, j):
 
 
 def monolith(p, a, k):
+    """Points, cells and surfaces of monolith k (1-based), a scene without lift joints (one body)."""
+    parts = monolith_lifts(p, a, k)
+    if len(parts) != 1:
+        raise ValueError(f"monolith m{k} has {len(parts)} lifts: take monolith_lifts()")
+    return parts[0][1:]
+
+
+def monolith_lifts(p, a, k):
     """The lifts of monolith k (1-based): (name, points, cells, surfaces) each, one lift (the whole
     monolith, body m<k>) without lift joints; x = x_d(z) i / nx on every z level. Lift j has one
     element more along x and y than the lifts next to it (j odd): a lift joint's meshes do not
@@ -328,7 +336,7 @@ def foundation(p, a):
 def write_mesh(path, p, a, binary=False):
     """All bodies into one Gmsh 2.2 file, each with its own vertices; a surface name used by
     several bodies (upstream) is one region."""
-    parts = [part for k in range(1, p.monoliths + 1) for part in monolith(p, a, k)] + [("foundation", *foundation(p, a))]
+    parts = [part for k in range(1, p.monoliths + 1) for part in monolith_lifts(p, a, k)] + [("foundation", *foundation(p, a))]
     points, regions, surfaces, offset = [], [], {}, 0
     for name, pts, cells, surf in parts:
         bad = np.count_nonzero(min_corner_volume("hex8", pts, cells) <= 0)

@@ -177,3 +177,44 @@ def test_table_and_levels_from_the_hydrostatic_load(tmp_path):
         r = solve(h5, "-mbc_view")
         F = [v for k in sorted(resultants(r.stdout)) for v in resultants(r.stdout)[k] if v[0] == "uplift"][0][1]
         assert abs(F[2] - U_DRAINED) < 1e-12 * U_DRAINED, (up, F)
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_dam_with_lift_joints_and_uplift(tmp_path, nproc):
+    """meshes/dam/build.py with two lift joints and the uplift (2 monoliths, h = 14 m: 4 296 DOFs),
+    static, 6 load steps: the base's uplift is the drained law's integral (heel 95 m, drains at
+    5 % of B = 78 m with E = 0.5, no tail water: H3 = 0.5 95 (B - X) / B), the base's contact
+    normal force W - U, each lift joint's uplift its own law's, and report.py prints the sliding
+    factor of safety per joint plane, FS = mu N' / T (no cohesion here), and the cracked length."""
+    import subprocess
+
+    from conftest import ROOT, env, load_script
+    dam = load_script("meshes/dam/build.py", "dam_build_uplift")
+    h5 = dam.build(tmp_path, h=14.0, monoliths=2, lift_joints=(30.0, 60.0), uplift=True)
+    p = dam.Dam(h=14.0, monoliths=2, lift_joints=(30.0, 60.0), uplift=True).check()
+    solve(h5, nproc=nproc)
+    prefix = str(h5)[:-3] + "_result"
+    c = read_csv(prefix + "_contact.csv")
+    width = 2 * p.width
+    for k, z in ((1, 0.0), (3, 30.0), (4, 60.0)):
+        L, H1 = p.section_width(z), p.water - z
+        X = 0.05 * L
+        H3 = 0.5 * H1 * (L - X) / L
+        U = GAMMA * width * ((H1 + H3) / 2 * X + H3 / 2 * (L - X))
+        row = c["couple"] == k
+        assert abs(c["uplift"][row][-1] / U - 1) < 1e-12, (k, c["uplift"][row][-1], U)
+    base = c["couple"] == 1
+    W = 2 * p.weight()
+    assert abs(c["normal_force"][base][-1] - (W - c["uplift"][base][-1])) < 1e-6 * W
+    r = subprocess.run(["/usr/bin/python3", f"{ROOT}/meshes/dam/report.py", prefix], capture_output=True, text=True,
+                       env=env(), timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "joint plane" in r.stdout and "lift 2 (z = 60)" in r.stdout, r.stdout
+    report = load_script("meshes/dam/report.py", "dam_report_uplift")
+    s = report.summarize(prefix)
+    for k in (1, 3, 4):
+        q = s["planes"][k]
+        h = {name: col[c["couple"] == k] for name, col in c.items()}
+        fs = 0.8 * h["normal_force"][-1] / np.hypot(h["fx"][-1], h["fy"][-1])
+        assert abs(q["fs_final"] / fs - 1) < 1e-12 and q["cohesion"] == 0
+        assert 0 <= q["cracked_length"][-1] <= q["length"]
