@@ -659,7 +659,18 @@ def _uplift(value, where, k, base_dir="."):
         u["drain"] = -1.0
         u["drain_efficiency"] = 0.0
         if "drain" in spec:
-            u["drain"] = real(spec["drain"], f"{at}.drain", gt=0)
+            if isinstance(spec["drain"], dict):  # a plane: where it crosses the line from the heel along direction
+                plane = mapping(spec["drain"], f"{at}.drain", ("point", "normal"), required=("point", "normal"))
+                point, normal = vector3(plane["point"], f"{at}.drain.point"), vector3(plane["normal"], f"{at}.drain.normal")
+                if not abs(normal @ u["direction"]) > 1e-6 * np.linalg.norm(normal):
+                    raise InputError(f"{at}.drain.normal: the drain plane must cross the joint's direction "
+                                     f"{list(u['direction'])} (its normal is perpendicular to it)")
+                u["drain"] = float((point - u["origin"]) @ normal / (normal @ u["direction"]))
+                if not u["drain"] > 0:
+                    raise InputError(f"{at}.drain: the drain plane crosses the joint at {u['drain']:g} from the heel, "
+                                     "not downstream of it")
+            else:
+                u["drain"] = real(spec["drain"], f"{at}.drain", gt=0)
             if not u["drain"] < u["length"]:
                 raise InputError(f"{at}.drain: the drain line at {u['drain']:g} from the heel must lie within "
                                  f"the joint (0 < drain < length = {u['length']:g})")

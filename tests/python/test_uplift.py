@@ -148,6 +148,8 @@ def prep_error(tmp_path, scene):
     (dict(unit_weight=None), ["unit_weight", "required", "no hydrostatic load"]),
     (dict(heel_head=None), ["level", "required", "no hydrostatic load"]),
     (dict(penetration=True), ["level", "required", "no hydrostatic load"]),
+    (dict(drain={"point": [1, 0, 0], "normal": [0, 1, 0]}), ["drain.normal", "must cross the joint's direction"]),
+    (dict(drain={"point": [-1, 0, 0], "normal": [1, 0, 0]}), ["drain", "not downstream"]),
     (dict(colour="blue"), ["couples[0].uplift (couple k=1)", "colour"]),
     (dict(origin=None), ["couples[0].uplift (couple k=1)", "origin"]),
 ])
@@ -164,15 +166,17 @@ def test_input_errors(tmp_path, change, words):
 
 
 def test_table_and_levels_from_the_hydrostatic_load(tmp_path):
-    """A table p(s) (the drained law's pressures at its kinks: the same resultant), and a law whose
+    """A table p(s) (the drained law's pressures at its kinks: the same resultant), a law whose
     level, unit weight and heel head come from the scene's hydrostatic load (heel head = level -
-    the heel's height)."""
+    the heel's height), and the same with the drain line given as a (slanted) plane."""
     table = {"origin": [0, 0, 0], "direction": [2, 0, 0], "length": L,
              "table": [[0, GAMMA * 10], [1, GAMMA * 5], [4, GAMMA * 2]]}
     water = {"kind": "hydrostatic", "surface": "base_xmin", "level": 10.0, "unit_weight": GAMMA}  # on the fixed base
     law = {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": L, "tail_head": 2.0, "drain": 1.0,
            "drain_efficiency": 0.5}
-    for up in (table, law):
+    plane = dict(law, drain={"point": [1.0, 5.0, -3.0], "normal": [2.0, 0.0, 0.5]})  # a slanted curtain through x = 1 at z = 0
+    plane["drain"]["point"] = [1.0 - 0.25 * -3.0, 5.0, -3.0]  # (point - origin) . n / (n . d) = 1
+    for up in (table, law, plane):
         h5 = prep(tmp_path, block_scene(tmp_path, up, loads=[water]))
         r = solve(h5, "-mbc_view")
         F = [v for k in sorted(resultants(r.stdout)) for v in resultants(r.stdout)[k] if v[0] == "uplift"][0][1]
