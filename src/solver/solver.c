@@ -1024,6 +1024,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       }
     } else {
       PetscCall(MBCSolverStageLog(s, 0));
+      PetscCall(MBCSolverUpliftUpdate(s)); /* the dry joints' resultants, for the initial output too */
       if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverCheckNoInitialState(s));
       if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
       else PetscCall(SolverDynamicBegin(s));

@@ -43,7 +43,9 @@ PetscErrorCode MBCSolverUpliftUpdate(MBCSolver s)
   changed = (PetscBool)!s->uplift.set;
   for (PetscInt i = 0; i < scene->ncouples; i++) { /* the same on every rank: s->cpts is replicated */
     const PetscReal w = scene->couples[i].uplift.on ? UpliftWetLength(s, i) : 0;
-    if (w != s->uplift.wet[i]) changed = PETSC_TRUE;
+    if (w == s->uplift.wet[i]) continue;
+    changed = PETSC_TRUE;
+    if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " uplift: couple %" PetscInt_FMT " wet length %g -> %g of %g\n", s->step, scene->couples[i].k, (double)s->uplift.wet[i], (double)w, (double)scene->couples[i].uplift.length));
     s->uplift.wet[i] = w;
   }
   s->uplift.set = PETSC_TRUE;
