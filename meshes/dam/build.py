@@ -95,7 +95,7 @@ class Dam:
     drains: float = 0.05          # the drain line's distance from the heel / the joint's length (0: no drains)
     drain_efficiency: float = 0.5 # USACE / FERC: at most 0.5 without measurements
     penetration: bool = True      # the reservoir's water enters a joint where it opens (with uplift)
-    static_steps: int = 0         # static load steps at the full load (0: 1, or 6 with uplift's penetration: the wet length iterates)
+    static_steps: int = 0         # static load steps (0: 1, or 12 with uplift's penetration: the water raised over the first half, then held while the wet length settles)
 
     @property
     def z_knee(self):
@@ -442,8 +442,13 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
                         "slave": [f"m{k}_lift{j}_lower" for k in range(1, n + 1)], "mu": p.mu_joint})
     for c in couples:
         c["sliding"] = p.sliding
+    steps = p.static_steps or (12 if p.uplift and p.penetration else 1)  # static: load steps
+    # A static analysis with water entering the joints raises the reservoir over the first half of its
+    # load steps and holds it: the crack and the water in it grow together (at the full load at once
+    # the first step's dry crack floods in one jump, which the multiplier solve may not follow)
+    water = {"table": [[0, 0], [steps // 2, 1]]} if analysis == "static" and steps > 1 and p.uplift and p.penetration else "constant"
     if p.uplift:
-        ramped_up = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else "constant"
+        ramped_up = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else water
         couples[0]["uplift"] = dict(uplift(p, 0.0, p.base), time=ramped_up)
         for j, z in enumerate(p.lifts(), start=1):
             if p.water > z:  # a joint above the reservoir has none
@@ -459,10 +464,11 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         absorbing = [{"surface": "foundation_bottom", "input": "outcrop"},
                      {"surface": "foundation_xsides"}, {"surface": "foundation_ysides"}]
     ramped = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else "constant"
+    water = ramped if analysis == "dynamic" else water
     loads = [{"kind": "gravity", "vector": [0, 0, -G], "bodies": dams, "time": ramped},
-             {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": ramped}]
+             {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": water}]
     if p.floor:
-        loads += [{"kind": "hydrostatic", "surface": name, "level": p.water, "unit_weight": WATER, "time": ramped}
+        loads += [{"kind": "hydrostatic", "surface": name, "level": p.water, "unit_weight": WATER, "time": water}
                   for name in wet_surfaces(p, layout(p))]
     mid = [(k - 0.5) * p.width for k in range(1, n + 1)]
     points = {}
@@ -496,7 +502,6 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
                           "loads": [quake]}]
         out["output"]["every"] = every
     else:
-        steps = p.static_steps or (6 if p.uplift and p.penetration else 1)
         out["analysis"] = {"type": "static"} if steps == 1 else {"type": "static", "dt": 1.0, "final_time": float(steps)}
     return out
 
@@ -616,7 +621,7 @@ if __name__ == "__main__":
     ap.add_argument("--drain-efficiency", type=float, default=Dam.drain_efficiency, help="default 0.5 (USACE, FERC)")
     ap.add_argument("--no-penetration", action="store_true", help="no water entering the joints as they open")
     ap.add_argument("--static-steps", type=int, default=0,
-                    help="static load steps at the full load (default 1; 6 with uplift: water enters the opening joints step by step)")
+                    help="static load steps (default 1; 12 with uplift: the reservoir raised over the first half, held over the rest, the water entering the opening joints step by step)")
     a = ap.parse_args()
     lifts = tuple(a.lift_heights) or tuple(a.height * j / (a.lift_joints + 1) for j in range(1, a.lift_joints + 1))
     params = dict(monoliths=a.monoliths, height=a.height, crest=a.crest, slope=a.slope, width=a.width, level=a.level,

@@ -186,7 +186,7 @@ def test_table_and_levels_from_the_hydrostatic_load(tmp_path):
 @pytest.mark.parametrize("nproc", [1, 2])
 def test_dam_with_lift_joints_and_uplift(tmp_path, nproc):
     """meshes/dam/build.py with two lift joints and the uplift (2 monoliths, h = 14 m: 4 296 DOFs),
-    static, 6 load steps: the base's uplift is the drained law's integral (heel 95 m, drains at
+    static, 12 load steps (the water raised over 6): the base's uplift is the drained law's integral (heel 95 m, drains at
     5 % of B = 78 m with E = 0.5, no tail water: H3 = 0.5 95 (B - X) / B), the base's contact
     normal force W - U, each lift joint's uplift its own law's, and report.py prints the sliding
     factor of safety per joint plane, FS = mu N' / T (no cohesion here), and the cracked length."""
