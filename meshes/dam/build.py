@@ -145,6 +145,11 @@ class Dam:
             raise ValueError(f"tail water {self.tail_water:g} m must lie between the base and the reservoir ({self.water:g} m)")
         return self
 
+    def load_steps(self):
+        """The static analysis's (or the staged analysis's static stage's) load steps: 12 with water
+        entering the joints (the reservoir raised over the first 6, then held), else 1."""
+        return self.static_steps or (12 if self.uplift and self.penetration else 1)
+
     def lifts(self):
         """The lift joints' heights, ascending."""
         return sorted(float(z) for z in self.lift_joints)
@@ -442,11 +447,11 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
                         "slave": [f"m{k}_lift{j}_lower" for k in range(1, n + 1)], "mu": p.mu_joint})
     for c in couples:
         c["sliding"] = p.sliding
-    steps = p.static_steps or (12 if p.uplift and p.penetration else 1)  # static: load steps
+    steps = p.load_steps() if analysis in ("static", "staged") else 1  # the static analysis's or stage's
     # A static analysis with water entering the joints raises the reservoir over the first half of its
     # load steps and holds it: the crack and the water in it grow together (at the full load at once
     # the first step's dry crack floods in one jump, which the multiplier solve may not follow)
-    water = {"table": [[0, 0], [steps // 2, 1]]} if analysis == "static" and steps > 1 and p.uplift and p.penetration else "constant"
+    water = {"table": [[0, 0], [steps // 2, 1]]} if steps > 1 and p.uplift and p.penetration else "constant"
     if p.uplift:
         ramped_up = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else water
         couples[0]["uplift"] = dict(uplift(p, 0.0, p.base), time=ramped_up)
@@ -495,9 +500,9 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         out["analysis"] = {"type": "modal", "modes": 10}
         out["output"]["fields"] = ["displacement", "stress"]
     elif staged:
-        quake = ground_motion(p, record, 1.0)
-        out["stages"] = [{"name": "static", "analysis": {"type": "static"}},
-                         {"name": "earthquake", "analysis": {"type": "dynamic", "dt": dt, "final_time": 1.0 + eq_duration,
+        quake = ground_motion(p, record, float(steps))
+        out["stages"] = [{"name": "static", "analysis": {"type": "static"} if steps == 1 else {"type": "static", "dt": 1.0, "final_time": float(steps)}},
+                         {"name": "earthquake", "analysis": {"type": "dynamic", "dt": dt, "final_time": steps + eq_duration,
                                                              "newmark": {"beta": 0.3025, "gamma": 0.6}},
                           "loads": [quake]}]
         out["output"]["every"] = every
@@ -564,7 +569,7 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     t2 = time.perf_counter()
     build.info = dict(params=asdict(p), analysis=analysis, dofs=dofs, vertices=vertices, h=p.h, nx=a["nx"], ny=a["ny"],
                       nz=a["nz"], mesh_seconds=t1 - t0, prep_seconds=t2 - t1, weight=p.weight(), thrust=p.thrust(),
-                      couples=couple_names(p), eq_start={"dynamic": eq_start, "staged": 1.0}.get(analysis))
+                      couples=couple_names(p), eq_start={"dynamic": eq_start, "staged": float(p.load_steps())}.get(analysis))
     with open(os.path.join(outdir, "dam.json"), "w") as f:  # for meshes/dam/report.py
         json.dump(build.info, f, indent=1)
     if not quiet:
