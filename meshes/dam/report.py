@@ -100,7 +100,7 @@ def joint_planes(prefix, info, hist):
             continue
         h = hist[k]
         spec = couples.get(k, {})
-        mu = float(spec.get("mu", 0.0))
+        mu = float(spec.get("mu", info["params"]["mu_base"] if k == 1 else info["params"]["mu_joint"]))
         c = float(spec.get("cohesion", 0.0))
         up = spec.get("uplift") or {}
         length = float(up.get("length", info["params"]["crest"] + info["params"]["slope"] * (info["params"]["height"] - info["params"]["crest"] / info["params"]["slope"])))
