@@ -129,12 +129,13 @@ def _uplift_extent(scene, bodies):
     """A couple's uplift acts where its master faces are, across the direction too: the joint's
     plane from the master faces' mean normal n, the lateral axis t = n x direction, and the master
     vertices' range along t (the slave side, a foundation reaching beyond the footprint, is loaded
-    only under the joint)."""
+    only under the joint), over all of them and per master body (its zone: the water's front moves
+    in each zone on its own, so the monoliths of one base couple crack each as its own)."""
     for c in scene.couples:
         u = c.uplift
         if u is None:
             continue
-        nrm, ts = np.zeros(3), []
+        nrm, ts = np.zeros(3), {}
         for name in c.master:
             for b, index in surface_faces(name, scene.surfaces[name], bodies).items():
                 body = bodies[b]
@@ -142,7 +143,7 @@ def _uplift_extent(scene, bodies):
                     nv = body.face_corners(body.boundary_faces[f:f + 1], body.boundary_nv[f:f + 1])[0]
                     x = body.coords[body.boundary_faces[f, :nv]]
                     nrm += 0.5 * sum(np.cross(x[k], x[(k + 1) % nv]) for k in range(nv))
-                    ts.append(x)
+                    ts.setdefault(b, []).append(x)
         nn = np.linalg.norm(nrm)
         if not nn > 0:
             raise InputError(f"{u['where']}: the master surfaces have no mean normal (a closed surface?): "
@@ -154,8 +155,22 @@ def _uplift_extent(scene, bodies):
                              "direction in the joint's plane")
         t = np.cross(nrm, u["direction"])
         t /= np.linalg.norm(t)
-        y = (np.concatenate(ts) - u["origin"]) @ t
-        u["lateral"] = np.array([*t, y.min(), y.max()])
+        zones = []
+        for b in sorted(ts):
+            y = (np.concatenate(ts[b]) - u["origin"]) @ t
+            zones.append([y.min(), y.max(), [b]])
+        merged, tol = [], 1e-9 * (max(z[1] for z in zones) - min(z[0] for z in zones) + u["length"])
+        for lo, hi, bs in sorted(zones, key=lambda z: (z[0], z[1])):  # bodies side by side along the direction share a zone
+            if merged and lo < merged[-1][1] - tol:
+                merged[-1][1] = max(merged[-1][1], hi)
+                merged[-1][2] += bs
+            else:
+                merged.append([lo, hi, bs])
+        u["lateral"] = np.array([*t, min(z[0] for z in merged), max(z[1] for z in merged)])
+        u["zones"] = np.array([z[:2] for z in merged])
+        u["zone_of_body"] = np.full(len(bodies), -1)
+        for i, z in enumerate(merged):
+            u["zone_of_body"][z[2]] = i
 
 
 def _nodal_inputs(scene, bodies, sets):
@@ -408,6 +423,10 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
                        uplift_lateral=u.get("lateral", np.array([0, 0, 0, -1e300, 1e300])))
                 if table is not None:
                     g.create_dataset("uplift_table", data=np.asarray(table, dtype=np.float64))
+                zones = u.get("zones", np.array([[-1e300, 1e300]]))
+                _attrs(g, uplift_zones=len(zones))
+                g.create_dataset("uplift_zone_range", data=np.asarray(zones, dtype=np.float64))
+                g.create_dataset("uplift_zone_body", data=np.asarray(u.get("zone_of_body", np.zeros(len(bodies))), dtype=np.float64))
 
         _list(root, "couples", enumerate(scene.couples), couple)
 

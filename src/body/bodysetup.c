@@ -77,9 +77,11 @@ static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
     PetscCall(MBCBodyAssembleHydrostatic(body, load, F));
     PetscFunctionReturn(0);
   }
-  if (load->kind == MBC_LOAD_UPLIFT) { /* the dry joint; the solver updates it with the wet length (solveruplift.c) */
-    PetscReal r[4];
-    PetscCall(MBCBodyAssembleUplift(body, load, 0.0, F, r));
+  if (load->kind == MBC_LOAD_UPLIFT) { /* the dry joint; the solver updates it with the wet lengths (solveruplift.c) */
+    PetscReal r[4], *w;
+    PetscCall(PetscCalloc1(body->scene->couples[load->couple].uplift.nzones, &w));
+    PetscCall(MBCBodyAssembleUplift(body, load, w, F, r));
+    PetscCall(PetscFree(w));
     PetscFunctionReturn(0);
   }
   if (load->kind == MBC_LOAD_NODAL_FORCE || load->kind == MBC_LOAD_LINE_FORCE) {

@@ -9,7 +9,8 @@
    - with penetration, the wet length w (solveruplift.c: the joint open from the heel up to its
      first closed point) carries the reservoir's pressure at its depth, unit_weight (level - x_axis),
      and the law starts at s0 = w with H1 (the crack's tip takes the heel's head; past the drains
-     they no longer act: H1 -> H2 linear), as the cracked-base analysis of USACE and FERC.
+     they no longer act: H1 -> H2 linear), as the cracked-base analysis of USACE and FERC. The
+     wet length is per zone, the master bodies' ranges across the direction (a monolith's base).
 
    Across the direction the pressure acts where the master faces are (the prep's lateral range), so
    a foundation's slave surface reaching beyond the footprint is loaded only under the joint.
@@ -54,14 +55,17 @@ static PetscReal UpliftPiecePressure(const MBCUpliftDesc *u, PetscReal w, const 
   return u->unit_weight * PetscMax(UpliftLawHead(u, u->penetration ? PetscMin(w, u->length) : 0, s), 0);
 }
 
-/* The uplift pressure at x, the wet length w from the heel (0 off the joint). */
-PetscReal MBCUpliftPressure(const MBCUpliftDesc *u, PetscReal w, const PetscReal x[3])
+/* The uplift pressure at x, the wet lengths w[] from the heel per zone (0 off the joint and
+   between the zones). */
+PetscReal MBCUpliftPressure(const MBCUpliftDesc *u, const PetscReal w[], const PetscReal x[3])
 {
   const PetscReal s = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
   const PetscReal y = (x[0] - u->origin[0]) * u->lateral[0] + (x[1] - u->origin[1]) * u->lateral[1] + (x[2] - u->origin[2]) * u->lateral[2];
 
-  if (s < 0 || s > u->length || y < u->lateral[3] || y > u->lateral[4]) return 0;
-  return UpliftPiecePressure(u, w, x, s);
+  if (s < 0 || s > u->length) return 0;
+  for (PetscInt z = 0; z < u->nzones; z++)
+    if (y >= u->zones[2 * z] && y <= u->zones[2 * z + 1]) return UpliftPiecePressure(u, w[z], x, s);
+  return 0;
 }
 
 #define UPLIFT_MAX_POLY 16
@@ -96,7 +100,7 @@ static PetscInt UpliftClip(PetscReal P[][4], PetscInt n, PetscInt c, PetscReal b
    the field's kinks and jumps (the joint's ends along s and across it, the wet length, the drain
    line, the table's rows) into polygons on which p is linear, each fanned into triangles with a
    7-point rule of degree 5 (Dunavant): exact on triangles and parallelograms. */
-static void UpliftFace(const MBCUpliftDesc *u, PetscReal w, PetscInt nv, const PetscReal X[6][3], PetscInt nc, PetscReal f[6][3], PetscReal r[4])
+static void UpliftFace(const MBCUpliftDesc *u, const PetscReal wz[], PetscInt nv, const PetscReal X[6][3], PetscInt nc, PetscReal f[6][3], PetscReal r[4])
 {
   static const PetscReal q[7][4] = { /* barycentric a, b, c and weight */
     {1.0 / 3,           1.0 / 3,           1.0 / 3,           0.225            },
@@ -108,8 +112,7 @@ static void UpliftFace(const MBCUpliftDesc *u, PetscReal w, PetscInt nv, const P
     {0.101286507323456, 0.101286507323456, 0.797426985353087, 0.125939180544827}
   };
   static const PetscReal sq[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}, tr[3][2] = {{0, 0}, {1, 0}, {0, 1}};
-  PetscReal              brk[72], C[4][4];
-  PetscInt               nbrk = 0;
+  PetscReal              C[4][4], ymin = PETSC_MAX_REAL, ymax = PETSC_MIN_REAL;
 
   for (PetscInt i = 0; i < nc; i++) { /* the corners: reference coordinates, s and lateral y */
     PetscReal N[6], dN[6][2], x[3] = {0, 0, 0};
@@ -119,61 +122,68 @@ static void UpliftFace(const MBCUpliftDesc *u, PetscReal w, PetscInt nv, const P
       for (PetscInt c = 0; c < 3; c++) x[c] += N[j] * X[j][c];
     C[i][2] = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
     C[i][3] = (x[0] - u->origin[0]) * u->lateral[0] + (x[1] - u->origin[1]) * u->lateral[1] + (x[2] - u->origin[2]) * u->lateral[2];
+    ymin = PetscMin(ymin, C[i][3]), ymax = PetscMax(ymax, C[i][3]);
   }
-  brk[nbrk++] = 0;
-  if (u->penetration && w > 0 && w < u->length) brk[nbrk++] = w;
-  if (u->drain > 0 && u->drain < u->length) brk[nbrk++] = u->drain;
-  for (PetscInt k = 0; k < u->ntable && nbrk < 71; k++)
-    if (u->table[2 * k] > 0 && u->table[2 * k] < u->length) brk[nbrk++] = u->table[2 * k];
-  brk[nbrk++] = u->length;
-  for (PetscInt i = 1; i < nbrk; i++) /* sort the few break points */
-    for (PetscInt j = i; j > 0 && brk[j] < brk[j - 1]; j--) {
-      PetscReal t = brk[j];
-      brk[j] = brk[j - 1], brk[j - 1] = t;
-    }
-  for (PetscInt k = 0; k + 1 < nbrk; k++) {
-    PetscReal P[UPLIFT_MAX_POLY][4];
-    PetscInt  n = nc;
-    if (!(brk[k + 1] > brk[k])) continue;
-    for (PetscInt i = 0; i < nc; i++)
-      for (PetscInt c = 0; c < 4; c++) P[i][c] = C[i][c];
-    n = UpliftClip(P, n, 2, brk[k], 1);
-    if (n >= 3) n = UpliftClip(P, n, 2, brk[k + 1], -1);
-    if (n >= 3) n = UpliftClip(P, n, 3, u->lateral[3], 1);
-    if (n >= 3) n = UpliftClip(P, n, 3, u->lateral[4], -1);
-    for (PetscInt t = 1; t + 1 < n; t++) {
-      const PetscReal *A = P[0], *B = P[t], *D = P[t + 1];
-      const PetscReal  area = 0.5 * PetscAbsReal((B[0] - A[0]) * (D[1] - A[1]) - (D[0] - A[0]) * (B[1] - A[1]));
-      if (area == 0) continue;
-      for (PetscInt g = 0; g < 7; g++) {
-        const PetscReal a = q[g][0] * A[0] + q[g][1] * B[0] + q[g][2] * D[0], b = q[g][0] * A[1] + q[g][1] * B[1] + q[g][2] * D[1];
-        PetscReal       N[6], dN[6][2], xa[3] = {0, 0, 0}, xb[3] = {0, 0, 0}, x[3] = {0, 0, 0}, nA[3], p, dA, wq;
-        MBCFaceShape(nv, a, b, N, dN);
-        for (PetscInt i = 0; i < nv; i++)
-          for (PetscInt c = 0; c < 3; c++) {
-            xa[c] += dN[i][0] * X[i][c];
-            xb[c] += dN[i][1] * X[i][c];
-            x[c] += N[i] * X[i][c];
-          }
-        p = UpliftPiecePressure(u, w, x, 0.5 * (brk[k] + brk[k + 1]));
-        if (p == 0) continue;
-        nA[0] = xa[1] * xb[2] - xa[2] * xb[1];
-        nA[1] = xa[2] * xb[0] - xa[0] * xb[2];
-        nA[2] = xa[0] * xb[1] - xa[1] * xb[0];
-        dA    = PetscSqrtReal(nA[0] * nA[0] + nA[1] * nA[1] + nA[2] * nA[2]);
-        wq    = q[g][3] * area;
-        for (PetscInt i = 0; i < nv; i++)
-          for (PetscInt c = 0; c < 3; c++) f[i][c] -= wq * p * N[i] * nA[c];
-        r[0] += wq * p * dA;
-        for (PetscInt c = 0; c < 3; c++) r[1 + c] += wq * p * dA * x[c];
+  for (PetscInt z = 0; z < u->nzones; z++) { /* each zone with its wet length */
+    const PetscReal w = wz[z], ylo = u->zones[2 * z], yhi = u->zones[2 * z + 1];
+    PetscReal       brk[72];
+    PetscInt        nbrk = 0;
+    if (ymax < ylo || ymin > yhi) continue;
+    brk[nbrk++] = 0;
+    if (u->penetration && w > 0 && w < u->length) brk[nbrk++] = w;
+    if (u->drain > 0 && u->drain < u->length) brk[nbrk++] = u->drain;
+    for (PetscInt k = 0; k < u->ntable && nbrk < 71; k++)
+      if (u->table[2 * k] > 0 && u->table[2 * k] < u->length) brk[nbrk++] = u->table[2 * k];
+    brk[nbrk++] = u->length;
+    for (PetscInt i = 1; i < nbrk; i++) /* sort the few break points */
+      for (PetscInt j = i; j > 0 && brk[j] < brk[j - 1]; j--) {
+        PetscReal t = brk[j];
+        brk[j] = brk[j - 1], brk[j - 1] = t;
+      }
+    for (PetscInt k = 0; k + 1 < nbrk; k++) {
+      PetscReal P[UPLIFT_MAX_POLY][4];
+      PetscInt  n = nc;
+      if (!(brk[k + 1] > brk[k])) continue;
+      for (PetscInt i = 0; i < nc; i++)
+        for (PetscInt c = 0; c < 4; c++) P[i][c] = C[i][c];
+      n = UpliftClip(P, n, 2, brk[k], 1);
+      if (n >= 3) n = UpliftClip(P, n, 2, brk[k + 1], -1);
+      if (n >= 3) n = UpliftClip(P, n, 3, ylo, 1);
+      if (n >= 3) n = UpliftClip(P, n, 3, yhi, -1);
+      for (PetscInt t = 1; t + 1 < n; t++) {
+        const PetscReal *A = P[0], *B = P[t], *D = P[t + 1];
+        const PetscReal  area = 0.5 * PetscAbsReal((B[0] - A[0]) * (D[1] - A[1]) - (D[0] - A[0]) * (B[1] - A[1]));
+        if (area == 0) continue;
+        for (PetscInt g = 0; g < 7; g++) {
+          const PetscReal a = q[g][0] * A[0] + q[g][1] * B[0] + q[g][2] * D[0], b = q[g][0] * A[1] + q[g][1] * B[1] + q[g][2] * D[1];
+          PetscReal       N[6], dN[6][2], xa[3] = {0, 0, 0}, xb[3] = {0, 0, 0}, x[3] = {0, 0, 0}, nA[3], p, dA, wq;
+          MBCFaceShape(nv, a, b, N, dN);
+          for (PetscInt i = 0; i < nv; i++)
+            for (PetscInt c = 0; c < 3; c++) {
+              xa[c] += dN[i][0] * X[i][c];
+              xb[c] += dN[i][1] * X[i][c];
+              x[c] += N[i] * X[i][c];
+            }
+          p = UpliftPiecePressure(u, w, x, 0.5 * (brk[k] + brk[k + 1]));
+          if (p == 0) continue;
+          nA[0] = xa[1] * xb[2] - xa[2] * xb[1];
+          nA[1] = xa[2] * xb[0] - xa[0] * xb[2];
+          nA[2] = xa[0] * xb[1] - xa[1] * xb[0];
+          dA    = PetscSqrtReal(nA[0] * nA[0] + nA[1] * nA[1] + nA[2] * nA[2]);
+          wq    = q[g][3] * area;
+          for (PetscInt i = 0; i < nv; i++)
+            for (PetscInt c = 0; c < 3; c++) f[i][c] -= wq * p * N[i] * nA[c];
+          r[0] += wq * p * dA;
+          for (PetscInt c = 0; c < 3; c++) r[1 + c] += wq * p * dA * x[c];
+        }
       }
     }
   }
 }
 
-/* F: the nodal forces of an uplift load for a unit time factor at wet length w; r[4] (this rank's
-   owned faces): int p dA and int p x dA over the load's faces. */
-PetscErrorCode MBCBodyAssembleUplift(MBCBody body, MBCLoadDesc *load, PetscReal w, Vec F, PetscReal r[4])
+/* F: the nodal forces of an uplift load for a unit time factor at the wet lengths w[] (per zone);
+   r[4] (this rank's owned faces): int p dA and int p x dA over the load's faces. */
+PetscErrorCode MBCBodyAssembleUplift(MBCBody body, MBCLoadDesc *load, const PetscReal w[], Vec F, PetscReal r[4])
 {
   const MBCUpliftDesc *u  = &body->scene->couples[load->couple].uplift;
   DM                   dm = body->dm;
@@ -236,10 +246,10 @@ PetscErrorCode MBCBodyAssembleUplift(MBCBody body, MBCLoadDesc *load, PetscReal 
   PetscFunctionReturn(0);
 }
 
-/* The body's uplift loads again for the wet lengths w[] (per couple of the scene); r[4 * couple]
-   gets this rank's int p dA and int p x dA over the master faces of each couple (for a unit time
-   factor). A rigid body's faces load it as a pressure does. */
-PetscErrorCode MBCBodyUpliftUpdate(MBCBody body, const PetscReal w[], PetscReal r[])
+/* The body's uplift loads again for the wet lengths w[off[i]..] (per zone of couple i of the
+   scene); r[4 * couple] gets this rank's int p dA and int p x dA over the master faces of each
+   couple (for a unit time factor). A rigid body's faces load it as a pressure does. */
+PetscErrorCode MBCBodyUpliftUpdate(MBCBody body, const PetscReal w[], const PetscInt off[], PetscReal r[])
 {
   MBCScene scene = body->scene;
 
@@ -248,7 +258,7 @@ PetscErrorCode MBCBodyUpliftUpdate(MBCBody body, const PetscReal w[], PetscReal 
     MBCLoadDesc *load = &scene->loads[body->load_index[i]];
     PetscReal    rl[4];
     if (load->kind != MBC_LOAD_UPLIFT) continue;
-    PetscCall(MBCBodyAssembleUplift(body, load, w[load->couple], body->load[i], rl));
+    PetscCall(MBCBodyAssembleUplift(body, load, &w[off[load->couple]], body->load[i], rl));
     if (load->side == 0) /* the couple's resultant is its master side's */
       for (PetscInt k = 0; k < 4; k++) r[4 * load->couple + k] += rl[k];
   }

@@ -320,6 +320,25 @@ static PetscErrorCode ReadCoupleUplift(H5Node *e, MBCScene s, MBCCoupleDesc *c)
   PetscCall(H5ReadInt(e, "uplift_table_rows", &u->ntable, PETSC_FALSE));
   u->penetration = (PetscBool)(pen != 0);
   if (u->ntable > 0) PetscCall(ReadRealDataset(e, "uplift_table", u->ntable, 2, &u->table));
+  u->nzones = 1;
+  PetscCall(H5ReadInt(e, "uplift_zones", &u->nzones, PETSC_TRUE));
+  PetscCheck(u->nzones >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift needs at least one zone", s->filename, c->k);
+  if (H5Lexists(e->obj, "uplift_zone_range", H5P_DEFAULT) > 0) PetscCall(ReadRealDataset(e, "uplift_zone_range", u->nzones, 2, &u->zones));
+  else { /* a file of an earlier prep: one zone, the lateral range */
+    PetscCheck(u->nzones == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift_zone_range is missing", s->filename, c->k);
+    PetscCall(PetscMalloc1(2, &u->zones));
+    u->zones[0] = u->lateral[3], u->zones[1] = u->lateral[4];
+  }
+  PetscCall(PetscMalloc1(s->nbodies + 1, &u->zone_of_body));
+  for (PetscInt b = 0; b < s->nbodies; b++) u->zone_of_body[b] = 0;
+  if (H5Lexists(e->obj, "uplift_zone_body", H5P_DEFAULT) > 0) {
+    PetscReal *zb;
+    PetscCall(ReadRealDataset(e, "uplift_zone_body", s->nbodies, 1, &zb)); /* float64: the prep writes numbers */
+    for (PetscInt b = 0; b < s->nbodies; b++) u->zone_of_body[b] = (PetscInt)zb[b];
+    PetscCall(PetscFree(zb));
+  }
+  for (PetscInt b = 0; b < s->nbodies; b++) PetscCheck(u->zone_of_body[b] >= -1 && u->zone_of_body[b] < u->nzones, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift_zone_body names zone %" PetscInt_FMT " of %" PetscInt_FMT, s->filename, c->k, u->zone_of_body[b], u->nzones);
+  for (PetscInt z = 0; z < u->nzones; z++) PetscCheck(u->zones[2 * z] <= u->zones[2 * z + 1] && (z == 0 || u->zones[2 * z] >= u->zones[2 * z - 1] - 1e-9 * (PetscAbsReal(u->zones[2 * z - 1]) + u->length)), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": the uplift's zones must be disjoint and ascending", s->filename, c->k);
   dn = PetscSqrtReal(PetscSqr(u->direction[0]) + PetscSqr(u->direction[1]) + PetscSqr(u->direction[2]));
   PetscCheck(dn > 0 && u->length > 0 && u->unit_weight >= 0 && u->axis >= 0 && u->axis < 3 && u->efficiency >= 0 && u->efficiency <= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift needs a direction, a length > 0, a unit weight >= 0, an axis 0..2 and a drain efficiency in [0, 1]", s->filename, c->k);
   for (PetscInt d = 0; d < 3; d++) u->direction[d] /= dn;
@@ -982,6 +1001,8 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree2(s->couples[i].master_faces, s->couples[i].slave_faces));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].exclude));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].uplift.table));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].uplift.zones));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].uplift.zone_of_body));
   for (PetscInt i = 0; i < s->ntables; i++) PetscCall(PetscFree2(s->tables[i].t, s->tables[i].f));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].bodies));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].nodes));

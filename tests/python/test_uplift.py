@@ -297,3 +297,37 @@ def test_dynamic_ramp_follows_the_time_table(tmp_path):
     assert w.max() > 0
     W = 2400 * 9.81 * L * B * 4.0
     assert abs(c["fz"][-1] + c["uplift"][-1] - W) < 0.01 * W
+
+
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_each_master_body_has_its_own_wet_front(tmp_path, nproc):
+    """Two blocks side by side across the direction (two monoliths) on one base, one couple: the
+    water pushes on block a only, whose heel opens; block b stays closed. The wet front is the
+    master body's: a's zone carries gamma 5 over its wet length, b's the dry law, so the uplift is
+    gamma b (H1 w + H1 (L - w) / 2) + gamma b H1 L / 2 (1e-10), with w the CSV's (the largest)."""
+    meshgen.boxes(str(tmp_path / "m.msh"), [
+        dict(lo=(0, 0, 0), hi=(L, B, 4.0), n=(8, 2, 4), name="a"),
+        dict(lo=(0, B, 0), hi=(L, 2 * B, 4.0), n=(8, 2, 4), name="b"),
+        dict(lo=(-0.5, -0.25, -1), hi=(L + 0.5, 2 * B + 0.25, 0), n=(6, 5, 1), name="base")])
+    concrete = {"E": 2.5e10, "nu": 0.2, "density": 2400.0}
+    scene = {"meshes": {"m": "m.msh"},
+             "bodies": {"a": {"mesh": "m", "regions": "a", "material": concrete},
+                        "b": {"mesh": "m", "regions": "b", "material": concrete},
+                        "base": {"mesh": "m", "regions": "base", "material": {"E": 2.0e10, "nu": 0.25}}},
+             "couples": [{"master": ["a_zmin", "b_zmin"], "slave": "base_zmax", "mu": 0.8,
+                          "uplift": {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": L, "tail_head": 0.0,
+                                     "penetration": True}}],
+             "dirichlet": [{"surface": "base_zmin"}],
+             "loads": [{"kind": "gravity", "vector": [0, 0, -9.81], "bodies": ["a", "b"]},
+                       {"kind": "hydrostatic", "surface": "a_xmin", "level": LEVEL, "unit_weight": GAMMA}],
+             "analysis": {"type": "static", "dt": 1.0, "final_time": 6.0}}
+    h5 = prep(tmp_path, scene)
+    solve(h5, nproc=nproc)
+    c = read_csv(result(h5, "_contact.csv"))
+    w = c["wet_length"][-1]
+    assert w > 0 and c["wet_length"][-2] == w
+    U = GAMMA * B * (LEVEL * w + LEVEL * (L - w) / 2) + GAMMA * B * LEVEL * L / 2
+    assert abs(c["uplift"][-1] - U) < 1e-10 * U
+    pts = read_contact(str(result(h5, ".h5")), step=-1)
+    y, p = pts["reference"][:, 1], pts["pressure"]
+    assert np.all(p[y > B + 1e-9] > 0)  # b closed everywhere

@@ -71,6 +71,9 @@ typedef struct {
   PetscBool  on;
   PetscReal  origin[3], direction[3], length; /* direction: unit */
   PetscReal  lateral[5];         /* the joint's lateral axis t (unit) and the master faces' range along it: 0 beyond */
+  PetscInt   nzones;             /* the master bodies' ranges along t (disjoint, ascending), each with its own wet front */
+  PetscReal *zones;              /* lo, hi each */
+  PetscInt  *zone_of_body;       /* per body of the scene: the zone of its master faces (-1: none) */
   PetscReal  unit_weight, heel_head, tail_head;
   PetscReal  drain, efficiency;  /* the drain line's s (< 0: no drains) and efficiency in [0, 1] */
   PetscInt   ntable;             /* > 0: pressure by the table (s, p) instead of the law */

@@ -133,11 +133,13 @@ struct _n_MBCSolver {
     int       *couple, *istate;
   } cpts;
 
-  /* uplift (solveruplift.c): per couple of the scene the wet length from the heel and, on its
-     master side, int p dA and int p x dA (4 each) for a unit time factor */
+  /* uplift (solveruplift.c): per zone of each couple of the scene (couple i's from off[i]) the wet
+     length from the heel (w: the new ones, work), and per couple on its master side int p dA and
+     int p x dA (4 each) for a unit time factor */
   struct {
     PetscBool  on, set;
-    PetscReal *wet, *r;
+    PetscInt  *off;
+    PetscReal *wet, *w, *r;
   } uplift;
 
   /* energy bookkeeping (dynamic) */
