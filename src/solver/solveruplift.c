@@ -9,17 +9,18 @@
 #include <mbc/private/solverimpl.h>
 
 /* The wet lengths w[] of couple i's zones from the last step's points (each point in the zone of
-   its master node's body): 0 before the first step. */
-static void UpliftWetLengths(MBCSolver s, PetscInt i, PetscReal w[])
+   its master node's body): 0 before the first step; false where the points are not those written
+   (w[] untouched: the caller keeps the wet lengths it has). */
+static PetscBool UpliftWetLengths(MBCSolver s, PetscInt i, PetscReal w[])
 {
   const MBCUpliftDesc *u = &s->scene->couples[i].uplift;
   MBCContact           c = s->contact;
   PetscInt             total = 0;
 
+  for (PetscInt ci = 0; c && ci < c->ncouples; ci++) total += c->couples[ci].npoints;
+  if (u->penetration && c && s->cpts.x0 && total != s->cpts.n) return PETSC_FALSE; /* the points changed since they were written */
   for (PetscInt z = 0; z < u->nzones; z++) w[z] = 0;
-  if (!u->penetration || !c || !s->cpts.x0) return;
-  for (PetscInt ci = 0; ci < c->ncouples; ci++) total += c->couples[ci].npoints;
-  if (total != s->cpts.n) return; /* the points changed since they were written: dry this step */
+  if (!u->penetration || !c || !s->cpts.x0) return PETSC_TRUE;
   for (PetscInt z = 0; z < u->nzones; z++) w[z] = -1; /* a zone without points stays dry */
   for (PetscInt ci = 0, k = 0; ci < c->ncouples; ci++) {
     const MBCCouple *cp = &c->couples[ci];
@@ -38,6 +39,7 @@ static void UpliftWetLengths(MBCSolver s, PetscInt i, PetscReal w[])
     }
   }
   for (PetscInt z = 0; z < u->nzones; z++) w[z] = PetscMax(w[z], 0);
+  return PETSC_TRUE;
 }
 
 PetscErrorCode MBCSolverUpliftUpdate(MBCSolver s)
@@ -64,7 +66,7 @@ PetscErrorCode MBCSolverUpliftUpdate(MBCSolver s)
     const PetscInt off = s->uplift.off[i], nz = s->uplift.off[i + 1] - off;
     PetscReal      before = 0, after = 0;
     if (!nz) continue;
-    UpliftWetLengths(s, i, &s->uplift.w[off]);
+    if (!UpliftWetLengths(s, i, &s->uplift.w[off])) PetscCall(PetscArraycpy(&s->uplift.w[off], &s->uplift.wet[off], nz));
     for (PetscInt z = 0; z < nz; z++) {
       if (s->uplift.w[off + z] != s->uplift.wet[off + z]) changed = PETSC_TRUE;
       before = PetscMax(before, s->uplift.wet[off + z]), after = PetscMax(after, s->uplift.w[off + z]);
