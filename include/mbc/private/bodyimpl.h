@@ -141,6 +141,10 @@ PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], Petsc
 PETSC_INTERN PetscErrorCode MBCBodyRigidModes(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyRigidModesDestroy(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyZeroHeldRows(MBCBody, Vec, Mat);
+/* bodyuplift.c: a couple's uplift on its faces */
+PETSC_INTERN PetscReal      MBCUpliftPressure(const MBCUpliftDesc *, const PetscReal[], const PetscReal[3]);
+PETSC_INTERN PetscErrorCode MBCBodyAssembleUplift(MBCBody, MBCLoadDesc *, const PetscReal[], Vec, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCBodyUpliftUpdate(MBCBody, const PetscReal[], const PetscInt[], PetscReal[]);
 /* seismic loads and boundaries (bodysurface.c, bodyaddedmass.c, bodyabsorbing.c) */
 typedef PetscErrorCode (*MBCFaceWeights)(PetscInt, const PetscReal[4][3], void *, PetscReal[4]);
 PETSC_INTERN PetscErrorCode MBCBodySurfaceBlocks(MBCBody, PetscInt, MBCFaceWeights, void *, PetscReal, PetscReal, Mat);

@@ -133,6 +133,15 @@ struct _n_MBCSolver {
     int       *couple, *istate;
   } cpts;
 
+  /* uplift (solveruplift.c): per zone of each couple of the scene (couple i's from off[i]) the wet
+     length from the heel (w: the new ones, work), and per couple on its master side int p dA and
+     int p x dA (4 each) for a unit time factor */
+  struct {
+    PetscBool  on, set;
+    PetscInt  *off;
+    PetscReal *wet, *w, *r;
+  } uplift;
+
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
   /* energy bookkeeping (dynamic): the work the step's mean contact force z takes from the bodies,
@@ -173,6 +182,9 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactPointsFree(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftUpdate(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftResultant(MBCSolver, PetscInt, PetscReal[5]);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftDestroy(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
