@@ -42,27 +42,63 @@ static PetscBool UpliftWetLengths(MBCSolver s, PetscInt i, PetscReal w[])
   return PETSC_TRUE;
 }
 
+/* the zones' arrays, once */
+static PetscErrorCode UpliftInit(MBCSolver s)
+{
+  MBCScene scene = s->scene;
+  PetscInt n     = 0;
+
+  PetscFunctionBegin;
+  if (s->uplift.off) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < scene->ncouples; i++) s->uplift.on = (PetscBool)(s->uplift.on || scene->couples[i].uplift.on);
+  if (!s->uplift.on) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc1(scene->ncouples + 1, &s->uplift.off));
+  for (PetscInt i = 0; i < scene->ncouples; i++) {
+    s->uplift.off[i] = n;
+    n += scene->couples[i].uplift.on ? scene->couples[i].uplift.nzones : 0;
+  }
+  s->uplift.off[scene->ncouples] = n;
+  PetscCall(PetscCalloc3(n + 1, &s->uplift.wet, n + 1, &s->uplift.w, 4 * scene->ncouples, &s->uplift.r));
+  PetscFunctionReturn(0);
+}
+
+/* The wet lengths the next step takes (from the last step's points), for a checkpoint: *n of them
+   (0 without uplift) in *w, valid until the next update */
+PetscErrorCode MBCSolverUpliftNext(MBCSolver s, PetscInt *n, const PetscReal **w)
+{
+  PetscFunctionBegin;
+  *n = 0, *w = NULL;
+  if (!s->uplift.on || !s->uplift.set) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < s->scene->ncouples; i++) {
+    const PetscInt off = s->uplift.off[i], nz = s->uplift.off[i + 1] - off;
+    if (nz && !UpliftWetLengths(s, i, &s->uplift.w[off])) PetscCall(PetscArraycpy(&s->uplift.w[off], &s->uplift.wet[off], nz));
+  }
+  *n = s->uplift.off[s->scene->ncouples], *w = s->uplift.w;
+  PetscFunctionReturn(0);
+}
+
+/* A restart: the wet lengths its checkpoint's step left (MBCSolverUpliftNext), which the first
+   step takes, as the uninterrupted run's did (the points they came from are not written) */
+PetscErrorCode MBCSolverUpliftRestore(MBCSolver s, PetscInt n, const PetscReal w[])
+{
+  PetscFunctionBegin;
+  PetscCall(UpliftInit(s));
+  PetscCheck(s->uplift.on && n == s->uplift.off[s->scene->ncouples], s->comm, PETSC_ERR_ARG_INCOMP, "Restart file %s: %" PetscInt_FMT " uplift zones, the scene has %" PetscInt_FMT, s->restart, n, s->uplift.on ? s->uplift.off[s->scene->ncouples] : 0);
+  PetscCall(PetscArraycpy(s->uplift.wet, w, n));
+  s->uplift.restored = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode MBCSolverUpliftUpdate(MBCSolver s)
 {
   MBCScene  scene = s->scene;
   PetscBool changed;
 
   PetscFunctionBegin;
-  if (!s->uplift.set) {
-    PetscInt n = 0;
-    for (PetscInt i = 0; i < scene->ncouples; i++) s->uplift.on = (PetscBool)(s->uplift.on || scene->couples[i].uplift.on);
-    if (!s->uplift.on) PetscFunctionReturn(0);
-    PetscCall(PetscMalloc1(scene->ncouples + 1, &s->uplift.off));
-    for (PetscInt i = 0; i < scene->ncouples; i++) {
-      s->uplift.off[i] = n;
-      n += scene->couples[i].uplift.on ? scene->couples[i].uplift.nzones : 0;
-    }
-    s->uplift.off[scene->ncouples] = n;
-    PetscCall(PetscCalloc3(n + 1, &s->uplift.wet, n + 1, &s->uplift.w, 4 * scene->ncouples, &s->uplift.r));
-  }
+  PetscCall(UpliftInit(s));
   if (!s->uplift.on) PetscFunctionReturn(0);
-  changed = (PetscBool)!s->uplift.set;
-  for (PetscInt i = 0; i < scene->ncouples; i++) { /* the same on every rank: s->cpts is replicated */
+  changed = (PetscBool)(!s->uplift.set || s->uplift.restored);
+  for (PetscInt i = 0; i < scene->ncouples && !s->uplift.restored; i++) { /* the same on every rank: s->cpts is replicated */
     const PetscInt off = s->uplift.off[i], nz = s->uplift.off[i + 1] - off;
     PetscReal      before = 0, after = 0;
     if (!nz) continue;
@@ -74,7 +110,8 @@ PetscErrorCode MBCSolverUpliftUpdate(MBCSolver s)
     if (s->monitor && before != after) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " uplift: couple %" PetscInt_FMT " wet length %g -> %g of %g (the largest of its %" PetscInt_FMT " zones)\n", s->step, scene->couples[i].k, (double)before, (double)after, (double)scene->couples[i].uplift.length, nz));
     PetscCall(PetscArraycpy(&s->uplift.wet[off], &s->uplift.w[off], nz));
   }
-  s->uplift.set = PETSC_TRUE;
+  s->uplift.set      = PETSC_TRUE;
+  s->uplift.restored = PETSC_FALSE;
   if (!changed) PetscFunctionReturn(0);
   PetscCall(PetscArrayzero(s->uplift.r, 4 * scene->ncouples));
   for (PetscInt b = 0; b < s->nbodies; b++)
@@ -111,6 +148,6 @@ PetscErrorCode MBCSolverUpliftDestroy(MBCSolver s)
   PetscFunctionBegin;
   PetscCall(PetscFree3(s->uplift.wet, s->uplift.w, s->uplift.r));
   PetscCall(PetscFree(s->uplift.off));
-  s->uplift.on = s->uplift.set = PETSC_FALSE;
+  s->uplift.on = s->uplift.set = s->uplift.restored = PETSC_FALSE;
   PetscFunctionReturn(0);
 }

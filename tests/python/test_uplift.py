@@ -331,3 +331,24 @@ def test_each_master_body_has_its_own_wet_front(tmp_path, nproc):
     pts = read_contact(str(result(h5, ".h5")), step=-1)
     y, p = pts["reference"][:, 1], pts["pressure"]
     assert np.all(p[y > B + 1e-9] > 0)  # b closed everywhere
+
+
+def test_restart_keeps_the_water_in_the_joint(tmp_path):
+    """A checkpoint inside the tilted block's load steps, its heel open and wet: the checkpoint
+    holds the wet length the next step takes (the points it comes from are not written), so the
+    restart ends bitwise where the uninterrupted run ends (a restart that starts dry takes another
+    path to the cracked state)."""
+    up = {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": L, "tail_head": 0.0, "penetration": True}
+    water = {"kind": "hydrostatic", "surface": "block_xmin", "level": LEVEL, "unit_weight": GAMMA}
+    h5 = prep(tmp_path, block_scene(tmp_path, up, loads=[water], steps=5))
+    solve(h5, "-mbc_output", str(tmp_path / "full"))
+    part = str(tmp_path / "part")
+    solve(h5, "-mbc_output", part, "-mbc_checkpoint_every", "2", "-mbc_final_time", "2")
+    r = solve(h5, "-mbc_output", part, "-mbc_restart", part + "_checkpoint.h5", "-mbc_monitor")
+    assert "restarted from" in r.stdout
+    a, b = read_csv(str(tmp_path / "full_contact.csv")), read_csv(part + "_restart_contact.csv")
+    assert a["wet_length"][2] > 0, a["wet_length"]  # the water in the joint when the checkpoint was taken
+    n = len(b["t"])
+    assert n == 3 and np.array_equal(a["t"][-n:], b["t"]), (a["t"], b["t"])
+    for key in ("wet_length", "uplift", "fx", "fz"):  # every step after the checkpoint
+        assert np.array_equal(a[key][-n:], b[key]), (key, a[key], b[key])

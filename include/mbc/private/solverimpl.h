@@ -138,6 +138,7 @@ struct _n_MBCSolver {
      int p x dA (4 each) for a unit time factor */
   struct {
     PetscBool  on, set;
+    PetscBool  restored; /* wet read from a checkpoint: the first step after a restart takes it */
     PetscInt  *off;
     PetscReal *wet, *w, *r;
   } uplift;
@@ -185,6 +186,8 @@ PETSC_INTERN PetscErrorCode MBCSolverContactPointsFree(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverUpliftUpdate(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverUpliftResultant(MBCSolver, PetscInt, PetscReal[5]);
 PETSC_INTERN PetscErrorCode MBCSolverUpliftDestroy(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftNext(MBCSolver, PetscInt *, const PetscReal **);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftRestore(MBCSolver, PetscInt, const PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
