@@ -6,7 +6,8 @@ is z = 0). Every monolith is a body with a gravity-dam cross-section: vertical u
 crest of width `crest`, downstream face of slope `slope` (H:V) from the knee down to the toe,
 base width B = crest + slope z_knee (z_knee = H - crest / slope). Neighbouring monoliths touch at
 contraction joints (couples 2, 3, ..., friction `mu_joint`); the monoliths' bases rest on the
-foundation block (couple 1, friction `mu_base`). The foundation extends `upstream` H upstream,
+foundation block (couple 1, friction `mu_base`); in dynamic and staged analyses every couple slides
+small (`sliding`: the pairs fixed per stage, docs/dam.md). The foundation extends `upstream` H upstream,
 `downstream` H downstream, `abutment` H beyond the end monoliths and `depth` H down, graded away
 from the dam; its bottom is fixed, its sides on rollers (`sides`). Loads: the monoliths'
 self-weight (the foundation's own weight is its in-situ state and is left out), the reservoir's
@@ -25,7 +26,8 @@ thousand to millions).
   meshes/dam/build.py OUTDIR [--h 5 | --dofs 1e6] [--monoliths 4] [--mu-base 0.8] [--mu-joint 0.8]
                       [--level 95] [--dynamic [--eq-duration 20] | --quasi-static | --staged | --modal] [--[no-]joints]
                       [--added-mass] [--foundation massed|massless|radiating] [--components x|xy|xyz]
-                      [--at2 X.AT2 [Y.AT2 [Z.AT2]]] [--binary]
+                      [--at2 X.AT2 [Y.AT2 [Z.AT2]]] [--sliding small|finite] [--binary] [--lift-joints N | --lift-heights Z ...]
+                      [--uplift [--tail-water 0] [--drains 0.05] [--drain-efficiency 0.5] [--no-penetration]]
 
 writes dam.msh, dam.yaml, dam.json (parameters, W, T for report.py), ground_motion.csv when
 dynamic, and dam.h5 (mbcontact-prep); then
@@ -74,6 +76,7 @@ class Dam:
     ring: int = 2                 # foundation contact surface: elements beyond the dam's footprint
     joints: bool = None           # contraction joints as contact couples (default: dynamic only, docs/dam.md)
     joint_base_rows: int = 1      # element rows above the base left out of the joint surfaces (see monolith())
+    sliding: str = None           # the couples' sliding: small | finite (default: small in dynamic and staged analyses, docs/dam.md)
     sides: str = "normal"         # foundation sides: normal (rollers) | all | none
     floor: bool = True            # hydrostatic pressure on the reservoir floor too
     E: float = 25e9               # concrete
@@ -86,6 +89,13 @@ class Dam:
     foundation_model: str = "massed"  # massed (its inertia, base fixed) | massless | radiating (absorbing sides and base, the record entering as the outcrop motion)
     components: str = "x"         # the ground motion's components: x | xy | xyz (y: another synthetic record, z: 2/3 of a third)
     at2: tuple = ()               # PEER .AT2 records for x (and y, z) instead of the synthetic ones
+    lift_joints: tuple = ()       # heights of horizontal lift joints through every monolith (m), each a couple
+    uplift: bool = False          # the water pressure under the base and in the lift joints (docs/dam.md, Uplift)
+    tail_water: float = 0.0       # head at the toe (m above the base)
+    drains: float = 0.05          # the drain line's distance from the heel / the joint's length (0: no drains)
+    drain_efficiency: float = 0.5 # USACE / FERC: at most 0.5 without measurements
+    penetration: bool = True      # the reservoir's water enters a joint where it opens (with uplift)
+    static_steps: int = 0         # static load steps (0: 1, or 12 with uplift's penetration: the water raised over the first half, then held while the wet length settles)
 
     @property
     def z_knee(self):
@@ -124,7 +134,29 @@ class Dam:
             raise ValueError(f"components must be x, xy or xyz, got {self.components!r}")
         if len(self.at2) > 3:
             raise ValueError("at most three .AT2 records (x, y, z)")
+        lifts = sorted(self.lift_joints)
+        if any(not 0 < z < self.height for z in lifts) or len(set(lifts)) < len(lifts):
+            raise ValueError(f"lift joints at {list(self.lift_joints)}: distinct heights strictly between the base and "
+                             f"the crest (0 < z < {self.height:g}) needed")
+        if not 0 <= self.drains < 1 or not 0 <= self.drain_efficiency <= 1:
+            raise ValueError(f"drains {self.drains:g} (a fraction of the joint's length, < 1) and drain efficiency "
+                             f"{self.drain_efficiency:g} (in [0, 1]) needed")
+        if self.uplift and not 0 <= self.tail_water <= self.water:
+            raise ValueError(f"tail water {self.tail_water:g} m must lie between the base and the reservoir ({self.water:g} m)")
         return self
+
+    def load_steps(self):
+        """The static analysis's (or the staged analysis's static stage's) load steps: 12 with water
+        entering the joints (the reservoir raised over the first 6, then held), else 1."""
+        return self.static_steps or (12 if self.uplift and self.penetration else 1)
+
+    def lifts(self):
+        """The lift joints' heights, ascending."""
+        return sorted(float(z) for z in self.lift_joints)
+
+    def section_width(self, z):
+        """The cross-section's width (heel to downstream face) at height z."""
+        return self.crest + self.slope * (self.z_knee - z) if z <= self.z_knee else self.crest
 
 
 def graded(h0, length, growth, hmax):
@@ -152,11 +184,17 @@ def layout(p):
     hmax = p.hmax or 4 * p.h
     nz1, nz2 = divisions(p.z_knee, p.h), divisions(p.height - p.z_knee, p.h)
     nx, ny = max(2, divisions(p.base, p.h)), divisions(p.width, p.h)
+    # z levels: the knee and the lift joints are levels of every monolith (a lift joint is a plane)
+    breaks = sorted({0.0, p.z_knee, p.height, *p.lifts()})
     mono = []
     for k in range(1, p.monoliths + 1):
         r = 1 - k % 2  # 0 for odd monoliths (masters of their joints), 1 for even ones
-        z = np.concatenate([np.linspace(0, p.z_knee, nz1 + r + 1), np.linspace(p.z_knee, p.height, nz2 + 1)[1:]])
-        mono.append(dict(nx=nx + r, ny=ny, z=z))
+        z = [0.0]
+        for i, (z0, z1) in enumerate(zip(breaks[:-1], breaks[1:])):
+            z += list(np.linspace(z0, z1, divisions(z1 - z0, p.h) + (r if i == 0 else 0) + 1)[1:])
+        z = np.array(z)
+        lifts = [0] + [int(np.argmin(np.abs(z - zl))) for zl in p.lifts()] + [len(z) - 1]
+        mono.append(dict(nx=nx + r, ny=ny, z=z, lifts=lifts))
     nfx = nx + 2
     dx = p.base / nfx
     up = graded(dx, p.upstream * p.height, p.growth, hmax)
@@ -193,37 +231,69 @@ def _lattice(n):
     return meshgen._box_arrays((0, 0, 0), tuple(n), tuple(n), "hex8", 0.0, 0)
 
 
+def lift_name(k, j):
+    """Body name of lift j (0: the lowest, on the base) of monolith k."""
+    return f"m{k}" if j == 0 else f"m{k}_l{j}"
+
+
 def monolith(p, a, k):
-    """Points, cells and surfaces of monolith k (1-based): x = x_d(z) i / nx on every z level."""
+    """Points, cells and surfaces of monolith k (1-based), a scene without lift joints (one body)."""
+    parts = monolith_lifts(p, a, k)
+    if len(parts) != 1:
+        raise ValueError(f"monolith m{k} has {len(parts)} lifts: take monolith_lifts()")
+    return parts[0][1:]
+
+
+def monolith_lifts(p, a, k):
+    """The lifts of monolith k (1-based): (name, points, cells, surfaces) each, one lift (the whole
+    monolith, body m<k>) without lift joints; x = x_d(z) i / nx on every z level. Lift j has one
+    element more along x and y than the lifts next to it (j odd): a lift joint's meshes do not
+    match, for the reason the base's and the contraction joints' do not (layout())."""
     m = a["mono"][k - 1]
-    ref, cells, sides = _lattice((m["nx"], m["ny"], len(m["z"]) - 1))
-    i, j, kz = ref[:, 0], ref[:, 1], ref[:, 2].astype(int)
-    z = m["z"][kz]
-    xd = np.where(z <= p.z_knee, p.crest + p.slope * (p.z_knee - z), p.crest)
-    points = np.stack([xd * i / m["nx"], (k - 1) * p.width + j * p.width / m["ny"], z], axis=1)
-    # Joint surfaces. The faces of the lowest rows are left out: a base node on a joint would
-    # carry a point of the base couple and one of the joint, and with the neighbour's base point
-    # the three constraints are linearly dependent (A_y - F_y, A_y - A'_y, A'_y - F_y for a
-    # foundation face F under both), which stalls the multiplier solve. On the master side (odd
-    # monoliths) the faces along the upstream, downstream and crest edges are left out too, so
-    # every master node lies inside the slave surface: a node on its border enters and leaves
-    # it with rounding-level motions, changing the contact pairs (and rebuilding D) every step.
+    nzk = len(m["z"]) - 1
+    lifts = m["lifts"]
     rows = max(p.joint_base_rows, 0)
-    joint = {}
+    parts = []
+    for li, (lo, hi) in enumerate(zip(lifts[:-1], lifts[1:])):
+        nx, ny = m["nx"] + li % 2, m["ny"] + li % 2
+        ref, cells, sides = _lattice((nx, ny, hi - lo))
+        i, j, kz = ref[:, 0], ref[:, 1], ref[:, 2].astype(int) + lo
+        z = m["z"][kz]
+        xd = np.where(z <= p.z_knee, p.crest + p.slope * (p.z_knee - z), p.crest)
+        points = np.stack([xd * i / nx, (k - 1) * p.width + j * p.width / ny, z], axis=1)
+        # Joint surfaces. The faces of the lowest rows are left out: a base node on a joint would
+        # carry a point of the base couple and one of the joint, and with the neighbour's base
+        # point the three constraints are linearly dependent (A_y - F_y, A_y - A'_y, A'_y - F_y for
+        # a foundation face F under both), which stalls the multiplier solve; so are the rows
+        # touching a lift joint, for the same reason. On the master side (odd monoliths) the faces
+        # along the upstream, downstream and crest edges are left out too, so every master node
+        # lies inside the slave surface: a node on its border enters and leaves it with
+        # rounding-level motions, changing the contact pairs (and rebuilding D) every step.
+        joint = {}
+        for side in ("ymin", "ymax"):
+            f = sides[side]
+            zlo, zhi = ref[f][:, :, 2].min(axis=1) + lo, ref[f][:, :, 2].max(axis=1) + lo
+            keep = zlo >= rows
+            for level in lifts[1:-1]:
+                keep &= ~((zlo <= level) & (zhi >= level))
+            if k % 2:
+                keep &= (ref[f][:, :, 0].min(axis=1) > 0) & (ref[f][:, :, 0].max(axis=1) < nx) & (zhi < nzk)
+            joint[side] = f[keep]
+        surf = {f"m{k}_ymin": joint["ymin"], f"m{k}_ymax": joint["ymax"], "upstream": sides["xmin"]}
+        if li == 0:
+            surf[f"m{k}_base"] = sides["zmin"]
+        else:  # the lift's bottom: the master of lift joint li
+            surf[f"m{k}_lift{li}_upper"] = sides["zmin"]
+        if li + 1 < len(lifts) - 1:  # its top: the slave of lift joint li + 1
+            surf[f"m{k}_lift{li + 1}_lower"] = sides["zmax"]
+        parts.append((lift_name(k, li), points, cells, surf))
     for side in ("ymin", "ymax"):
-        f = sides[side]
-        keep = ref[f][:, :, 2].min(axis=1) >= rows
-        if k % 2:
-            keep &= (ref[f][:, :, 0].min(axis=1) > 0) & (ref[f][:, :, 0].max(axis=1) < m["nx"]) & (ref[f][:, :, 2].max(axis=1) < len(m["z"]) - 1)
-        joint[side] = f[keep]
         used = p.joints and k % 2 and (k < p.monoliths if side == "ymax" else k > 1)
-        if used and not len(joint[side]):
-            raise ValueError(f"h = {p.h:g} m is too coarse for joints: monolith m{k} has {m['nx']} x {len(m['z']) - 1} elements on its "
-                             f"joint and keeps no face inside its upstream, downstream and crest edges for the joint's master side; "
-                             "take a smaller h (more DOFs)")
-    surfaces = {f"m{k}_base": sides["zmin"], f"m{k}_ymin": joint["ymin"], f"m{k}_ymax": joint["ymax"],
-                "upstream": sides["xmin"]}
-    return points, cells, surfaces
+        if used and not sum(len(part[3][f"m{k}_{side}"]) for part in parts):
+            raise ValueError(f"h = {p.h:g} m is too coarse for joints: monolith m{k} has {m['nx']} x {nzk} elements on its "
+                             f"joint and keeps no face inside its upstream, downstream, crest and lift edges for the joint's "
+                             "master side; take a smaller h (more DOFs)")
+    return parts
 
 
 def _footprint(p, a, cx, cy):
@@ -271,7 +341,7 @@ def foundation(p, a):
 def write_mesh(path, p, a, binary=False):
     """All bodies into one Gmsh 2.2 file, each with its own vertices; a surface name used by
     several bodies (upstream) is one region."""
-    parts = [(f"m{k}", *monolith(p, a, k)) for k in range(1, p.monoliths + 1)] + [("foundation", *foundation(p, a))]
+    parts = [part for k in range(1, p.monoliths + 1) for part in monolith_lifts(p, a, k)] + [("foundation", *foundation(p, a))]
     points, regions, surfaces, offset = [], [], {}, 0
     for name, pts, cells, surf in parts:
         bad = np.count_nonzero(min_corner_volume("hex8", pts, cells) <= 0)
@@ -288,11 +358,31 @@ def write_mesh(path, p, a, binary=False):
 
 
 def couple_names(p):
-    """{k: name} of the scene's couples: 1 the base, 1 + k the joint between monoliths k and k + 1."""
+    """{k: name} of the scene's couples: 1 the base, 1 + k the joint between monoliths k and k + 1,
+    then the lift joints from the lowest (k = lift_k(p, j))."""
     names = {1: "base"}
     if p.joints:
         names.update({1 + k: f"joint m{k}|m{k + 1}" for k in range(1, p.monoliths)})
+    names.update({lift_k(p, j): f"lift {j} (z = {z:g})" for j, z in enumerate(p.lifts(), start=1)})
     return names
+
+
+def lift_k(p, j):
+    """The couple number of lift joint j (1: the lowest)."""
+    return p.monoliths + j
+
+
+def uplift(p, z, length):
+    """The uplift keys of a joint at height z of the given length (heel to toe): USACE / FERC's
+    heel-to-toe law, the reservoir's head at the heel, the tail water's at the toe (none above it),
+    the drain line at `drains` of the length; the water entering where the joint opens."""
+    heel = max(p.water - z, 0.0)
+    up = {"origin": [0.0, 0.0, z], "direction": [1.0, 0.0, 0.0], "length": length, "heel_head": heel,
+          "tail_head": min(max(p.tail_water - z, 0.0), heel), "unit_weight": WATER, "level": p.water,
+          "penetration": p.penetration}
+    if p.drains > 0:
+        up.update(drain=p.drains * length, drain_efficiency=p.drain_efficiency)
+    return up
 
 
 def rayleigh(p, zeta=0.05, ratio=5.0):
@@ -331,7 +421,7 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         raise ValueError("a radiating foundation needs the staged analysis (its absorbing boundaries hold it in the "
                          "static stage; a ramp would push it into its dashpots)")
     n = p.monoliths
-    dams = [f"m{k}" for k in range(1, n + 1)]
+    dams = [lift_name(k, j) for k in range(1, n + 1) for j in range(len(p.lifts()) + 1)]
     concrete = {"E": p.E, "nu": p.nu, "density": p.density}
     rock = {"E": p.rock_E, "nu": p.rock_nu}
     if seismic:
@@ -352,6 +442,22 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
     if p.joints:  # joint k between monoliths k and k + 1: the odd (coarser) one is the master
         couples += [{"k": 1 + k, "master": f"m{k}_ymax" if k % 2 else f"m{k + 1}_ymin",
                      "slave": f"m{k + 1}_ymin" if k % 2 else f"m{k}_ymax", "mu": p.mu_joint} for k in range(1, n)]
+    for j, z in enumerate(p.lifts(), start=1):  # lift joint j: every monolith's lift above it on the one below
+        couples.append({"k": lift_k(p, j), "master": [f"m{k}_lift{j}_upper" for k in range(1, n + 1)],
+                        "slave": [f"m{k}_lift{j}_lower" for k in range(1, n + 1)], "mu": p.mu_joint})
+    for c in couples:
+        c["sliding"] = p.sliding
+    steps = p.load_steps() if analysis in ("static", "staged") else 1  # the static analysis's or stage's
+    # A static analysis with water entering the joints raises the reservoir over the first half of its
+    # load steps and holds it: the crack and the water in it grow together (at the full load at once
+    # the first step's dry crack floods in one jump, which the multiplier solve may not follow)
+    water = {"table": [[0, 0], [steps // 2, 1]]} if steps > 1 and p.uplift and p.penetration else "constant"
+    if p.uplift:
+        ramped_up = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else water
+        couples[0]["uplift"] = dict(uplift(p, 0.0, p.base), time=ramped_up)
+        for j, z in enumerate(p.lifts(), start=1):
+            if p.water > z:  # a joint above the reservoir has none
+                next(c for c in couples if c["k"] == lift_k(p, j))["uplift"] = dict(uplift(p, z, p.section_width(z)), time=ramped_up)
     dirichlet = [{"surface": "foundation_bottom", "components": "all"}]
     if p.sides == "normal":
         dirichlet += [{"surface": "foundation_xsides", "components": ["x"]}, {"surface": "foundation_ysides", "components": ["y"]}]
@@ -363,15 +469,16 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         absorbing = [{"surface": "foundation_bottom", "input": "outcrop"},
                      {"surface": "foundation_xsides"}, {"surface": "foundation_ysides"}]
     ramped = {"table": [[0, 0], [ramp, 1]]} if analysis == "dynamic" else "constant"
+    water = ramped if analysis == "dynamic" else water
     loads = [{"kind": "gravity", "vector": [0, 0, -G], "bodies": dams, "time": ramped},
-             {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": ramped}]
+             {"kind": "hydrostatic", "surface": "upstream", "level": p.water, "unit_weight": WATER, "time": water}]
     if p.floor:
-        loads += [{"kind": "hydrostatic", "surface": name, "level": p.water, "unit_weight": WATER, "time": ramped}
+        loads += [{"kind": "hydrostatic", "surface": name, "level": p.water, "unit_weight": WATER, "time": water}
                   for name in wet_surfaces(p, layout(p))]
     mid = [(k - 0.5) * p.width for k in range(1, n + 1)]
     points = {}
     for k, y in enumerate(mid, start=1):
-        points[f"crest_m{k}"] = {"x": [0, y, p.height], "body": f"m{k}"}
+        points[f"crest_m{k}"] = {"x": [0, y, p.height], "body": lift_name(k, len(p.lifts()))}
         points[f"heel_m{k}"] = {"x": [0, y, 0], "body": f"m{k}"}
         points[f"toe_m{k}"] = {"x": [p.base, y, 0], "body": f"m{k}"}
     out = {"title": f"gravity dam: {n} monoliths, H = {p.height:g} m, {analysis}",
@@ -393,14 +500,14 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
         out["analysis"] = {"type": "modal", "modes": 10}
         out["output"]["fields"] = ["displacement", "stress"]
     elif staged:
-        quake = ground_motion(p, record, 1.0)
-        out["stages"] = [{"name": "static", "analysis": {"type": "static"}},
-                         {"name": "earthquake", "analysis": {"type": "dynamic", "dt": dt, "final_time": 1.0 + eq_duration,
+        quake = ground_motion(p, record, float(steps))
+        out["stages"] = [{"name": "static", "analysis": {"type": "static"} if steps == 1 else {"type": "static", "dt": 1.0, "final_time": float(steps)}},
+                         {"name": "earthquake", "analysis": {"type": "dynamic", "dt": dt, "final_time": steps + eq_duration,
                                                              "newmark": {"beta": 0.3025, "gamma": 0.6}},
                           "loads": [quake]}]
         out["output"]["every"] = every
     else:
-        out["analysis"] = {"type": "static"}
+        out["analysis"] = {"type": "static"} if steps == 1 else {"type": "static", "dt": 1.0, "final_time": float(steps)}
     return out
 
 
@@ -442,6 +549,10 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     p = Dam(**params).check()
     if p.joints is None:  # a static analysis with contact between two bodies held only by contact does not converge yet
         p = replace(p, joints=analysis in ("dynamic", "modal"))
+    if p.sliding is None:  # an earthquake slides the joints by millimetres under faces of metres (docs/dam.md)
+        p = replace(p, sliding="small" if analysis in ("dynamic", "staged") else "finite")
+    if p.sliding not in ("small", "finite"):
+        raise ValueError(f"sliding {p.sliding!r}: small or finite")
     if target_dofs:
         p = replace(p, h=size_for_dofs(p, target_dofs))
     os.makedirs(outdir, exist_ok=True)
@@ -458,7 +569,7 @@ def build(outdir, analysis="static", target_dofs=None, binary=None, quiet=True, 
     t2 = time.perf_counter()
     build.info = dict(params=asdict(p), analysis=analysis, dofs=dofs, vertices=vertices, h=p.h, nx=a["nx"], ny=a["ny"],
                       nz=a["nz"], mesh_seconds=t1 - t0, prep_seconds=t2 - t1, weight=p.weight(), thrust=p.thrust(),
-                      couples=couple_names(p), eq_start={"dynamic": eq_start, "staged": 1.0}.get(analysis))
+                      couples=couple_names(p), eq_start={"dynamic": eq_start, "staged": float(p.load_steps())}.get(analysis))
     with open(os.path.join(outdir, "dam.json"), "w") as f:  # for meshes/dam/report.py
         json.dump(build.info, f, indent=1)
     if not quiet:
@@ -492,6 +603,8 @@ if __name__ == "__main__":
     ap.add_argument("--eq-duration", type=float, default=20.0, help="s of the record to run")
     ap.add_argument("--joints", action=argparse.BooleanOptionalAction, default=None,
                     help="contraction joints as contact couples (default: in dynamic analyses only)")
+    ap.add_argument("--sliding", choices=("small", "finite"), default=None,
+                    help="the couples' sliding (default: small in dynamic and staged analyses, finite in static ones)")
     ap.add_argument("--binary", action="store_true", default=None, help="binary Gmsh file (default above 200k DOFs)")
     ap.add_argument("--modal", action="store_true", help="the first 10 natural frequencies and modes (couples tied)")
     ap.add_argument("--added-mass", action="store_true", help="the reservoir's Westergaard added mass on the upstream faces")
@@ -500,10 +613,27 @@ if __name__ == "__main__":
                          "boundaries, the record entering at the bottom as the outcrop motion; --staged)")
     ap.add_argument("--components", choices=("x", "xy", "xyz"), default="x", help="ground motion components")
     ap.add_argument("--at2", nargs="+", default=(), help="PEER .AT2 records for x (and y, z) instead of the synthetic ones")
+    lift = ap.add_mutually_exclusive_group()
+    lift.add_argument("--lift-joints", type=int, default=0, metavar="N",
+                      help="N horizontal lift joints through every monolith, evenly spaced (H / (N + 1) apart), as contact couples")
+    lift.add_argument("--lift-heights", nargs="+", type=float, default=(), metavar="Z", help="the lift joints' heights, m")
+    ap.add_argument("--uplift", action="store_true",
+                    help="the water pressure under the base and in the lift joints (heel-to-toe law with drains, "
+                         "water entering open joints: docs/dam.md)")
+    ap.add_argument("--tail-water", type=float, default=Dam.tail_water, help="tail water above the base, m (default 0)")
+    ap.add_argument("--drains", type=float, default=Dam.drains,
+                    help="the drain line's distance from the heel / the joint's length (default 0.05; 0: no drains)")
+    ap.add_argument("--drain-efficiency", type=float, default=Dam.drain_efficiency, help="default 0.5 (USACE, FERC)")
+    ap.add_argument("--no-penetration", action="store_true", help="no water entering the joints as they open")
+    ap.add_argument("--static-steps", type=int, default=0,
+                    help="static load steps (default 1; 12 with uplift: the reservoir raised over the first half, held over the rest, the water entering the opening joints step by step)")
     a = ap.parse_args()
+    lifts = tuple(a.lift_heights) or tuple(a.height * j / (a.lift_joints + 1) for j in range(1, a.lift_joints + 1))
     params = dict(monoliths=a.monoliths, height=a.height, crest=a.crest, slope=a.slope, width=a.width, level=a.level,
-                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints,
-                  added_mass=a.added_mass, foundation_model=a.foundation, components=a.components, at2=tuple(a.at2))
+                  mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints, sliding=a.sliding,
+                  added_mass=a.added_mass, foundation_model=a.foundation, components=a.components, at2=tuple(a.at2),
+                  lift_joints=lifts, uplift=a.uplift, tail_water=a.tail_water, drains=a.drains,
+                  drain_efficiency=a.drain_efficiency, penetration=not a.no_penetration, static_steps=a.static_steps)
     if a.h:
         params["h"] = a.h
     extra = dict(dt=0.02, eq_duration=0.0) if a.quasi_static else dict(eq_duration=a.eq_duration)

@@ -58,6 +58,79 @@ def contact_points(prefix, step=-1):
     raise OSError(f"no contact points under {prefix} (.h5 or _contact.h5)")
 
 
+def contact_point_steps(prefix):
+    """Every output step's per-point datasets (contact_points() for each), oldest first."""
+    import h5py
+
+    for path, group in ((prefix + ".h5", "contact"), (prefix + "_contact.h5", None)):
+        if os.path.exists(path):
+            with h5py.File(path, "r") as f:
+                if group and group not in f:
+                    continue
+                n = sum(1 for name in (f[group] if group else f) if name.startswith("step_"))
+            return [contact_points(prefix, i) for i in range(n)]
+    return []
+
+
+def scene_couples(prefix):
+    """{k: the couple's YAML mapping} from the scene build.py wrote beside the results (dam.yaml):
+    mu, cohesion (a joint law's, if the scene has one), uplift."""
+    import yaml
+
+    path = os.path.join(os.path.dirname(os.path.abspath(prefix)), "dam.yaml")
+    if not os.path.exists(path):
+        return {}
+    with open(path) as f:
+        doc = yaml.safe_load(f)
+    return {int(c.get("k", i + 1)): c for i, c in enumerate(doc.get("couples") or [])}
+
+
+def joint_planes(prefix, info, hist):
+    """The sliding factor of safety of the base and each lift joint over time (USACE EM 1110-2-2100,
+    FERC chapter III): FS = (c A_bonded + mu N') / T, N' the effective normal force (the contact's
+    normal resultant: the uplift acts on the faces already), T the shear resultant (horizontal
+    planes: |(Fx, Fy)|), c the couple's `cohesion` (0 without), A_bonded the area of its points
+    still bonded (the per-point `bonded` output of a joint law; 0 without); and the cracked length
+    from the heel (the first point in compression along x) at every output step."""
+    couples = scene_couples(prefix)
+    steps = contact_point_steps(prefix)
+    planes = {}
+    for k, name in info["couples"].items():
+        if not (k == 1 or str(name).startswith("lift")) or k not in hist:
+            continue
+        h = hist[k]
+        spec = couples.get(k, {})
+        mu = float(spec.get("mu", info["params"]["mu_base"] if k == 1 else info["params"]["mu_joint"]))
+        c = float(spec.get("cohesion", 0.0))
+        up = spec.get("uplift") or {}
+        length = float(up.get("length", info["params"]["crest"] + info["params"]["slope"] * (info["params"]["height"] - info["params"]["crest"] / info["params"]["slope"])))
+        x0 = float((up.get("origin") or [0.0])[0])
+        times, abond, crack = [], [], []
+        for st in steps:
+            mine = st["couple"].reshape(-1) == k
+            area = st["area"].reshape(-1)[mine]
+            bonded = st["bonded"].reshape(-1)[mine] if "bonded" in st else np.zeros(len(area))
+            x = st["reference"][mine][:, 0] - x0
+            closed = st["pressure"].reshape(-1)[mine] > 0
+            times.append(st["time"])
+            abond.append(float(area[bonded != 0].sum()))
+            crack.append(float(np.clip(x[closed].min(), 0, length)) if closed.any() else length)
+        times, abond = np.array(times), np.array(abond)
+        # A_bonded at each CSV step: the last output at or before it (0 before the first)
+        idx = np.searchsorted(times, h["t"] + 1e-12, side="right") - 1
+        ab = np.where(idx >= 0, abond[np.maximum(idx, 0)] if len(abond) else 0.0, 0.0)
+        N, T = h["normal_force"], np.hypot(h["fx"], h["fy"])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fs = np.where(T > 0, (c * ab + mu * N) / T, np.inf)
+        i = int(np.argmin(fs))
+        planes[k] = {"name": name, "mu": mu, "cohesion": c, "t": h["t"].tolist(), "fs": fs.tolist(),
+                     "normal": N.tolist(), "shear": T.tolist(), "bonded_area": ab.tolist(),
+                     "uplift": (h["uplift"] if "uplift" in h else np.zeros_like(N)).tolist(),
+                     "fs_final": float(fs[-1]), "fs_min": float(fs[i]), "fs_min_time": float(h["t"][i]),
+                     "crack_times": times.tolist(), "cracked_length": crack, "length": length}
+    return planes
+
+
 def scene_info(prefix):
     """The parameters build.py wrote beside the scene (dam.json): loads, couples, friction."""
     folder = os.path.dirname(os.path.abspath(prefix))
@@ -100,12 +173,15 @@ def summarize(prefix):
             with np.errstate(divide="ignore", invalid="ignore"):
                 fs = np.where(Ft > 0, row["mu"] * N / Ft, np.inf)
             during = h["t"] >= eq if eq is not None else np.ones_like(N, bool)
+            U = float(h["uplift"][-1]) if "uplift" in h else 0.0  # the base's uplift (build.py --uplift)
             row.update(vertical_over_weight=float(N[-1] / W), horizontal_over_thrust=float(-h["fx"][-1] / T),
-                       design_safety=row["mu"] * W / T, safety_final=float(fs[-1]),
+                       uplift=U, vertical_over_weight_minus_uplift=float(N[-1] / (W - U)) if W > U else float("nan"),
+                       design_safety=row["mu"] * (W - U) / T, safety_final=float(fs[-1]),
                        safety_min=float(np.min(fs[during])) if during.any() else float(fs[-1]),
                        safety_min_time=float(h["t"][during][np.argmin(fs[during])]) if during.any() else float(h["t"][-1]))
         out["couples"][k] = row
     out["monoliths"] = _per_monolith(prefix, p)
+    out["planes"] = joint_planes(prefix, info, hist)
     return out
 
 
@@ -143,9 +219,21 @@ def text(r):
                      f"{c['force'][0]:13.5e} {c['force'][1]:13.5e} {c['force'][2]:13.5e}")
     b = r["couples"].get(1)
     if b:
-        lines += [f"base: vertical resultant / W = {b['vertical_over_weight']:.6f}, horizontal / T = {b['horizontal_over_thrust']:.6f}",
-                  f"sliding factor of safety: design mu W / T = {b['design_safety']:.3f}; computed mu N / |F_t| = "
+        lines += [f"base: vertical resultant / W = {b['vertical_over_weight']:.6f}, horizontal / T = {b['horizontal_over_thrust']:.6f}"
+                  + (f", uplift U = {b['uplift']:.6e} N, vertical / (W - U) = {b['vertical_over_weight_minus_uplift']:.6f}" if b["uplift"] else ""),
+                  f"sliding factor of safety: design mu {'(W - U)' if b['uplift'] else 'W'} / T = {b['design_safety']:.3f}; computed mu N / |F_t| = "
                   f"{b['safety_final']:.3f} at the end, {b['safety_min']:.3f} at its smallest (t = {b['safety_min_time']:.3f} s)"]
+    if r.get("planes"):
+        lines.append(f"{'joint plane':<20} {'N_eff [N]':>12} {'T [N]':>12} {'uplift [N]':>12} {'c A_b [N]':>12} "
+                     f"{'FS end':>7} {'FS min':>7} {'at t':>8} {'cracked [m]':>11} {'max':>7} {'/ length':>8}")
+        for k, q in sorted(r["planes"].items()):
+            crack = q["cracked_length"]
+            lines.append(f"{q['name']:<20} {q['normal'][-1]:12.5e} {q['shear'][-1]:12.5e} {q['uplift'][-1]:12.5e} "
+                         f"{q['cohesion'] * q['bonded_area'][-1]:12.5e} {q['fs_final']:7.3f} {q['fs_min']:7.3f} "
+                         f"{q['fs_min_time']:8.3f} {crack[-1] if crack else float('nan'):11.3f} "
+                         f"{max(crack) if crack else float('nan'):7.3f} {q['length']:8.3f}")
+        lines.append("FS = (c A_bonded + mu N_eff) / T per joint plane (uplift on the faces: N_eff is the contact's "
+                     "normal force); cracked: from the heel to the first point in compression")
     if r["monoliths"]:
         lines.append(f"{'monolith':<9} {'points':>6} {'base open [m]':>14} {'base slide [m]':>15} {'open %':>7} {'slip %':>7}  (last output)")
         for m in r["monoliths"]:

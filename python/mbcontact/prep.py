@@ -75,6 +75,7 @@ def _run(args):
     sets = build_node_sets(scene, bodies)
     exclude = couple_exclusions(scene, bodies, labels, sets)
     _reservoir_floors(scene, bodies)
+    _uplift_extent(scene, bodies)
     nodal = _nodal_inputs(scene, bodies, sets)
 
     if not args.check:
@@ -101,7 +102,7 @@ def _print_summary(output, check_only, scene, bodies, face_counts, exclude, noda
         out = f", {len(exclude[scene.couples.index(c)])} master nodes out of contact" if c.exclude else ""
         joint = (f", bonded: cohesion={c.cohesion:g} tensile_strength={c.tensile_strength:g} "
                  f"mu_residual={c.mu_residual:g}" + (f" softening_displacement={c.softening:g}" if c.softening else "")) if c.cohesion > 0 else ""
-        print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{joint}{out}")
+        print(f"  couple k={c.k}: master {','.join(c.master)}, slave {','.join(c.slave)}, mu={c.mu:g}{', ' + c.sliding + ' sliding' if c.sliding else ''}{joint}{out}")
     if nodal:
         for i, rows in enumerate(nodal["dirichlet"]):
             if rows is not None:
@@ -124,6 +125,54 @@ def _reservoir_floors(scene, bodies):
                              f"below the reservoir's floor {m.bottom:g}")
         if not m.level > m.bottom:
             raise InputError(f"added_mass[{i}].level: {m.level:g} is not above the reservoir's floor {m.bottom:g}")
+
+
+def _uplift_extent(scene, bodies):
+    """A couple's uplift acts where its master faces are, across the direction too: the joint's
+    plane from the master faces' mean normal n, the lateral axis t = n x direction, and the master
+    vertices' range along t (the slave side, a foundation reaching beyond the footprint, is loaded
+    only under the joint), over all of them and per master body (its zone: the water's front moves
+    in each zone on its own, so the monoliths of one base couple crack each as its own)."""
+    for c in scene.couples:
+        u = c.uplift
+        if u is None:
+            continue
+        nrm, ts = np.zeros(3), {}
+        for name in c.master:
+            for b, index in surface_faces(name, scene.surfaces[name], bodies).items():
+                body = bodies[b]
+                for f in index:
+                    nv = body.face_corners(body.boundary_faces[f:f + 1], body.boundary_nv[f:f + 1])[0]
+                    x = body.coords[body.boundary_faces[f, :nv]]
+                    nrm += 0.5 * sum(np.cross(x[k], x[(k + 1) % nv]) for k in range(nv))
+                    ts.setdefault(b, []).append(x)
+        nn = np.linalg.norm(nrm)
+        if not nn > 0:
+            raise InputError(f"{u['where']}: the master surfaces have no mean normal (a closed surface?): "
+                             "the uplift needs a plane joint")
+        nrm /= nn
+        if abs(nrm @ u["direction"]) > 0.1:
+            raise InputError(f"{u['where']}.direction: {list(u['direction'])} is not along the joint (the master "
+                             f"faces' normal is [{nrm[0]:.3g}, {nrm[1]:.3g}, {nrm[2]:.3g}]): give the heel-to-toe "
+                             "direction in the joint's plane")
+        t = np.cross(nrm, u["direction"])
+        t /= np.linalg.norm(t)
+        zones = []
+        for b in sorted(ts):
+            y = (np.concatenate(ts[b]) - u["origin"]) @ t
+            zones.append([y.min(), y.max(), [b]])
+        merged, tol = [], 1e-9 * (max(z[1] for z in zones) - min(z[0] for z in zones) + u["length"])
+        for lo, hi, bs in sorted(zones, key=lambda z: (z[0], z[1])):  # bodies side by side along the direction share a zone
+            if merged and lo < merged[-1][1] - tol:
+                merged[-1][1] = max(merged[-1][1], hi)
+                merged[-1][2] += bs
+            else:
+                merged.append([lo, hi, bs])
+        u["lateral"] = np.array([*t, min(z[0] for z in merged), max(z[1] for z in merged)])
+        u["zones"] = np.array([z[:2] for z in merged])
+        u["zone_of_body"] = np.full(len(bodies), -1)
+        for i, z in enumerate(merged):
+            u["zone_of_body"][z[2]] = i
 
 
 def _nodal_inputs(scene, bodies, sets):
@@ -359,12 +408,31 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
             i, c = item
             _attrs(g, k=c.k, mu=c.mu, master=",".join(c.master), slave=",".join(c.slave),
                    master_faces=side_faces(c, 1), slave_faces=side_faces(c, 2))
+            if c.sliding:
+                _attrs(g, sliding=c.sliding)
             if c.cohesion > 0:  # the joint law, only on bonded couples (older scenes' files stay as they were)
                 _attrs(g, cohesion=c.cohesion, tensile_strength=c.tensile_strength, mu_residual=c.mu_residual)
                 if c.softening > 0:
                     _attrs(g, softening_displacement=c.softening)
             if exclude is not None and len(exclude[i]):  # (body, vertex) of the master nodes out of contact
                 g.create_dataset("exclude", data=exclude[i].astype(np.int32))
+            u = c.uplift
+            if u is not None:  # the law's or the table's keys, settled by the parse (docs/scene-h5.md)
+                table = u["table"]
+                _attrs(g, uplift=1, uplift_origin=u["origin"], uplift_direction=u["direction"],
+                       uplift_length=u["length"], uplift_unit_weight=u["unit_weight"],
+                       uplift_heel_head=u.get("heel_head", 0.0), uplift_tail_head=u.get("tail_head", 0.0),
+                       uplift_drain=u.get("drain", -1.0), uplift_efficiency=u.get("drain_efficiency", 0.0),
+                       uplift_penetration=int(u["penetration"]), uplift_level=u["level"],
+                       uplift_threshold=u["threshold"], uplift_axis=int(u["axis"]),
+                       uplift_table_rows=0 if table is None else len(table),
+                       uplift_lateral=u.get("lateral", np.array([0, 0, 0, -1e300, 1e300])))
+                if table is not None:
+                    g.create_dataset("uplift_table", data=np.asarray(table, dtype=np.float64))
+                zones = u.get("zones", np.array([[-1e300, 1e300]]))
+                _attrs(g, uplift_zones=len(zones))
+                g.create_dataset("uplift_zone_range", data=np.asarray(zones, dtype=np.float64))
+                g.create_dataset("uplift_zone_body", data=np.asarray(u.get("zone_of_body", np.zeros(len(bodies))), dtype=np.float64))
 
         _list(root, "couples", enumerate(scene.couples), couple)
 
@@ -400,7 +468,8 @@ def write_metadata(path, scene, bodies, face_counts, labels=None, exclude=None, 
                       if load.kind == "hydrostatic" else {}),
                    **(dict(velocity_function=time_function(Time("table", load.velocity)),
                            displacement_function=time_function(Time("table", load.displacement)))
-                      if load.kind == "ground_acceleration" else {}))
+                      if load.kind == "ground_acceleration" else {}),
+                   **(dict(couple=load.couple, side=load.side) if load.kind == "uplift" else {}))
 
         _list(root, "loads", enumerate(scene.loads), load)
 

@@ -293,6 +293,8 @@ class Couple:
     slave: list
     mu: float
     exclude: list = field(default_factory=list)  # regions whose nodes carry no contact point
+    sliding: str = ""     # "small" (pairs fixed per stage) or "finite"; "": -mbc_contact_sliding's default
+    uplift: dict = None   # the water pressure on its faces (_uplift), None: none
     cohesion: float = 0.0          # joint law (docs/dam.md): 0 = unbonded Coulomb contact
     tensile_strength: float = 0.0  # resolved: cohesion / mu when not given
     mu_residual: float = 0.0       # resolved: mu when not given
@@ -326,6 +328,8 @@ class Load:
     displacement: np.ndarray = None  # tables (n, 2), integrated exactly from the acceleration's
     nodes: list = field(default_factory=list)  # nodal_force: the node sets it acts on (per node)
     line: list = field(default_factory=list)   # line_force: the line regions it acts on (per length)
+    couple: int = -1          # uplift (made from a couple's `uplift`): the couple's index, its side 0 master / 1 slave
+    side: int = 0
 
 
 @dataclass
@@ -445,7 +449,7 @@ def parse_scene(doc, base_dir):
     meshes = _meshes(doc["meshes"], base_dir, extrude)
     bodies = _bodies(doc["bodies"], meshes)
     body_names = [b.name for b in bodies]
-    couples = _couples(doc.get("couples"))
+    couples = _couples(doc.get("couples"), base_dir)
     node_sets = _node_sets(doc.get("node_sets"), body_names)
     dirichlet = [_dirichlet(e, f"dirichlet[{i}]", base_dir, bodies) for i, e in enumerate(entries(doc.get("dirichlet"), "dirichlet"))]
     initial = [_initial(e, f"initial[{i}]", body_names) for i, e in enumerate(entries(doc.get("initial"), "initial"))]
@@ -480,6 +484,7 @@ def parse_scene(doc, base_dir):
         raise InputError("absorbing: an input surface (input: outcrop or incident) needs a ground_acceleration "
                          "load (the record that enters through it)")
     surfaces = _surface_references(doc, couples, dirichlet, loads, added_mass, absorbing)
+    loads += _uplift_loads(couples, loads)
     if initial and not dynamic:
         raise InputError("initial: initial conditions start a dynamic analysis (or a first dynamic stage)")
     if initial and stages and stages[0].analysis.type != "dynamic":
@@ -590,13 +595,12 @@ def _material(value, where, rigid=False):
     return material
 
 
-def _couples(value):
+def _couples(value, base_dir="."):
     couples, seen = [], {}
     for i, spec in enumerate(entries(value, "couples")):
         where = f"couples[{i}]"
-        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude", "cohesion", "tensile_strength", "mu_residual",
-                                        "softening_displacement"),
-                       required=("master", "slave"))
+        spec = mapping(spec, where, ("k", "master", "slave", "mu", "exclude", "sliding", "uplift", "cohesion", "tensile_strength",
+                                        "mu_residual", "softening_displacement"), required=("master", "slave"))
         k = integer(spec.get("k", i + 1), f"{where}.k", ge=1)
         if k in seen:
             raise InputError(f"{where}.k: couple k={k} is already defined by couples[{seen[k]}]")
@@ -604,7 +608,10 @@ def _couples(value):
         couples.append(Couple(k, name_list(spec["master"], f"{where}.master (couple k={k})"),
                               name_list(spec["slave"], f"{where}.slave (couple k={k})"),
                               real(spec.get("mu", 0.0), f"{where}.mu", ge=0),
-                              name_list(spec["exclude"], f"{where}.exclude (couple k={k})") if "exclude" in spec else []))
+                              name_list(spec["exclude"], f"{where}.exclude (couple k={k})") if "exclude" in spec else [],
+                              string(spec["sliding"], f"{where}.sliding", ("finite", "small")) if "sliding" in spec else ""))
+        if "uplift" in spec:
+            couples[-1].uplift = _uplift(spec["uplift"], f"{where}.uplift", k, base_dir)
         if couples[-1].mu > MAX_MU:
             raise InputError(f"{where}.mu: {couples[-1].mu:g} is not a friction coefficient (at most "
                              f"{MAX_MU:g}, a friction angle of 89.94 degrees)")
@@ -639,6 +646,128 @@ def _joint_law(c, spec, where):
     if c.mu_residual > MAX_MU:
         raise InputError(f"{where}.mu_residual (couple k={c.k}): {c.mu_residual:g} is not a friction coefficient "
                          f"(at most {MAX_MU:g})")
+
+
+UPLIFT_KEYS = ("origin", "direction", "length", "unit_weight", "heel_head", "tail_head", "drain",
+               "drain_efficiency", "table", "penetration", "level", "axis", "threshold", "time")
+
+
+def _uplift(value, where, k, base_dir="."):
+    """A couple's `uplift`: the heel-to-toe law with an optional drain line, or a table; optionally
+    the reservoir's water entering the joint where it opens (docs/scene.md, Couples). Keys that
+    default to the scene's hydrostatic load (level, unit_weight, axis, heel_head) are settled by
+    _uplift_loads once the loads are read."""
+    at = f"{where} (couple k={k})"
+    spec = mapping(value, at, UPLIFT_KEYS, required=("origin", "direction", "length"))
+    u = dict(where=at)
+    u["origin"] = vector3(spec["origin"], f"{at}.origin")
+    d = vector3(spec["direction"], f"{at}.direction")
+    if not np.linalg.norm(d) > 0:
+        raise InputError(f"{at}.direction: must not be zero (the direction from the heel to the toe)")
+    u["direction"] = d / np.linalg.norm(d)
+    u["length"] = real(spec["length"], f"{at}.length", gt=0)
+    if "table" in spec:
+        for key in ("heel_head", "tail_head", "drain", "drain_efficiency"):
+            if key in spec:
+                raise InputError(f"{at}.{key}: a table gives the pressure by itself; {key} belongs to the "
+                                 "heel-to-toe law (give one or the other)")
+        rows = spec["table"]
+        if not isinstance(rows, list) or len(rows) < 2:
+            raise InputError(f"{at}.table: expected at least two [position, pressure] pairs")
+        table = np.empty((len(rows), 2))
+        for i, row in enumerate(rows):
+            if not isinstance(row, list) or len(row) != 2:
+                raise InputError(f"{at}.table[{i}]: expected a pair [position, pressure], got {row!r}")
+            table[i] = [real(row[0], f"{at}.table[{i}][0]"), real(row[1], f"{at}.table[{i}][1]", ge=0)]
+            if i and table[i, 0] <= table[i - 1, 0]:
+                raise InputError(f"{at}.table[{i}]: positions must be strictly increasing "
+                                 f"({table[i, 0]:g} follows {table[i - 1, 0]:g})")
+        u["table"] = table
+    else:
+        u["table"] = None
+        if "heel_head" in spec:
+            u["heel_head"] = real(spec["heel_head"], f"{at}.heel_head", ge=0)
+        u["tail_head"] = real(spec.get("tail_head", 0.0), f"{at}.tail_head", ge=0)
+        if "heel_head" in u and u["tail_head"] > u["heel_head"]:
+            raise InputError(f"{at}.tail_head: {u['tail_head']:g} is above heel_head {u['heel_head']:g} "
+                             "(the law runs from the reservoir's head down to the tail water's)")
+        u["drain"] = -1.0
+        u["drain_efficiency"] = 0.0
+        if "drain" in spec:
+            if isinstance(spec["drain"], dict):  # a plane: where it crosses the line from the heel along direction
+                plane = mapping(spec["drain"], f"{at}.drain", ("point", "normal"), required=("point", "normal"))
+                point, normal = vector3(plane["point"], f"{at}.drain.point"), vector3(plane["normal"], f"{at}.drain.normal")
+                if not abs(normal @ u["direction"]) > 1e-6 * np.linalg.norm(normal):
+                    raise InputError(f"{at}.drain.normal: the drain plane must cross the joint's direction "
+                                     f"{list(u['direction'])} (its normal is perpendicular to it)")
+                u["drain"] = float((point - u["origin"]) @ normal / (normal @ u["direction"]))
+                if not u["drain"] > 0:
+                    raise InputError(f"{at}.drain: the drain plane crosses the joint at {u['drain']:g} from the heel, "
+                                     "not downstream of it")
+            else:
+                u["drain"] = real(spec["drain"], f"{at}.drain", gt=0)
+            if not u["drain"] < u["length"]:
+                raise InputError(f"{at}.drain: the drain line at {u['drain']:g} from the heel must lie within "
+                                 f"the joint (0 < drain < length = {u['length']:g})")
+            if "drain_efficiency" not in spec:
+                raise InputError(f"{at}.drain_efficiency: required with a drain line (USACE and FERC "
+                                 "credit at most 0.5 without measurements)")
+            u["drain_efficiency"] = real(spec["drain_efficiency"], f"{at}.drain_efficiency", ge=0)
+            if u["drain_efficiency"] > 1:
+                raise InputError(f"{at}.drain_efficiency: must be in [0, 1], got {u['drain_efficiency']:g}")
+        elif "drain_efficiency" in spec:
+            raise InputError(f"{at}.drain_efficiency: given without a drain line (key drain)")
+    if "unit_weight" in spec:
+        u["unit_weight"] = real(spec["unit_weight"], f"{at}.unit_weight", ge=0)
+    if "level" in spec:
+        u["level"] = real(spec["level"], f"{at}.level")
+    axis = spec.get("axis", None)
+    if axis is not None and (not isinstance(axis, str) or axis not in COMPONENTS):
+        raise InputError(f"{at}.axis: expected x, y or z (the upward axis), got {axis!r}")
+    if axis is not None:
+        u["axis"] = COMPONENTS[axis]
+    u["penetration"] = boolean(spec.get("penetration", False), f"{at}.penetration")
+    u["threshold"] = real(spec.get("threshold", 0.0), f"{at}.threshold")
+    u["time"] = time_spec(spec.get("time"), f"{at}.time", ("constant", "sudden"), base_dir)
+    return u
+
+
+def _uplift_loads(couples, loads):
+    """Settles the couples' uplift keys left to the hydrostatic load (the reservoir's level, unit
+    weight and upward axis, when the scene has one such load or several that agree; the heel's
+    head = level - the heel's height) and returns the uplift loads: one per surface of each side."""
+    hyd = [l for l in loads if l.kind == "hydrostatic"]
+    out = []
+    for i, c in enumerate(couples):
+        u = c.uplift
+        if u is None:
+            continue
+        at = u["where"]
+        for key, attr in (("level", "level"), ("unit_weight", "unit_weight"), ("axis", "axis")):
+            if key in u:
+                continue
+            values = sorted({getattr(l, attr) for l in hyd})
+            needed = (u["table"] is None or u["penetration"]) if key == "unit_weight" else \
+                u["penetration"] or (key == "level" and u["table"] is None and "heel_head" not in u)
+            if len(values) == 1:
+                u[key] = values[0]
+            elif key == "axis":
+                u[key] = 2
+            elif needed:
+                why = "no hydrostatic load" if not values else f"hydrostatic loads at several {key}s ({', '.join(f'{v:g}' for v in values)})"
+                raise InputError(f"{at}.{key}: required (the scene has {why} to take it from)")
+            else:
+                u[key] = 0.0
+        if u["table"] is None and "heel_head" not in u:
+            u["heel_head"] = max(u["level"] - u["origin"][u["axis"]], 0.0)
+            if u["tail_head"] > u["heel_head"]:
+                raise InputError(f"{at}.tail_head: {u['tail_head']:g} is above the heel's head {u['heel_head']:g} "
+                                 f"(level {u['level']:g} minus the heel's height {u['origin'][u['axis']]:g})")
+        for side, names in enumerate((c.master, c.slave)):
+            for name in names:
+                out.append(Load("uplift", np.zeros(3), 0.0, name, [], u["time"], couple=i, side=side,
+                                where=f"{at} on surface {name}"))
+    return out
 
 
 def _dirichlet(spec, where, base_dir=".", bodies=()):

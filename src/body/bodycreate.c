@@ -216,6 +216,8 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   PetscCall(MBCBodyRigidModesDestroy(b));
   PetscCall(MatDestroy(&b->K));
   PetscCall(MatDestroy(&b->M));
+  PetscCall(MatDestroy(&b->Kbc));
+  PetscCall(MatDestroy(&b->Mbc));
   PetscCall(MatDestroy(&b->Cb));
   PetscCall(MatDestroy(&b->Cin));
   PetscCall(VecDestroy(&b->envelope));

@@ -77,6 +77,13 @@ static PetscErrorCode BodyAssembleLoad(MBCBody body, MBCLoadDesc *load, Vec F)
     PetscCall(MBCBodyAssembleHydrostatic(body, load, F));
     PetscFunctionReturn(0);
   }
+  if (load->kind == MBC_LOAD_UPLIFT) { /* the dry joint; the solver updates it with the wet lengths (solveruplift.c) */
+    PetscReal r[4], *w;
+    PetscCall(PetscCalloc1(body->scene->couples[load->couple].uplift.nzones, &w));
+    PetscCall(MBCBodyAssembleUplift(body, load, w, F, r));
+    PetscCall(PetscFree(w));
+    PetscFunctionReturn(0);
+  }
   if (load->kind == MBC_LOAD_NODAL_FORCE || load->kind == MBC_LOAD_LINE_FORCE) {
     PetscCall(BodyAssembleNodalLoad(body, load, F));
     PetscFunctionReturn(0);
@@ -118,7 +125,7 @@ PetscErrorCode MBCBodyAssembleLoads(MBCBody body)
       applies = PETSC_FALSE;
       for (PetscInt k = 0; k < load->nnodes && !applies; k++) applies = (PetscBool)(load->nodes[2 * k] == body->index);
     }
-    if (applies && body->desc.rigid && (load->kind == MBC_LOAD_PRESSURE || load->kind == MBC_LOAD_TRACTION || load->kind == MBC_LOAD_HYDROSTATIC) && body->surface)
+    if (applies && body->desc.rigid && (load->kind == MBC_LOAD_PRESSURE || load->kind == MBC_LOAD_TRACTION || load->kind == MBC_LOAD_HYDROSTATIC || load->kind == MBC_LOAD_UPLIFT) && body->surface)
       SETERRQ(body->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: load %" PetscInt_FMT " (%s) acts on the rigid surface '%s', which has no faces of its own: load it by nodal forces", scene->filename, l, MBCLoadKinds[load->kind], body->name);
     if (applies && load->kind == MBC_LOAD_GROUND_ACCELERATION) applies = (PetscBool)(!body->scene->absolute || body->Cin); /* absolute motion: through the input surfaces only */
     if (!applies) continue;

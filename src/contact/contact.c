@@ -43,11 +43,18 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
   PetscCall(PetscOptionsReal("-mbc_contact_margin", "Box enlargement and re-search distance (0: one cell edge)", "MBCContactSetFromOptions", c->margin, &c->margin, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_extension", "Fraction of its edge by which a slave face reaches beyond the slave surface's free boundary", "MBCContactSetFromOptions", c->extension, &c->extension, NULL));
   PetscCall(PetscOptionsReal("-mbc_contact_hysteresis", "A master node keeps the slave face of the pairs H was built for while its projection lies on that face or within this fraction of an edge beyond it, the two faces on one smooth surface (0: the best face at every search)", "MBCContactSetFromOptions", c->hysteresis, &c->hysteresis, NULL));
-  {
+  { /* given, it sets every couple (a run against the other kind without editing the scene);
+       else each couple's `sliding` key decides, finite where it has none */
     const char *const slidings[] = {"finite", "small", "MBCContactSliding", "", NULL};
-    PetscInt          sliding    = c->small_sliding;
-    PetscCall(PetscOptionsEList("-mbc_contact_sliding", "finite: a search at every step; small: the pairs, weights and frames of a search kept, the gaps moved by the motion since (until a new stage, step size or -mbc_contact_slide_repair)", "MBCContactSetFromOptions", slidings, 2, slidings[sliding], &sliding, NULL));
-    c->small_sliding = (PetscBool)(sliding == 1);
+    PetscInt          sliding    = 0;
+    PetscBool         set;
+    PetscCall(PetscOptionsEList("-mbc_contact_sliding", "Every couple's sliding, over the scene's `sliding` keys. finite: a search at every step; small: the pairs, weights and frames of a search kept, the gaps moved by the motion since (until a new stage, step size or -mbc_contact_slide_repair)", "MBCContactSetFromOptions", slidings, 2, slidings[sliding], &sliding, &set));
+    c->small_sliding = PETSC_FALSE;
+    for (PetscInt i = 0; i < c->ncouples; i++) {
+      const PetscInt key = c->scene->couples[i].sliding;
+      c->couples[i].small_sliding = (PetscBool)(set ? sliding == 1 : key == 1);
+      c->small_sliding            = (PetscBool)(c->small_sliding || c->couples[i].small_sliding);
+    }
   }
   PetscCall(PetscOptionsReal("-mbc_contact_slide_limit", "Small sliding: a point that slid more than this fraction of its slave face's shortest edge since its pairs were fixed is reported", "MBCContactSetFromOptions", c->slide_limit, &c->slide_limit, NULL));
   PetscCall(PetscOptionsBool("-mbc_contact_slide_repair", "Small sliding: search again when a point slid beyond -mbc_contact_slide_limit, instead of reporting it", "MBCContactSetFromOptions", c->slide_repair, &c->slide_repair, NULL));
@@ -478,26 +485,35 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
 {
   PetscReal *rec = NULL, moved = 0;
   PetscInt   nrec = 0;
-  PetscBool  global;
+  PetscBool  global, keep = PETSC_FALSE; /* keep: the small-sliding couples' references hold */
 
   PetscFunctionBegin;
   if (!c->reference_done) PetscCall(ContactReference(c, nbodies, bodies));
-  PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
-  if (c->small_sliding && c->frozen && !force) {
-    PetscBool repair;
-    for (PetscInt i = 0; i < c->ncouples; i++) {
-      PetscCall(SurfaceFromRecords(&c->couples[i].master, rec, nrec, i, 0));
-      PetscCall(SurfaceFromRecords(&c->couples[i].slave, rec, nrec, i, 1));
+  if (c->small_sliding && c->frozen && !force) { /* the small-sliding couples' gaps moved; the others searched below */
+    PetscBool repair, finite = PETSC_FALSE, done = PETSC_FALSE;
+    for (PetscInt i = 0; i < c->ncouples; i++) finite = (PetscBool)(finite || !c->couples[i].small_sliding);
+    if (!finite) PetscCall(MBCContactSlidingGather(c, nbodies, bodies, &done));
+    if (!done) {
+      PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
+      for (PetscInt i = 0; i < c->ncouples; i++) {
+        if (!c->couples[i].small_sliding) continue;
+        PetscCall(SurfaceFromRecords(&c->couples[i].master, rec, nrec, i, 0));
+        PetscCall(SurfaceFromRecords(&c->couples[i].slave, rec, nrec, i, 1));
+      }
     }
     PetscCall(MBCContactSlidingUpdate(c, &repair));
-    if (!repair) {
+    if (!repair && !finite) {
       PetscCall(PetscFree(rec));
       if (researched) *researched = PETSC_FALSE;
       if (c->dump[0]) PetscCall(MBCContactDump(c));
       PetscFunctionReturn(0);
     }
+    keep = (PetscBool)!repair;
   }
-  global = (PetscBool)(force || c->nsearches == 0 || c->small_sliding); /* small sliding: every search global, so that a restart's replay of the last one restores its reference */
+  if (!rec) PetscCall(ContactGather(c, nbodies, bodies, PETSC_FALSE, &rec, &nrec));
+  /* a search of small-sliding couples is global (a restart's replay of the last global search
+     restores their reference); a global search takes them along (so the last one is their reference) */
+  global = (PetscBool)(force || c->nsearches == 0 || (c->small_sliding && !keep));
   for (PetscInt b = 0; b < nbodies && !global; b++) { /* largest displacement since the last search */
     PetscReal d = 0;
     if (!bodies[b] || !bodies[b]->u || !c->usearch[b]) continue;
@@ -510,9 +526,11 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPIU_REAL, MPI_MAX, c->comm));
     for (PetscInt i = 0; i < c->ncouples; i++) margin = PetscMin(margin, c->couples[i].margin);
     global = (PetscBool)(moved > 0.5 * margin);
+    if (global) keep = PETSC_FALSE;
   }
   for (PetscInt i = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
+    if (keep && cp->small_sliding) continue;
     PetscCall(SurfaceFromRecords(&cp->master, rec, nrec, i, 0));
     PetscCall(SurfaceFromRecords(&cp->slave, rec, nrec, i, 1));
     PetscCheck(cp->master.nfaces > 0 && cp->slave.nfaces > 0, c->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: couple k = %" PetscInt_FMT " has no %s faces (surfaces %s); every couple needs master (+k) and slave (-k) faces", c->scene->filename, cp->k, cp->master.nfaces ? "slave" : "master", cp->master.nfaces ? c->scene->couples[i].slave : c->scene->couples[i].master);
@@ -538,7 +556,7 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
       PetscCall(VecCopy(bodies[b]->u, c->usearch[b]));
     }
   }
-  if (c->small_sliding) PetscCall(MBCContactSlidingFreeze(c));
+  if (c->small_sliding && !keep) PetscCall(MBCContactSlidingFreeze(c));
   if (researched) *researched = global;
   if (c->dump[0]) PetscCall(MBCContactDump(c));
   PetscFunctionReturn(0);

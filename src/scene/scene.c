@@ -8,7 +8,7 @@ const char *const MBCAnalysisTypes[] = {"static", "dynamic", "modal", "MBCAnalys
 const char *const MBCMassTypes[]     = {"consistent", "lumped", "MBCMassType", "MBC_MASS_", NULL};
 const char *const MBCTimeKinds[]     = {"constant", "sudden", "table", "MBCTimeKind", "MBC_TIME_", NULL};
 const char *const MBCAbsorbingInputs[] = {"none", "outcrop", "incident", "MBCAbsorbingInput", "MBC_INPUT_", NULL};
-const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration", "nodal_force", "line_force", "MBCLoadKind", "MBC_LOAD_", NULL};
+const char *const MBCLoadKinds[]     = {"gravity", "body_force", "pressure", "traction", "hydrostatic", "ground_acceleration", "nodal_force", "line_force", "uplift", "MBCLoadKind", "MBC_LOAD_", NULL};
 
 typedef struct {
   const char *file;
@@ -289,6 +289,60 @@ static PetscErrorCode ReadRealDataset(H5Node *entry, const char *name, PetscInt 
   PetscCheck(rows * cols == 0 || H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, *values) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Scene file %s: cannot read %s/%s", entry->file, entry->path, name);
   H5Dclose(dset);
   for (PetscInt i = 0; i < rows * cols; i++) PetscCheck(!PetscIsInfOrNanReal((*values)[i]) && PetscAbsReal((*values)[i]) <= 1e100, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: %s/%s[%" PetscInt_FMT "] is %g (not finite, or beyond 1e100)", entry->file, entry->path, name, i, (double)(*values)[i]);
+  PetscFunctionReturn(0);
+}
+
+/* The optional uplift of a couple (attributes uplift_*, dataset uplift_table; docs/scene-h5.md):
+   the prep validated it, the checks here catch a file made otherwise. */
+static PetscErrorCode ReadCoupleUplift(H5Node *e, MBCScene s, MBCCoupleDesc *c)
+{
+  MBCUpliftDesc *u = &c->uplift;
+  PetscInt       on = 0, pen = 0;
+  PetscReal      dn;
+
+  PetscFunctionBegin;
+  PetscCall(H5ReadInt(e, "uplift", &on, PETSC_TRUE));
+  if (!on) PetscFunctionReturn(0);
+  u->on = PETSC_TRUE;
+  PetscCall(H5ReadReals(e, "uplift_origin", 3, u->origin, PETSC_FALSE));
+  PetscCall(H5ReadReals(e, "uplift_direction", 3, u->direction, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_length", &u->length, PETSC_FALSE));
+  PetscCall(H5ReadReals(e, "uplift_lateral", 5, u->lateral, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_unit_weight", &u->unit_weight, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_heel_head", &u->heel_head, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_tail_head", &u->tail_head, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_drain", &u->drain, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_efficiency", &u->efficiency, PETSC_FALSE));
+  PetscCall(H5ReadInt(e, "uplift_penetration", &pen, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_level", &u->level, PETSC_FALSE));
+  PetscCall(H5ReadReal(e, "uplift_threshold", &u->threshold, PETSC_FALSE));
+  PetscCall(H5ReadInt(e, "uplift_axis", &u->axis, PETSC_FALSE));
+  PetscCall(H5ReadInt(e, "uplift_table_rows", &u->ntable, PETSC_FALSE));
+  u->penetration = (PetscBool)(pen != 0);
+  if (u->ntable > 0) PetscCall(ReadRealDataset(e, "uplift_table", u->ntable, 2, &u->table));
+  u->nzones = 1;
+  PetscCall(H5ReadInt(e, "uplift_zones", &u->nzones, PETSC_TRUE));
+  PetscCheck(u->nzones >= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift needs at least one zone", s->filename, c->k);
+  if (H5Lexists(e->obj, "uplift_zone_range", H5P_DEFAULT) > 0) PetscCall(ReadRealDataset(e, "uplift_zone_range", u->nzones, 2, &u->zones));
+  else { /* a file of an earlier prep: one zone, the lateral range */
+    PetscCheck(u->nzones == 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift_zone_range is missing", s->filename, c->k);
+    PetscCall(PetscMalloc1(2, &u->zones));
+    u->zones[0] = u->lateral[3], u->zones[1] = u->lateral[4];
+  }
+  PetscCall(PetscMalloc1(s->nbodies + 1, &u->zone_of_body));
+  for (PetscInt b = 0; b < s->nbodies; b++) u->zone_of_body[b] = 0;
+  if (H5Lexists(e->obj, "uplift_zone_body", H5P_DEFAULT) > 0) {
+    PetscReal *zb;
+    PetscCall(ReadRealDataset(e, "uplift_zone_body", s->nbodies, 1, &zb)); /* float64: the prep writes numbers */
+    for (PetscInt b = 0; b < s->nbodies; b++) u->zone_of_body[b] = (PetscInt)zb[b];
+    PetscCall(PetscFree(zb));
+  }
+  for (PetscInt b = 0; b < s->nbodies; b++) PetscCheck(u->zone_of_body[b] >= -1 && u->zone_of_body[b] < u->nzones, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift_zone_body names zone %" PetscInt_FMT " of %" PetscInt_FMT, s->filename, c->k, u->zone_of_body[b], u->nzones);
+  for (PetscInt z = 0; z < u->nzones; z++) PetscCheck(u->zones[2 * z] <= u->zones[2 * z + 1] && (z == 0 || u->zones[2 * z] >= u->zones[2 * z - 1] - 1e-9 * (PetscAbsReal(u->zones[2 * z - 1]) + u->length)), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": the uplift's zones must be disjoint and ascending", s->filename, c->k);
+  dn = PetscSqrtReal(PetscSqr(u->direction[0]) + PetscSqr(u->direction[1]) + PetscSqr(u->direction[2]));
+  PetscCheck(dn > 0 && u->length > 0 && u->unit_weight >= 0 && u->axis >= 0 && u->axis < 3 && u->efficiency >= 0 && u->efficiency <= 1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": uplift needs a direction, a length > 0, a unit weight >= 0, an axis 0..2 and a drain efficiency in [0, 1]", s->filename, c->k);
+  for (PetscInt d = 0; d < 3; d++) u->direction[d] /= dn;
+  for (PetscInt r = 1; r < u->ntable; r++) PetscCheck(u->table[2 * r] > u->table[2 * r - 2], PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT ": the uplift table's positions must increase", s->filename, c->k);
   PetscFunctionReturn(0);
 }
 
@@ -750,6 +804,13 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
     PetscCheck(c->mu >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: couple k = %" PetscInt_FMT " has friction coefficient mu = %g < 0", s->filename, c->k, (double)c->mu);
     PetscCall(ReadCoupleJoint(&e, s, c));
     PetscCall(ReadCoupleExclude(&e, s, c));
+    {
+      char sliding[16];
+      PetscCall(H5ReadString(&e, "sliding", sliding, sizeof(sliding), NULL, PETSC_TRUE));
+      c->sliding = !sliding[0] ? -1 : !strcmp(sliding, "small") ? 1 : !strcmp(sliding, "finite") ? 0 : -2;
+      PetscCheck(c->sliding >= -1, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: couple k = %" PetscInt_FMT " has sliding '%s'; it must be finite or small", s->filename, c->k, sliding);
+    }
+    PetscCall(ReadCoupleUplift(&e, s, c));
     PetscCall(H5NodeClose(&e));
   }
   PetscCall(H5NodeClose(&list));
@@ -808,6 +869,11 @@ static PetscErrorCode SceneRead(MBCScene s, hid_t file)
       PetscCall(H5ReadInt(&e, "axis", &l->axis, PETSC_FALSE));
       PetscCheck(l->axis >= 0 && l->axis < 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: hydrostatic load %s has axis %" PetscInt_FMT ", not 0, 1 or 2", s->filename, e.path, l->axis);
       PetscCheck(l->unit_weight >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene file %s: hydrostatic load %s has unit weight %g < 0", s->filename, e.path, (double)l->unit_weight);
+    }
+    if (l->kind == MBC_LOAD_UPLIFT) {
+      PetscCall(H5ReadInt(&e, "couple", &l->couple, PETSC_FALSE));
+      PetscCall(H5ReadInt(&e, "side", &l->side, PETSC_FALSE));
+      PetscCheck(l->surface_id >= 1 && l->couple >= 0 && l->couple < s->ncouples && s->couples[l->couple].uplift.on, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Scene file %s: uplift load %s needs a surface and a couple with an uplift", s->filename, e.path);
     }
     if (l->kind == MBC_LOAD_NODAL_FORCE || l->kind == MBC_LOAD_LINE_FORCE) {
       PetscCall(ReadNodePairs(&e, s, "nodes", &l->nnodes, &l->nodes));
@@ -961,6 +1027,9 @@ PetscErrorCode MBCSceneDestroy(MBCScene *scene)
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].slave));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree2(s->couples[i].master_faces, s->couples[i].slave_faces));
   for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].exclude));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].uplift.table));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].uplift.zones));
+  for (PetscInt i = 0; i < s->ncouples; i++) PetscCall(PetscFree(s->couples[i].uplift.zone_of_body));
   for (PetscInt i = 0; i < s->ntables; i++) PetscCall(PetscFree2(s->tables[i].t, s->tables[i].f));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].bodies));
   for (PetscInt i = 0; i < s->nloads; i++) PetscCall(PetscFree(s->loads[i].nodes));
@@ -1067,7 +1136,8 @@ PetscErrorCode MBCSceneView(MBCScene s, PetscViewer viewer)
   for (PetscInt i = 0; i < s->nsprings; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "springs %" PetscInt_FMT ": %" PetscInt_FMT " %s, stiffness (%g, %g, %g), damping (%g, %g, %g)\n", i, s->springs[i].n, s->springs[i].to ? "node to node" : "node to ground", (double)s->springs[i].k[0], (double)s->springs[i].k[1], (double)s->springs[i].k[2], (double)s->springs[i].c[0], (double)s->springs[i].c[1], (double)s->springs[i].c[2]));
   for (PetscInt i = 0; i < s->nloads; i++) {
     MBCLoadDesc *l = &s->loads[i];
-    if (l->kind == MBC_LOAD_HYDROSTATIC) PetscCall(PetscViewerASCIIPrintf(viewer, "load hydrostatic on %s: unit weight %g, level %c = %g (%s)\n", l->surface, (double)l->unit_weight, "xyz"[l->axis], (double)l->level, MBCTimeKinds[l->time]));
+    if (l->kind == MBC_LOAD_UPLIFT) PetscCall(PetscViewerASCIIPrintf(viewer, "load uplift of couple k = %" PetscInt_FMT " on %s (%s)\n", s->couples[l->couple].k, l->surface, MBCTimeKinds[l->time]));
+    else if (l->kind == MBC_LOAD_HYDROSTATIC) PetscCall(PetscViewerASCIIPrintf(viewer, "load hydrostatic on %s: unit weight %g, level %c = %g (%s)\n", l->surface, (double)l->unit_weight, "xyz"[l->axis], (double)l->level, MBCTimeKinds[l->time]));
     else PetscCall(PetscViewerASCIIPrintf(viewer, "load %s (%g, %g, %g) value %g%s%s bodies [%s] (%s)\n", MBCLoadKinds[l->kind], (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], (double)l->value, l->surface[0] ? " on " : "", l->surface, l->bodies, MBCTimeKinds[l->time]));
     if (l->kind == MBC_LOAD_GROUND_ACCELERATION) PetscCall(PetscViewerASCIIPrintf(viewer, "  ground acceleration along (%g, %g, %g): %" PetscInt_FMT " rows from t = %g to %g\n", (double)l->vector[0], (double)l->vector[1], (double)l->vector[2], s->tables[l->time_function].n, (double)s->tables[l->time_function].t[0], (double)s->tables[l->time_function].t[s->tables[l->time_function].n - 1]));
     if (l->stage) PetscCall(PetscViewerASCIIPrintf(viewer, "  from stage %" PetscInt_FMT " (%s)\n", l->stage, s->stages[l->stage].name));

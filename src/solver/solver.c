@@ -1031,6 +1031,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
       }
     } else {
       PetscCall(MBCSolverStageLog(s, 0));
+      PetscCall(MBCSolverUpliftUpdate(s)); /* the dry joints' resultants, for the initial output too */
       if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverCheckNoInitialState(s));
       if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticBegin(s));
       else PetscCall(SolverDynamicBegin(s));
@@ -1038,6 +1039,7 @@ PetscErrorCode MBCSolverStep(MBCSolver s)
   }
   if (s->step == s->stages[s->istage].step0 + s->stages[s->istage].nsteps) PetscCall(SolverStageBegin(s, s->istage + 1));
   s->step++;
+  PetscCall(MBCSolverUpliftUpdate(s)); /* the water in the joints as the last step left them open */
   if (s->analysis == MBC_ANALYSIS_STATIC) PetscCall(SolverStaticStep(s));
   else PetscCall(SolverDynamicStep(s));
   if (s->step == s->nsteps) {
@@ -1234,6 +1236,7 @@ PetscErrorCode MBCSolverDestroy(MBCSolver *solver)
   }
   if (s->monitordestroy) PetscCall((*s->monitordestroy)(&s->monitorctx));
   PetscCall(MBCSolverContactPointsFree(s));
+  PetscCall(MBCSolverUpliftDestroy(s));
 
   PetscCall(MBCInterfaceDestroy(&s->iface));
   PetscCall(MBCContactDestroy(&s->contact));

@@ -245,6 +245,16 @@ PetscErrorCode MBCSolverCheckpointWrite(MBCSolver s)
     PetscCall(PetscViewerHDF5PopGroup(v));
     PetscCall(PetscFree(tj));
   }
+  { /* the wet lengths of the joints the next step takes */
+    PetscInt         nw;
+    const PetscReal *w;
+    PetscCall(MBCSolverUpliftNext(s, &nw, &w));
+    if (nw) {
+      PetscCall(PetscViewerHDF5PushGroup(v, "/uplift"));
+      PetscCall(CheckpointArray(s, v, nw, (PetscReal *)w, "wet_length", PETSC_FALSE));
+      PetscCall(PetscViewerHDF5PopGroup(v));
+    }
+  }
   PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "num_points", PETSC_INT, &nc));
   PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "num_multipliers", PETSC_INT, &m));
   PetscCall(PetscViewerDestroy(&v));
@@ -409,6 +419,18 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
     PetscCall(PetscViewerHDF5PopGroup(v));
     PetscCall(MBCInterfaceJointSetState(s->iface, nj, tj));
     PetscCall(PetscFree(tj));
+  }
+  PetscCall(PetscViewerHDF5HasDataset(v, "/uplift/wet_length", &has));
+  if (has) {
+    PetscInt   nw = 0;
+    PetscReal *w;
+    for (PetscInt i = 0; i < s->scene->ncouples; i++) nw += s->scene->couples[i].uplift.on ? s->scene->couples[i].uplift.nzones : 0;
+    PetscCall(PetscMalloc1(nw + 1, &w));
+    PetscCall(PetscViewerHDF5PushGroup(v, "/uplift"));
+    PetscCall(CheckpointArray(s, v, nw, w, "wet_length", PETSC_TRUE));
+    PetscCall(PetscViewerHDF5PopGroup(v));
+    PetscCall(MBCSolverUpliftRestore(s, nw, w));
+    PetscCall(PetscFree(w));
   }
   PetscCall(PetscViewerDestroy(&v));
   if (s->monitor) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g restarted from %s (stage %" PetscInt_FMT ")\n", s->step, (double)s->time, file, s->istage));

@@ -53,17 +53,22 @@ PetscErrorCode MBCSolverStepRHS(MBCBody body, MBCTimeCoefficients c, Vec fc)
   PetscFunctionBegin;
   PetscCall(VecCopy(body->f, body->rhs));
   if (c.cf != 0) PetscCall(VecAXPY(body->rhs, c.cf, body->fold));
-  PetscCall(MatMult(body->K, body->u, body->work));
-  PetscCall(VecAXPY(body->rhs, -(1 + c.cf), body->work));
-  PetscCall(VecAXPBY(body->work2, c.a2 * (1 - c.am) / (1 - c.af), 0.0, body->v)); /* work2 = ((1 - am)(a2 v + a3 a) - am a) / (1 - af) */
+  /* the vectors summed before the products: rhs += K (cK y - (1 + cf) u) + M (w + cM y) + Cb y with
+     w = ((1 - am)(a2 v + a3 a) - am a) / (1 - af) and y = (a4 - cf) v + a5 a (Rayleigh's C =
+     cM M + cK K + the dashpots' Cb): two products with the body's matrices a step, not four */
+  PetscCall(VecAXPBY(body->work2, c.a2 * (1 - c.am) / (1 - c.af), 0.0, body->v));
   PetscCall(VecAXPY(body->work2, (c.a3 * (1 - c.am) - c.am) / (1 - c.af), body->a));
-  PetscCall(MatMult(body->M, body->work2, body->work));
-  PetscCall(VecAXPY(body->rhs, 1.0, body->work));
+  PetscCall(VecSet(body->work, 0.0));
   if (MBCBodyDamped(body)) {
-    PetscCall(VecAXPBY(body->work2, c.a4 - c.cf, 0.0, body->v));
-    PetscCall(VecAXPY(body->work2, c.a5, body->a));
-    PetscCall(MBCBodyAddDamping(body, 1.0, body->work2, body->rhs));
+    PetscCall(VecAXPBY(body->work, c.a4 - c.cf, 0.0, body->v));
+    PetscCall(VecAXPY(body->work, c.a5, body->a));
+    if (body->Cb) PetscCall(MatMultAdd(body->Cb, body->work, body->rhs, body->rhs));
+    if (body->cM != 0) PetscCall(VecAXPY(body->work2, body->cM, body->work));
+    PetscCall(VecScale(body->work, body->cK));
   }
+  PetscCall(VecAXPY(body->work, -(1 + c.cf), body->u));
+  PetscCall(MatMultAdd(body->K, body->work, body->rhs, body->rhs));
+  PetscCall(MatMultAdd(body->M, body->work2, body->rhs, body->rhs));
   if (fc && c.cf != 0) PetscCall(VecAXPY(body->rhs, c.cf, fc));
   PetscFunctionReturn(0);
 }

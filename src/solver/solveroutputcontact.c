@@ -22,7 +22,7 @@ PetscErrorCode MBCSolverOutputContactOpen(MBCSolver s)
   if (rank) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(file, sizeof(file), "%s_contact.csv", s->output));
   PetscCall(MBCFileOpenWrite(file, &s->contact_csv));
-  fprintf(s->contact_csv, "t,couple,points,separated,stick,slip,normal_force,fx,fy,fz,max_slip,max_opening%s\n", MBCInterfaceHasJoints(s->iface) ? ",bonded" : ""); /* bonded couples: the points whose bond holds */
+  fprintf(s->contact_csv, "t,couple,points,separated,stick,slip,normal_force,fx,fy,fz,max_slip,max_opening,uplift,uplift_x,uplift_y,uplift_z,wet_length%s\n", MBCInterfaceHasJoints(s->iface) ? ",bonded" : ""); /* bonded couples: the points whose bond holds */
   PetscFunctionReturn(0);
 }
 
@@ -68,7 +68,7 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
   for (PetscInt i = 0, k = 0; i < c->ncouples; i++) {
     MBCCouple *cp = &c->couples[i];
     PetscReal  sum[5] = {0, 0, 0, 0, 0}; /* -, the three states, normal force */
-    PetscReal  f[3]   = {0, 0, 0}, maxslip = 0, maxopen = 0;
+    PetscReal  f[3]   = {0, 0, 0}, maxslip = 0, maxopen = 0, up[5];
     PetscInt   kfirst = k;
     PetscInt   nbonded = 0;
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
@@ -104,7 +104,9 @@ PetscErrorCode MBCSolverOutputContactStep(MBCSolver s, PetscBool fields)
       sum[4] += z[0];
     }
     if (cp->mu == 0) maxslip = NAN; /* frictionless: the tangential motion is not tracked */
-    if (s->contact_csv) fprintf(s->contact_csv, "%.17g,%" PetscInt_FMT ",%" PetscInt_FMT ",%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", (double)s->time, cp->k, k - kfirst, (int)sum[1], (int)sum[2], (int)sum[3], (double)sum[4], (double)f[0], (double)f[1], (double)f[2], (double)maxslip, (double)maxopen);
+    for (PetscInt j = 0; j < s->scene->ncouples; j++) /* the uplift on its faces (solveruplift.c) */
+      if (s->scene->couples[j].k == cp->k) PetscCall(MBCSolverUpliftResultant(s, j, up));
+    if (s->contact_csv) fprintf(s->contact_csv, "%.17g,%" PetscInt_FMT ",%" PetscInt_FMT ",%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", (double)s->time, cp->k, k - kfirst, (int)sum[1], (int)sum[2], (int)sum[3], (double)sum[4], (double)f[0], (double)f[1], (double)f[2], (double)maxslip, (double)maxopen, (double)up[0], (double)up[1], (double)up[2], (double)up[3], (double)up[4]);
     if (s->contact_csv && joints) fprintf(s->contact_csv, ",%d", (int)nbonded);
     if (s->contact_csv) fprintf(s->contact_csv, "\n");
   }

@@ -91,16 +91,7 @@ static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, const PetscReal lam[
   MBCBody body = s->bodies[b];
 
   PetscFunctionBegin;
-  PetscCall(MatMult(body->K, body->u, r));
-  if (s->analysis == MBC_ANALYSIS_DYNAMIC) {
-    PetscCall(MatMultAdd(body->M, body->a, r, r));
-    if (body->cM != 0 || body->cK != 0) {
-      PetscCall(MatMult(body->M, body->v, body->work));
-      PetscCall(VecAXPY(r, body->cM, body->work));
-      PetscCall(MatMult(body->K, body->v, body->work));
-      PetscCall(VecAXPY(r, body->cK, body->work));
-    }
-  }
+  PetscCall(MBCBodyPrescribedRowsForce(body, (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC), r));
   PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->work));
   PetscCall(VecAXPY(r, -1.0, body->work));
   if (s->iface) { /* H lambda_n+1 of the step (MBCInterfaceMultipliersToBodies) */

@@ -69,6 +69,8 @@ struct _n_MBCBody {
   Vec       fhold;        /* the reactions the absorbing surfaces carried when released: a constant load */
   Vec envelope;           /* per cell (stress layout): the largest principal stress so far [0] and its time [1] (output field envelope) */
   PetscReal cM, cK;       /* damping C = cM M + cK K (never formed) */
+  Mat Kbc, Mbc;           /* K's and M's prescribed rows bc_rows (MBCBodyPrescribedRowsForce; NULL until used) */
+  const PetscInt *bcrows_of; /* the bc_rows they were taken for */
   Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
   KSP ksp;
   KSP kspcut[MBC_MAX_CUTS]; /* dynamic: the factor of each step size dt / 2^level used (solver.c) */
@@ -133,11 +135,16 @@ PETSC_INTERN PetscErrorCode MBCBodyPrescribedIncrement(MBCBody, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode MBCBodySetConstrainedRows(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyConstrainedSolve(MBCBody, KSP, PetscReal, PetscReal, Vec, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyApplyInverse(MBCBody, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyPrescribedRowsForce(MBCBody, PetscBool, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyComputeStress(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyRigidModes(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyRigidModesDestroy(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyZeroHeldRows(MBCBody, Vec, Mat);
+/* bodyuplift.c: a couple's uplift on its faces */
+PETSC_INTERN PetscReal      MBCUpliftPressure(const MBCUpliftDesc *, const PetscReal[], const PetscReal[3]);
+PETSC_INTERN PetscErrorCode MBCBodyAssembleUplift(MBCBody, MBCLoadDesc *, const PetscReal[], Vec, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCBodyUpliftUpdate(MBCBody, const PetscReal[], const PetscInt[], PetscReal[]);
 /* seismic loads and boundaries (bodysurface.c, bodyaddedmass.c, bodyabsorbing.c) */
 typedef PetscErrorCode (*MBCFaceWeights)(PetscInt, const PetscReal[4][3], void *, PetscReal[4]);
 PETSC_INTERN PetscErrorCode MBCBodySurfaceBlocks(MBCBody, PetscInt, MBCFaceWeights, void *, PetscReal, PetscReal, Mat);

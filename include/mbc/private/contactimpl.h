@@ -97,7 +97,8 @@ typedef struct {
      the whole run (a strain-free adjustment of the initial geometry); NULL without the option */
   PetscReal *g0n, *g0i;
   PetscInt   nexclude, *exclude; /* master nodes taken out of contact (the scene's `exclude`): (body, first global row), sorted */
-  /* -mbc_contact_sliding small (contactsliding.c): the nodes' coordinates and the points' gaps at
+  PetscBool  small_sliding; /* the scene's `sliding: small` (or -mbc_contact_sliding small for every couple) */
+  /* small sliding (contactsliding.c): the nodes' coordinates and the points' gaps at
      the search the pairs were fixed at, and per point the slide beyond which it is reported */
   PetscReal *xref_m, *xref_s, *gref, *igref, *slide_max;
   PetscInt   nref_m, nref_s, nref_p;
@@ -140,10 +141,10 @@ struct _n_MBCContact {
   PetscBool  reference_done;      /* the reference-geometry pass (interference check, adjustment) is done */
   PetscBool  keep_penetration; /* -mbc_contact_keep_penetration: a dynamic step starts from max(gap, 0) */
   Vec       *usearch;       /* per body: displacement at the last global search (NULL off the body) */
-  PetscBool  small_sliding; /* -mbc_contact_sliding small: pairs, weights and frames fixed at a search, gaps linear in the motion since */
+  PetscBool  small_sliding; /* some couple slides small: pairs, weights and frames fixed at a search, gaps linear in the motion since */
   PetscReal  slide_limit;   /* -mbc_contact_slide_limit: a point sliding more than this fraction of its slave face's shortest edge is reported */
   PetscBool  slide_repair;  /* -mbc_contact_slide_repair: and searched again instead */
-  PetscBool  frozen;        /* small sliding: the references hold (else the next update searches) */
+  PetscBool  frozen;        /* small sliding: the references hold (else the next update searches those couples) */
 };
 
 PETSC_EXTERN PetscLogEvent MBC_RankWait, MBC_ContactGather, MBC_GlobalSearch, MBC_LocalSearch, MBC_ContactIntegrate;
@@ -158,6 +159,7 @@ PETSC_INTERN PetscErrorCode MBCContactSetPreferredFaces(MBCContact, PetscInt, co
 PETSC_INTERN PetscErrorCode MBCContactSetExcluded(MBCContact, PetscInt, PetscInt, const PetscInt[]);
 PETSC_INTERN PetscErrorCode MBCContactSlidingFreeze(MBCContact);
 PETSC_INTERN PetscErrorCode MBCContactSlidingUpdate(MBCContact, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCContactSlidingGather(MBCContact, PetscInt, MBCBody[], PetscBool *);
 PETSC_INTERN PetscErrorCode MBCContactSlidingReset(MBCContact);
 PETSC_INTERN PetscErrorCode MBCCoupleSlidingDestroy(MBCCouple *);
 

@@ -34,7 +34,8 @@ typedef enum {
                                   in relative motion; 2 rho c v_incident(t) on the absorbing input surfaces
                                   of a scene in absolute motion (bodyabsorbing.c) */
   MBC_LOAD_NODAL_FORCE, /* vector times a weight at each of its nodes (1: a force per node) */
-  MBC_LOAD_LINE_FORCE   /* vector times int N_i ds at each node of its lines (a force per length) */
+  MBC_LOAD_LINE_FORCE,  /* vector times int N_i ds at each node of its lines (a force per length) */
+  MBC_LOAD_UPLIFT       /* a couple's uplift on one of its surfaces (bodyuplift.c): made by the prep from the couple's `uplift` */
 } MBCLoadKind;
 PETSC_INTERN const char *const MBCLoadKinds[];
 
@@ -62,14 +63,36 @@ typedef struct {
   PetscInt  id, num_faces;
 } MBCSurfaceDesc;
 
+/* Uplift on a couple's faces (docs/scene.md, couples' `uplift`; bodyuplift.c): a pressure along s =
+   (x - origin) . direction, 0 <= s <= length, by the heel-to-toe law with a drain line or by a
+   table; with penetration the reservoir's pressure unit_weight (level - x_axis) where the joint is
+   open from the heel (s < the wet length the solver finds, solveruplift.c). */
+typedef struct {
+  PetscBool  on;
+  PetscReal  origin[3], direction[3], length; /* direction: unit */
+  PetscReal  lateral[5];         /* the joint's lateral axis t (unit) and the master faces' range along it: 0 beyond */
+  PetscInt   nzones;             /* the master bodies' ranges along t (disjoint, ascending), each with its own wet front */
+  PetscReal *zones;              /* lo, hi each */
+  PetscInt  *zone_of_body;       /* per body of the scene: the zone of its master faces (-1: none) */
+  PetscReal  unit_weight, heel_head, tail_head;
+  PetscReal  drain, efficiency;  /* the drain line's s (< 0: no drains) and efficiency in [0, 1] */
+  PetscInt   ntable;             /* > 0: pressure by the table (s, p) instead of the law */
+  PetscReal *table;
+  PetscBool  penetration;        /* water enters the open joint from the heel */
+  PetscReal  level, threshold;   /* the reservoir's level along axis; a point is open at pressure <= threshold */
+  PetscInt   axis;
+} MBCUpliftDesc;
+
 typedef struct {
   PetscInt  k;
   PetscReal mu;
+  MBCUpliftDesc uplift;
   PetscReal cohesion, tensile, mu_residual; /* the joint law (docs/dam.md): cohesion 0 = unbonded Coulomb contact */
   PetscReal softening; /* softening_displacement: the relative displacement over which the bond softens linearly (0: brittle) */
   char     *master, *slave; /* surface names joined by "," */
   PetscReal *master_faces, *slave_faces; /* per body: its faces on each side (weights of the decomposition) */
   PetscInt   nexclude, *exclude; /* master nodes taken out of contact: (body, vertex in scene order) each */
+  PetscInt   sliding; /* its `sliding`: 1 small, 0 finite, -1 not given (-mbc_contact_sliding's default) */
 } MBCCoupleDesc;
 
 typedef struct {
@@ -94,6 +117,7 @@ typedef struct {
   PetscInt    velocity_function, displacement_function; /* ground acceleration: the record's v and d tables */
   PetscInt    nnodes, *nodes; /* nodal and line forces: (body, node) each */
   PetscReal  *weights;        /* and the node's weight */
+  PetscInt    couple, side;   /* uplift: the couple's index in the scene, and 0: its master surface, 1: slave */
 } MBCLoadDesc;
 
 /* Discrete springs and dashpots (bodyspring.c): at each node, to the ground or to its partner node of

@@ -136,6 +136,16 @@ struct _n_MBCSolver {
     PetscReal *tbreak; /*   and the time it broke, NaN if it did not */
   } cpts;
 
+  /* uplift (solveruplift.c): per zone of each couple of the scene (couple i's from off[i]) the wet
+     length from the heel (w: the new ones, work), and per couple on its master side int p dA and
+     int p x dA (4 each) for a unit time factor */
+  struct {
+    PetscBool  on, set;
+    PetscBool  restored; /* wet read from a checkpoint: the first step after a restart takes it */
+    PetscInt  *off;
+    PetscReal *wet, *w, *r;
+  } uplift;
+
   /* energy bookkeeping (dynamic) */
   PetscReal work, dissipated;
   /* energy bookkeeping (dynamic): the work the step's mean contact force z takes from the bodies,
@@ -176,6 +186,11 @@ PETSC_INTERN PetscErrorCode MBCSolverOutputContactOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactStep(MBCSolver, PetscBool);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactClose(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverContactPointsFree(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftUpdate(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftResultant(MBCSolver, PetscInt, PetscReal[5]);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftDestroy(MBCSolver);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftNext(MBCSolver, PetscInt *, const PetscReal **);
+PETSC_INTERN PetscErrorCode MBCSolverUpliftRestore(MBCSolver, PetscInt, const PetscReal[]);
 PETSC_INTERN PetscErrorCode MBCSolverOutputContactXdmf(MBCSolver, FILE *, PetscInt);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver);
 PETSC_INTERN PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver);
