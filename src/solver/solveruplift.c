@@ -2,7 +2,8 @@
    couple with penetration and per zone of it (a master body's range across the direction: a
    monolith's base), the wet length from the heel, from the contact points of the last step
    (s->cpts, the same on every rank): the joint is open from the heel up to its first point along
-   the uplift's direction whose contact pressure exceeds the threshold, the water filling it
+   the uplift's direction whose contact pressure exceeds the threshold or whose bond holds (a
+   bonded couple's, docs/dam.md), the water filling it
    (Abaqus' pressure penetration from the reservoir side, along one direction: one front per
    zone). Where a wet length changed, the bodies assemble their uplift loads again (bodyuplift.c);
    their factored operators are untouched. */
@@ -34,8 +35,8 @@ static PetscBool UpliftWetLengths(MBCSolver s, PetscInt i, PetscReal w[])
       const PetscReal  sp = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
       if (z < 0) continue;
       if (w[z] < 0) w[z] = u->length;
-      if (sp < 0 || sp > u->length || !(s->cpts.pressure[k] > u->threshold)) continue;
-      w[z] = PetscMin(w[z], sp); /* closed: the water stops here */
+      if (sp < 0 || sp > u->length || !(s->cpts.pressure[k] > u->threshold || (s->cpts.bonded && s->cpts.bonded[k]))) continue;
+      w[z] = PetscMin(w[z], sp); /* closed, or bonded (a joint law's bond holds, in tension too: interfacejoint.c): the water stops here */
     }
   }
   for (PetscInt z = 0; z < u->nzones; z++) w[z] = PetscMax(w[z], 0);

@@ -512,3 +512,41 @@ def test_softening_bond_static_displacement_driven(tmp_path, nproc):
             assert np.allclose(tn, (1 - D) * C + (MU + D * (MU_R - MU)) * q["pressure"], rtol=1e-6), (q["time"], tn)
             seen.add("softening" if D.max() < 1 else "broken")
     assert seen == {"softening", "broken"}
+
+
+@pytest.mark.parametrize("bonded", [True, False])
+def test_intact_bond_keeps_the_water_out(tmp_path, bonded):
+    """Uplift with penetration (docs/scene.md, couples' uplift) on the base of the cracked-base
+    scene: the reservoir's water enters the joint from the heel up to the first point in
+    compression, or still bonded. Bonded strongly (c = 10 MPa, f_t = c/mu = 5 MPa: nothing breaks) the heel
+    holds in tension under the moment (p down to -0.9 MPa at t = 1) and the joint stays dry (wet
+    length 0 in every step); unbonded the heel opens and the water runs in (wet length > 0)."""
+    B, Hb, n = 4.0, 2.0, 32
+    p = 1.0e6
+    N = p * B
+    Tfin = N * B / 3 / (Hb / 2)
+    meshgen.boxes(str(tmp_path / "c.msh"),
+                  [dict(lo=(0, 0, -0.1), hi=(B, 1, 0), n=(n, 1, 1), name="base", cell="hex8"),
+                   dict(lo=(0, 0, 0), hi=(B, 1, Hb), n=(n, 1, 4), name="block", cell="hex8")])
+    couple = {"master": "block_zmin", "slave": "base_zmax", "mu": 2.0,  # the unbonded block, its N lowered by the uplift, holds
+              "uplift": {"origin": [0, 0, 0], "direction": [1, 0, 0], "length": B, "heel_head": 20.0,
+                         "unit_weight": 9810.0, "level": 20.0, "penetration": True}}
+    if bonded:
+        couple["cohesion"] = 10e6
+    sc = {"meshes": {"m": "c.msh"},
+          "bodies": {"base": {"mesh": "m", "regions": "base", "material": {"E": 1e9, "nu": 0.0}},
+                     "block": {"mesh": "m", "regions": "block", "material": {"E": 1e12, "nu": 0.0}}},
+          "couples": [couple],
+          "dirichlet": [{"surface": "base_zmin", "components": "all"}],
+          "loads": [{"kind": "pressure", "surface": "block_zmax", "value": p},
+                    {"kind": "traction", "surface": "block_xmin", "vector": [Tfin / Hb, 0, 0], "time": {"table": [[0, 0], [1, 1]]}}],
+          "analysis": {"type": "static", "dt": 0.1, "final_time": 1.0}}
+    h5 = prep(tmp_path, sc)
+    solve(h5, "-mbc_multiplier_rtol", "1e-10")
+    wet = read_csv(result(h5, "_contact.csv"))["wet_length"]
+    q = read_contact(result(h5, ".h5"))
+    if bonded:
+        assert np.all(q["bonded"] == 1) and q["pressure"].min() < -0.5e6, q["pressure"].min()
+        assert np.all(wet == 0), wet
+    else:
+        assert wet[-1] > 0.5, wet
