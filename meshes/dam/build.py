@@ -28,6 +28,7 @@ thousand to millions).
                       [--added-mass] [--foundation massed|massless|radiating] [--components x|xy|xyz]
                       [--at2 X.AT2 [Y.AT2 [Z.AT2]]] [--sliding small|finite] [--binary] [--lift-joints N | --lift-heights Z ...]
                       [--uplift [--tail-water 0] [--drains 0.05] [--drain-efficiency 0.5] [--no-penetration]]
+                      [--cohesion-base C [--tensile-base T]] [--cohesion-lift C [--tensile-lift T]] [--mu-residual M] [--softening D]
 
 writes dam.msh, dam.yaml, dam.json (parameters, W, T for report.py), ground_motion.csv when
 dynamic, and dam.h5 (mbcontact-prep); then
@@ -95,6 +96,12 @@ class Dam:
     drains: float = 0.05          # the drain line's distance from the heel / the joint's length (0: no drains)
     drain_efficiency: float = 0.5 # USACE / FERC: at most 0.5 without measurements
     penetration: bool = True      # the reservoir's water enters a joint where it opens (with uplift)
+    cohesion_base: float = 0.0    # the base's joint law (docs/dam.md, Bonded joints): cohesion (Pa; 0: unbonded)
+    tensile_base: float = None    #   its tensile strength (None: cohesion / mu_base)
+    cohesion_lift: float = 0.0    # the lift joints' cohesion (Pa; 0: unbonded)
+    tensile_lift: float = None    #   their tensile strength (None: cohesion / mu_joint)
+    mu_residual: float = None     # friction once a bond broke (None: the joint's mu)
+    softening: float = 0.0        # the bonds' softening displacement (m; 0: brittle)
     static_steps: int = 0         # static load steps (0: 1, or 12 with uplift's penetration: the water raised over the first half, then held while the wet length settles)
 
     @property
@@ -447,6 +454,13 @@ def scene(p, analysis="static", dt=0.01, ramp=1.0, eq_start=2.0, eq_duration=20.
                         "slave": [f"m{k}_lift{j}_lower" for k in range(1, n + 1)], "mu": p.mu_joint})
     for c in couples:
         c["sliding"] = p.sliding
+    for c, coh, ft in [(couples[0], p.cohesion_base, p.tensile_base)] + \
+            [(next(c for c in couples if c["k"] == lift_k(p, j)), p.cohesion_lift, p.tensile_lift) for j in range(1, len(p.lifts()) + 1)]:
+        if coh > 0:  # a bonded joint (docs/dam.md, Bonded joints)
+            c["cohesion"] = coh
+            c.update({k: v for k, v in (("tensile_strength", ft), ("mu_residual", p.mu_residual)) if v is not None})
+            if p.softening > 0:
+                c["softening_displacement"] = p.softening
     steps = p.load_steps() if analysis in ("static", "staged") else 1  # the static analysis's or stage's
     # A static analysis with water entering the joints raises the reservoir over the first half of its
     # load steps and holds it: the crack and the water in it grow together (at the full load at once
@@ -592,6 +606,12 @@ if __name__ == "__main__":
     ap.add_argument("--level", type=float, default=0.0, help="reservoir level above the base (default 0.95 height)")
     ap.add_argument("--mu-base", type=float, default=Dam.mu_base)
     ap.add_argument("--mu-joint", type=float, default=Dam.mu_joint)
+    ap.add_argument("--cohesion-base", type=float, default=0.0, help="the base bonded: its cohesion, Pa (docs/dam.md, Bonded joints)")
+    ap.add_argument("--tensile-base", type=float, default=None, help="the base's tensile strength, Pa (default cohesion / mu-base; 0 is FERC's without tests)")
+    ap.add_argument("--cohesion-lift", type=float, default=0.0, help="the lift joints bonded: their cohesion, Pa")
+    ap.add_argument("--tensile-lift", type=float, default=None, help="the lift joints' tensile strength, Pa (default cohesion / mu-joint)")
+    ap.add_argument("--mu-residual", type=float, default=None, help="friction of a broken bond (default the joint's mu)")
+    ap.add_argument("--softening", type=float, default=0.0, help="the bonds soften over this relative displacement, m (default 0: brittle)")
     ap.add_argument("--sides", choices=("normal", "all", "none"), default=Dam.sides)
     ap.add_argument("--no-floor", action="store_true", help="no water pressure on the reservoir floor")
     ap.add_argument("--dynamic", action="store_true", help="ramp the static loads, then the ground motion record")
@@ -633,7 +653,9 @@ if __name__ == "__main__":
                   mu_base=a.mu_base, mu_joint=a.mu_joint, sides=a.sides, floor=not a.no_floor, joints=a.joints, sliding=a.sliding,
                   added_mass=a.added_mass, foundation_model=a.foundation, components=a.components, at2=tuple(a.at2),
                   lift_joints=lifts, uplift=a.uplift, tail_water=a.tail_water, drains=a.drains,
-                  drain_efficiency=a.drain_efficiency, penetration=not a.no_penetration, static_steps=a.static_steps)
+                  drain_efficiency=a.drain_efficiency, penetration=not a.no_penetration, static_steps=a.static_steps,
+                  cohesion_base=a.cohesion_base, tensile_base=a.tensile_base, cohesion_lift=a.cohesion_lift,
+                  tensile_lift=a.tensile_lift, mu_residual=a.mu_residual, softening=a.softening)
     if a.h:
         params["h"] = a.h
     extra = dict(dt=0.02, eq_duration=0.0) if a.quasi_static else dict(eq_duration=a.eq_duration)
