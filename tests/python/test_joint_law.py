@@ -187,8 +187,10 @@ def test_bonded_block_pulled_separates_beyond_tensile_strength(tmp_path, nproc):
 
 
 def test_unbonded_couple_unchanged(tmp_path):
-    """Cohesion 0 (the default) is today's law: the same scene without the joint keys gives the same
-    result file datasets bitwise, and no bonded/break_time datasets nor CSV column."""
+    """Cohesion 0 (the default) takes today's path: no bonded/break_time datasets, no CSV column. (That
+    the results stay bitwise those of the code before the joint law was checked against its build on
+    a dragged block, dynamic with both multiplier types, and a static block held by friction alone:
+    every dataset of the result files and the contact CSVs equal, docs/design.md.)"""
     sc = scene(tmp_path, push=0.3 * MU * P, joint={})
     h5 = prep(tmp_path, sc)
     solve(h5)
