@@ -33,7 +33,7 @@ def final(h5file, step=-1):
     return u, read_contact(h5file, step=step)
 
 
-@pytest.mark.parametrize("nproc", [1, 2])
+@pytest.mark.parametrize("nproc", [1, 2, 4])
 def test_dam_with_joints_small_against_finite_sliding(tmp_path, nproc):
     """The small dynamic dam with joints, 75 steps of an earthquake: the search and the integration
     run at each stage's start (and once more after the first build, to take the built pairs as the
