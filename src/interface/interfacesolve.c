@@ -250,7 +250,12 @@ static PetscErrorCode InterfaceSolveJoints(MBCInterface ifc, PetscInt step, Pets
     PetscCall(MBCInterfaceJointProblem(ifc, s));
     PetscCall(MatMult(ifc->fp.W, s, ifc->ucontact));
     PetscCall(VecWAXPY(ifc->fp.q, -1.0, ifc->ucontact, q0));
-    PetscCall(VecAXPY(ifc->lambda, 1.0, s)); /* the warm start in r' */
+    { /* the warm start in r'; from no contact force at all r' = 0, so that the multiplier solve
+         starts as from scratch (the Newton type's all-stick predictor with free bodies) */
+      PetscReal lmax;
+      PetscCall(VecNorm(ifc->lambda, NORM_INFINITY, &lmax));
+      if (lmax > 0) PetscCall(VecAXPY(ifc->lambda, 1.0, s));
+    }
     PetscCall(InterfaceSolveScaled(ifc, step, time, s, qnorm));
     nsolves++;
     if (ifc->fclib_step == step && ifc->fclib_file[0]) PetscCall(InterfaceWriteFclib(ifc, step));

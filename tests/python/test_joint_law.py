@@ -552,3 +552,26 @@ def test_intact_bond_keeps_the_water_out(tmp_path, bonded):
         assert np.all(wet == 0), wet
     else:
         assert wet[-1] > 0.5, wet
+
+
+@pytest.mark.parametrize("cohesion", [0.0, 1e6], ids=["unbonded", "bonded"])
+def test_static_dam_with_a_lift_joint(tmp_path, cohesion):
+    """The builder's static dam with a lift joint at 40 m, bonded (c = 1 MPa) or not: each lift a
+    free body on the one below, every monolith held by contact only. Bonded, the multiplier solve
+    starts from r' = 0 (the warm start r + s only from a nonzero r), so the Newton type takes its
+    all-stick predictor; it stalled at a merit of 6e-2 before (every load step cut). The base
+    carries the four monoliths' weight W and the water's thrust T to 1e-6 (the builder's analytic
+    values), and a bonded lift joint stays bonded at this load."""
+    from conftest import load_script
+    dam = load_script("meshes/dam/build.py", "dam_build")
+    h5 = dam.build(tmp_path, "static", h=10.0, lift_joints=(40.0,), cohesion_lift=cohesion, quiet=True)
+    solve(h5)
+    info = dam.build.info
+    c = read_csv(result(h5, "_contact.csv"))
+    base = c["couple"] == 1
+    n = info["params"]["monoliths"]
+    assert abs(c["fz"][base][-1] - n * info["weight"]) < 1e-6 * n * info["weight"], c["fz"][base]
+    assert abs(abs(c["fx"][base][-1]) - n * info["thrust"]) < 1e-6 * n * info["weight"], c["fx"][base]
+    lift = c["couple"] != 1
+    if cohesion:
+        assert np.all(c["bonded"][lift] == c["points"][lift]), (c["bonded"][lift], c["points"][lift])

@@ -34,6 +34,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
   PetscScalar        *pv;
   PetscReal           s2 = 0, gn2 = 0;
   PetscBool           slip = PETSC_FALSE;
+  const PetscBool     closed = (PetscBool)(stick && nt->closeall);
 
   PetscFunctionBegin;
   PetscCall(VecGetArrayRead(r, &rv));
@@ -46,7 +47,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
     for (PetscInt d = 0; d < dim; d++) R[d] = PetscRealPart(rv[o + d]), U[d] = PetscRealPart(uv[o + d]);
     xn = R[0] - rn * U[0];
     if (jac) nt->sticks[i] = PETSC_FALSE, nt->nu[2 * i] = nt->nu[2 * i + 1] = 0;
-    if (nt->frozen[o] || xn <= 0) { /* separated (or no flexibility along the normal): r = 0 */
+    if (nt->frozen[o] || (xn <= 0 && !closed)) { /* separated (or no flexibility along the normal): r = 0 */
       for (PetscInt d = 0; d < dim; d++) P[d] = R[d], A[4 * d] = 1;
       if (jac) nt->active[i] = PETSC_FALSE;
     } else {
@@ -57,7 +58,7 @@ static PetscErrorCode ACResidual(MBCMultiplier m, Vec r, Vec u, PetscBool jac, P
         PetscReal       xt[2], nrm;
         for (PetscInt d = 1; d < 3; d++) xt[d - 1] = nt->frozen[o + d] ? 0 : R[d] - rt * U[d];
         nrm = PetscSqrtReal(xt[0] * xt[0] + xt[1] * xt[1]);
-        if ((nrm <= g || stick) && g > 0) { /* stick */
+        if ((nrm <= g || stick) && (g > 0 || (closed && mu > 0))) { /* stick */
           for (PetscInt d = 1; d < 3; d++) P[d] = rt * U[d], B[4 * d] = rt;
           if (jac) nt->sticks[i] = PETSC_TRUE;
         } else if (g == 0 || nrm == 0) { /* no friction force */
@@ -717,6 +718,7 @@ static PetscErrorCode NewtonStep(MBCMultiplier m, Vec r, PetscBool slips)
     if (failed) reason = KSP_DIVERGED_PC_FAILED;
     else PetscCall(NewtonLUSolve(nt->klu, b, x, &reason));
   }
+  nt->stepfailed = (PetscBool)(reason < 0);
   if (reason < 0) { /* a failed factorization: steepest descent on 1/2|phi|^2 instead (dr = -phi) */
     PetscCall(PetscInfo(m, "Newton matrix: %s; falling back to dr = -phi\n", KSPConvergedReasons[reason]));
     PetscCall(VecCopy(nt->phi, nt->dr));
@@ -1061,6 +1063,15 @@ static PetscErrorCode MBCMultiplierSolve_Newton(MBCMultiplier m, Vec r, Vec u)
                                        the solutions a frictional static problem can have */
       PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_TRUE, &psi, &slips));
       PetscCall(NewtonStep(m, r, PETSC_FALSE));
+      if (nt->stepfailed) { /* the contacts the free increment closes cannot hold a free body (its
+                               Newton matrix singular: a block stacked on another free block, whose
+                               increment alone opens their joint): every contact closed instead */
+        PetscCall(PetscInfo(m, "Newton predictor: its matrix singular; every contact taken as closed and sticking\n"));
+        nt->closeall = PETSC_TRUE;
+        PetscCall(ACResidual(m, r, u, PETSC_TRUE, PETSC_TRUE, &psi, &slips));
+        PetscCall(NewtonStep(m, r, PETSC_FALSE));
+        nt->closeall = PETSC_FALSE;
+      }
       PetscCall(VecAXPY(r, 1.0, nt->dr));
       if (fp->G) PetscCall(VecAXPY(fp->alpha, 1.0, nt->dalpha));
       PetscCall(MBCNewtonVelocity(m, r, u));

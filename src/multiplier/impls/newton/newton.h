@@ -13,6 +13,8 @@ typedef struct {
   PetscInt      ls_max, nonmonotone;
   PetscInt      watchdog;     /* iterations without halving the best merit before going back to it */
   PetscBool     predictor;    /* from r = 0 with equilibrium constraints, the all-stick solution as the first iterate */
+  PetscBool     closeall;     /* the predictor takes every contact closed, not only those the free increment closes */
+  PetscBool     stepfailed;   /* the last Newton step's matrix could not be factored (dr = -phi) */
   PetscReal     shift;        /* relative diagonal shift of the Newton matrix */
   PetscReal     dense_fill;   /* a Newton matrix with at least this fraction of its entries nonzero is factored dense */
   PetscReal     w_dense_fill; /* W with at least this fraction of its entries nonzero: its products through a dense copy */
