@@ -65,21 +65,30 @@ PetscInt MBCFaceQuadrature(PetscInt nv, PetscInt q, PetscReal *a, PetscReal *b, 
   }
 }
 
+/* The face of nv nodes X at (a, b): its shape functions N, the point x and the tangents xa, xb */
+void MBCFaceMap(PetscInt nv, const PetscReal X[6][3], PetscReal a, PetscReal b, PetscReal N[6], PetscReal x[3], PetscReal xa[3], PetscReal xb[3])
+{
+  PetscReal dN[6][2];
+
+  MBCFaceShape(nv, a, b, N, dN);
+  for (PetscInt c = 0; c < 3; c++) x[c] = xa[c] = xb[c] = 0;
+  for (PetscInt i = 0; i < nv; i++)
+    for (PetscInt c = 0; c < 3; c++) {
+      xa[c] += dN[i][0] * X[i][c];
+      xb[c] += dN[i][1] * X[i][c];
+      x[c] += N[i] * X[i][c];
+    }
+}
+
 /* Adds the nodal forces of the surface load on one face (nodes X, outward winding) to f:
    pressure(x) against the normal when pressure is given, else the constant traction t. */
 void MBCFaceIntegrate(PetscInt nv, const PetscReal X[6][3], PetscReal (*pressure)(const PetscReal[3], void *), void *ctx, const PetscReal t[3], PetscReal f[6][3])
 {
   const PetscInt nq = MBCFaceQuadrature(nv, 0, &(PetscReal){0}, &(PetscReal){0}, &(PetscReal){0});
   for (PetscInt q = 0; q < nq; q++) {
-    PetscReal a, b, w, N[6], dN[6][2], xa[3] = {0, 0, 0}, xb[3] = {0, 0, 0}, x[3] = {0, 0, 0}, nA[3], dA;
+    PetscReal a, b, w, N[6], xa[3], xb[3], x[3], nA[3], dA;
     (void)MBCFaceQuadrature(nv, q, &a, &b, &w);
-    MBCFaceShape(nv, a, b, N, dN);
-    for (PetscInt i = 0; i < nv; i++)
-      for (PetscInt c = 0; c < 3; c++) {
-        xa[c] += dN[i][0] * X[i][c];
-        xb[c] += dN[i][1] * X[i][c];
-        x[c] += N[i] * X[i][c];
-      }
+    MBCFaceMap(nv, X, a, b, N, x, xa, xb);
     nA[0] = xa[1] * xb[2] - xa[2] * xb[1];
     nA[1] = xa[2] * xb[0] - xa[0] * xb[2];
     nA[2] = xa[0] * xb[1] - xa[1] * xb[0];
@@ -100,8 +109,11 @@ static PetscReal ConstantPressure(const PetscReal x[3], void *ctx)
   return *(PetscReal *)ctx;
 }
 
-/* F: the nodal forces of a pressure or traction load for a unit time factor. */
-PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody body, MBCLoadDesc *load, Vec F)
+/* F = the nodal forces of the faces of surface `id` that this rank owns (each face once over the
+   ranks), face() giving each face's: its nodes pts[0 .. *n) and their forces f (zeroed; *n = 0:
+   none), from the local coordinates x. The loop of every face load (pressure and traction,
+   hydrostatic, uplift); collective on the body. */
+PetscErrorCode MBCBodyAssembleFaces(MBCBody body, PetscInt id, MBCFaceForceFn face, void *ctx, Vec F)
 {
   DM                 dm = body->dm;
   DMLabel            label;
@@ -114,12 +126,12 @@ PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody body, MBCLoadDesc *load, Vec F)
   IS                 faceIS = NULL;
   const PetscInt    *faces  = NULL, *leaves;
   PetscInt           nfaces = 0, pStart, pEnd, nleaves;
-  PetscReal          p      = load->value;
 
   PetscFunctionBegin;
   PetscCall(VecZeroEntries(F));
   PetscCall(DMGetLabel(dm, "Face Sets", &label));
-  if (label) PetscCall(DMLabelGetStratumIS(label, load->surface_id, &faceIS));
+  if (label) PetscCall(DMLabelGetStratumIS(label, id, &faceIS));
+  /* no early return for a rank without faces: the coordinates and DMLocalToGlobal() are collective */
   PetscCall(DMGetLocalSection(dm, &lsec));
   PetscCall(DMGetCoordinatesLocal(dm, &coords));
   PetscCall(DMPlexGetChart(dm, &pStart, &pEnd));
@@ -134,14 +146,12 @@ PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody body, MBCLoadDesc *load, Vec F)
   if (faceIS) PetscCall(ISGetLocalSize(faceIS, &nfaces));
   if (faceIS) PetscCall(ISGetIndices(faceIS, &faces));
   for (PetscInt fi = 0; fi < nfaces; fi++) {
-    PetscInt  pts[6], nv, nc;
-    PetscReal X[6][3], f[6][3];
+    PetscInt  pts[6], n = 0;
+    PetscReal f[6][3];
     if (PetscBTLookup(notmine, faces[fi])) continue;
-    PetscCall(MBCBodyFaceNodes(body, faces[fi], x, pts, X, &nv, &nc));
     PetscCall(PetscArrayzero(&f[0][0], 18));
-    if (load->kind == MBC_LOAD_PRESSURE) MBCFaceIntegrate(nv, (const PetscReal(*)[3])X, ConstantPressure, &p, NULL, f);
-    else MBCFaceIntegrate(nv, (const PetscReal(*)[3])X, NULL, NULL, load->vector, f);
-    for (PetscInt v = 0; v < nv; v++) {
+    PetscCall(face(body, faces[fi], x, ctx, pts, f, &n));
+    for (PetscInt v = 0; v < n; v++) {
       PetscInt off;
       PetscCall(PetscSectionGetOffset(lsec, pts[v], &off));
       for (PetscInt c = 0; c < 3; c++) fl[off + c] += f[v][c];
@@ -154,5 +164,27 @@ PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody body, MBCLoadDesc *load, Vec F)
   PetscCall(PetscBTDestroy(&notmine));
   PetscCall(DMLocalToGlobal(dm, Floc, ADD_VALUES, F));
   PetscCall(DMRestoreLocalVector(dm, &Floc));
+  PetscFunctionReturn(0);
+}
+
+/* a pressure's or traction's forces on one face */
+static PetscErrorCode FaceLoadForces(MBCBody body, PetscInt face, const PetscScalar x[], void *ctx, PetscInt pts[6], PetscReal f[6][3], PetscInt *n)
+{
+  const MBCLoadDesc *load = (const MBCLoadDesc *)ctx;
+  PetscReal          X[6][3], p = load->value;
+  PetscInt           nc;
+
+  PetscFunctionBegin;
+  PetscCall(MBCBodyFaceNodes(body, face, x, pts, X, n, &nc));
+  if (load->kind == MBC_LOAD_PRESSURE) MBCFaceIntegrate(*n, (const PetscReal(*)[3])X, ConstantPressure, &p, NULL, f);
+  else MBCFaceIntegrate(*n, (const PetscReal(*)[3])X, NULL, NULL, load->vector, f);
+  PetscFunctionReturn(0);
+}
+
+/* F: the nodal forces of a pressure or traction load for a unit time factor. */
+PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody body, MBCLoadDesc *load, Vec F)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCBodyAssembleFaces(body, load->surface_id, FaceLoadForces, load, F));
   PetscFunctionReturn(0);
 }

@@ -12,8 +12,6 @@
    tri3: the depth is linear, the wet part a polygon cut in the reference triangle, fanned into
    triangles with the edge-midpoint rule (exact: the integrand is quadratic). */
 #include <mbc/private/bodyimpl.h>
-#include <petscbt.h>
-#include <petscsf.h>
 
 #define HYD_MAX_BREAKS 4
 
@@ -119,114 +117,34 @@ static void TriHydrostatic(const PetscReal X[3][3], const PetscReal d[3], PetscR
   }
 }
 
+/* a hydrostatic load's forces on one face (its vertices: a tet10's midside nodes carry none of
+   this linear load's); none where it is dry */
+static PetscErrorCode HydrostaticForces(MBCBody body, PetscInt face, const PetscScalar x[], void *ctx, PetscInt vert[6], PetscReal f[6][3], PetscInt *n)
+{
+  const MBCLoadDesc *load = (const MBCLoadDesc *)ctx;
+  PetscInt           nv;
+  PetscReal          X[4][3], d[4], nrm[3], dmax = 0;
+  char               what[MBC_NAME_LEN + 48];
+
+  PetscFunctionBegin;
+  *n = 0;
+  PetscCall(PetscSNPrintf(what, sizeof(what), "hydrostatic load on surface '%s'", load->surface));
+  PetscCall(MBCBodyFaceCorners(body, face, x, what, vert, X, &nv, nrm));
+  for (PetscInt v = 0; v < nv; v++) {
+    d[v] = load->level - X[v][load->axis];
+    dmax = PetscMax(dmax, d[v]);
+  }
+  if (dmax <= 0) PetscFunctionReturn(0); /* dry face */
+  if (nv == 4) QuadHydrostatic((const PetscReal(*)[3])X, d, load->unit_weight, f);
+  else TriHydrostatic((const PetscReal(*)[3])X, d, load->unit_weight, f);
+  *n = nv;
+  PetscFunctionReturn(0);
+}
+
 /* F = the load vector of a hydrostatic load for a unit time factor (docs/scene.md). */
 PetscErrorCode MBCBodyAssembleHydrostatic(MBCBody body, MBCLoadDesc *load, Vec F)
 {
-  DM                 dm = body->dm, cdm;
-  DMLabel            label;
-  PetscSection       csec, lsec;
-  Vec                coords, Floc;
-  const PetscScalar *x;
-  PetscScalar       *fl;
-  PetscSF            sf;
-  PetscBT            notmine;
-  IS                 faceIS = NULL;
-  const PetscInt    *faces;
-  PetscInt           nfaces = 0, vStart, vEnd, pStart, pEnd, nleaves;
-  const PetscInt    *leaves;
-  const PetscInt     axis = load->axis;
-
   PetscFunctionBegin;
-  PetscCall(VecZeroEntries(F));
-  PetscCall(DMGetLabel(dm, "Face Sets", &label));
-  if (label) PetscCall(DMLabelGetStratumIS(label, load->surface_id, &faceIS));
-  /* no early return for a rank without wet faces: the coordinates and DMLocalToGlobal() are collective */
-  PetscCall(DMGetCoordinateDM(dm, &cdm));
-  PetscCall(DMGetLocalSection(cdm, &csec));
-  PetscCall(DMGetLocalSection(dm, &lsec));
-  PetscCall(DMGetCoordinatesLocal(dm, &coords));
-  PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
-  PetscCall(DMPlexGetChart(dm, &pStart, &pEnd));
-  PetscCall(PetscBTCreate(pEnd, &notmine)); /* points this rank does not own: leaves of the point SF */
-  PetscCall(DMGetPointSF(dm, &sf));
-  PetscCall(PetscSFGetGraph(sf, NULL, &nleaves, &leaves, NULL));
-  for (PetscInt i = 0; i < nleaves && nleaves > 0; i++) PetscCall(PetscBTSet(notmine, leaves ? leaves[i] : i));
-  PetscCall(DMGetLocalVector(dm, &Floc));
-  PetscCall(VecZeroEntries(Floc));
-  PetscCall(VecGetArray(Floc, &fl));
-  PetscCall(VecGetArrayRead(coords, &x));
-  nfaces = 0;
-  faces  = NULL;
-  if (faceIS) PetscCall(ISGetLocalSize(faceIS, &nfaces));
-  if (faceIS) PetscCall(ISGetIndices(faceIS, &faces));
-  for (PetscInt fi = 0; fi < nfaces; fi++) {
-    const PetscInt  face = faces[fi];
-    PetscInt       *closure = NULL, nclosure, nv = 0, vert[4], ns, ncv = 0;
-    const PetscInt *support;
-    PetscReal       X[4][3], d[4], f[4][3], fc[3] = {0, 0, 0}, cc[3] = {0, 0, 0}, nrm[3] = {0, 0, 0}, dmax = 0;
-
-    if (PetscBTLookup(notmine, face)) continue;
-    PetscCall(DMPlexGetTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure)); /* vertices in cyclic order */
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2)
-      if (closure[p] >= vStart && closure[p] < vEnd && nv < 4) vert[nv++] = closure[p];
-    PetscCall(DMPlexRestoreTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure));
-    PetscCheck(nv == 3 || nv == 4, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': hydrostatic load on surface '%s': face with %" PetscInt_FMT " vertices", body->name, load->surface, nv);
-    for (PetscInt v = 0; v < nv; v++) {
-      PetscInt coff;
-      PetscCall(PetscSectionGetOffset(csec, vert[v], &coff));
-      for (PetscInt c = 0; c < 3; c++) {
-        X[v][c] = PetscRealPart(x[coff + c]);
-        fc[c] += X[v][c] / nv;
-      }
-      d[v] = load->level - X[v][axis];
-      dmax = PetscMax(dmax, d[v]);
-    }
-    if (dmax <= 0) continue; /* dry face */
-    for (PetscInt v = 0; v < nv; v++) { /* Newell normal; orient it away from the support cell */
-      const PetscReal *a = X[v], *b = X[(v + 1) % nv];
-      nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
-      nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
-      nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
-    }
-    PetscCall(DMPlexGetSupportSize(dm, face, &ns));
-    PetscCall(DMPlexGetSupport(dm, face, &support));
-    PetscCheck(ns == 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': hydrostatic load on surface '%s': a face is not on the body's boundary", body->name, load->surface);
-    PetscCall(DMPlexGetTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-      PetscInt coff;
-      if (closure[p] < vStart || closure[p] >= vEnd) continue;
-      PetscCall(PetscSectionGetOffset(csec, closure[p], &coff));
-      for (PetscInt c = 0; c < 3; c++) cc[c] += PetscRealPart(x[coff + c]);
-      ncv++;
-    }
-    PetscCall(DMPlexRestoreTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-    if (nrm[0] * (fc[0] - cc[0] / ncv) + nrm[1] * (fc[1] - cc[1] / ncv) + nrm[2] * (fc[2] - cc[2] / ncv) < 0) { /* reverse: outward winding */
-      for (PetscInt i = 1, j = nv - 1; i < j; i++, j--) {
-        PetscInt  tv = vert[i];
-        PetscReal td = d[i];
-        vert[i] = vert[j], vert[j] = tv;
-        d[i] = d[j], d[j] = td;
-        for (PetscInt c = 0; c < 3; c++) {
-          PetscReal t = X[i][c];
-          X[i][c] = X[j][c], X[j][c] = t;
-        }
-      }
-    }
-    PetscCall(PetscArrayzero(&f[0][0], 12));
-    if (nv == 4) QuadHydrostatic((const PetscReal(*)[3])X, d, load->unit_weight, f);
-    else TriHydrostatic((const PetscReal(*)[3])X, d, load->unit_weight, f);
-    for (PetscInt v = 0; v < nv; v++) {
-      PetscInt off;
-      PetscCall(PetscSectionGetOffset(lsec, vert[v], &off));
-      for (PetscInt c = 0; c < 3; c++) fl[off + c] += f[v][c];
-    }
-  }
-  if (faceIS) PetscCall(ISRestoreIndices(faceIS, &faces));
-  PetscCall(ISDestroy(&faceIS));
-  PetscCall(VecRestoreArrayRead(coords, &x));
-  PetscCall(VecRestoreArray(Floc, &fl));
-  PetscCall(PetscBTDestroy(&notmine));
-  PetscCall(DMLocalToGlobal(dm, Floc, ADD_VALUES, F));
-  PetscCall(DMRestoreLocalVector(dm, &Floc));
+  PetscCall(MBCBodyAssembleFaces(body, load->surface_id, HydrostaticForces, load, F));
   PetscFunctionReturn(0);
 }

@@ -214,6 +214,53 @@ MBCCellType MBCBodyCellType(MBCBody body, PetscInt c)
   return (MBCCellType)body->celltype[c - cStart];
 }
 
+/* Winds a boundary face's nv corners pts (coordinates X) outward, away from its one cell, with
+   its Newell normal n (twice its area times the unit normal, for a flat face); what names the
+   face's surface in an error. */
+static PetscErrorCode FaceWindOutward(MBCBody body, PetscInt face, const PetscScalar x[], const char what[], PetscInt pts[], PetscReal X[][3], PetscInt nv, PetscReal n[3])
+{
+  DM              dm = body->dm;
+  PetscInt       *closure = NULL, nclosure, vStart, vEnd, ns, ncv = 0;
+  const PetscInt *support;
+  PetscReal       fc[3] = {0, 0, 0}, cc[3] = {0, 0, 0};
+
+  PetscFunctionBegin;
+  PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
+  for (PetscInt v = 0; v < nv; v++)
+    for (PetscInt c = 0; c < 3; c++) fc[c] += X[v][c] / nv;
+  for (PetscInt c = 0; c < 3; c++) n[c] = 0;
+  for (PetscInt v = 0; v < nv; v++) { /* Newell's normal */
+    const PetscReal *p = X[v], *q = X[(v + 1) % nv];
+    n[0] += (p[1] - q[1]) * (p[2] + q[2]);
+    n[1] += (p[2] - q[2]) * (p[0] + q[0]);
+    n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+  }
+  PetscCall(DMPlexGetSupportSize(dm, face, &ns));
+  PetscCall(DMPlexGetSupport(dm, face, &support));
+  PetscCheck(ns == 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': %s: a face is not on the body's boundary", body->name, what);
+  PetscCall(DMPlexGetTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
+  for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
+    PetscReal y[3];
+    if (closure[p] < vStart || closure[p] >= vEnd) continue;
+    PetscCall(MBCBodyPointCoordinates(body, closure[p], x, y));
+    for (PetscInt c = 0; c < 3; c++) cc[c] += y[c];
+    ncv++;
+  }
+  PetscCall(DMPlexRestoreTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
+  if (n[0] * (fc[0] - cc[0] / ncv) + n[1] * (fc[1] - cc[1] / ncv) + n[2] * (fc[2] - cc[2] / ncv) < 0) { /* outward winding */
+    for (PetscInt i = 1, j = nv - 1; i < j; i++, j--) {
+      PetscInt tv = pts[i];
+      pts[i] = pts[j], pts[j] = tv;
+      for (PetscInt c = 0; c < 3; c++) {
+        PetscReal t = X[i][c];
+        X[i][c] = X[j][c], X[j][c] = t;
+      }
+    }
+    for (PetscInt c = 0; c < 3; c++) n[c] = -n[c];
+  }
+  PetscFunctionReturn(0);
+}
+
 /* The nodes of face `face` (a boundary face of a volume body, or a rigid surface's cell) with the
    outward winding: its corners in cyclic order seen from outside (the support cell's centroid
    behind it), then a tri6's midside nodes of the edges (c0 c1) (c1 c2) (c2 c0); their points,
@@ -222,9 +269,8 @@ MBCCellType MBCBodyCellType(MBCBody body, PetscInt c)
 PetscErrorCode MBCBodyFaceNodes(MBCBody body, PetscInt face, const PetscScalar x[], PetscInt pts[6], PetscReal X[6][3], PetscInt *nv, PetscInt *ncorner)
 {
   DM              dm = body->dm;
-  PetscInt       *closure = NULL, nclosure, vStart, vEnd, eStart, eEnd, ne = 0, edges[3], ns;
-  const PetscInt *support;
-  PetscReal       fc[3] = {0, 0, 0}, cc[3] = {0, 0, 0}, n[3] = {0, 0, 0};
+  PetscInt       *closure = NULL, nclosure, vStart, vEnd, eStart, eEnd, ne = 0, edges[3];
+  PetscReal       n[3];
 
   PetscFunctionBegin;
   PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
@@ -238,41 +284,8 @@ PetscErrorCode MBCBodyFaceNodes(MBCBody body, PetscInt face, const PetscScalar x
   PetscCall(DMPlexRestoreTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure));
   PetscCheck(*nv == 3 || *nv == 4, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': a face with %" PetscInt_FMT " vertices", body->name, *nv);
   *ncorner = *nv;
-  for (PetscInt v = 0; v < *nv; v++) {
-    PetscCall(MBCBodyPointCoordinates(body, pts[v], x, X[v]));
-    for (PetscInt c = 0; c < 3; c++) fc[c] += X[v][c] / *nv;
-  }
-  if (!body->surface) {
-    PetscInt ncv = 0;
-    for (PetscInt v = 0; v < *nv; v++) { /* Newell's normal */
-      const PetscReal *p = X[v], *q = X[(v + 1) % *nv];
-      n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-      n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-      n[2] += (p[0] - q[0]) * (p[1] + q[1]);
-    }
-    PetscCall(DMPlexGetSupportSize(dm, face, &ns));
-    PetscCall(DMPlexGetSupport(dm, face, &support));
-    PetscCheck(ns == 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': a face of a surface is not on the body's boundary", body->name);
-    PetscCall(DMPlexGetTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-      PetscReal y[3];
-      if (closure[p] < vStart || closure[p] >= vEnd) continue;
-      PetscCall(MBCBodyPointCoordinates(body, closure[p], x, y));
-      for (PetscInt c = 0; c < 3; c++) cc[c] += y[c];
-      ncv++;
-    }
-    PetscCall(DMPlexRestoreTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-    if (n[0] * (fc[0] - cc[0] / ncv) + n[1] * (fc[1] - cc[1] / ncv) + n[2] * (fc[2] - cc[2] / ncv) < 0) { /* outward winding */
-      for (PetscInt i = 1, j = *nv - 1; i < j; i++, j--) {
-        PetscInt tv = pts[i];
-        pts[i] = pts[j], pts[j] = tv;
-        for (PetscInt c = 0; c < 3; c++) {
-          PetscReal t = X[i][c];
-          X[i][c] = X[j][c], X[j][c] = t;
-        }
-      }
-    }
-  }
+  for (PetscInt v = 0; v < *nv; v++) PetscCall(MBCBodyPointCoordinates(body, pts[v], x, X[v]));
+  if (!body->surface) PetscCall(FaceWindOutward(body, face, x, "a face of a surface", pts, X, *nv, n));
   if (ne == 3 && *nv == 3) { /* tri6: the midside nodes in the corners' order */
     for (PetscInt k = 0; k < 3; k++) {
       const PetscInt a = pts[k], b = pts[(k + 1) % 3];
@@ -321,5 +334,26 @@ PetscErrorCode MBCBodyLayoutDestroy(MBCBody body)
   }
   PetscCall(PetscFree3(body->cellvoff, body->cellv, body->celltype));
   PetscCall(PetscFree2(body->enode, body->ecoord));
+  PetscFunctionReturn(0);
+}
+
+/* A boundary face's corner vertices vert (3 or 4) wound outward, away from its one cell, their
+   coordinates X (from the local coordinates x) and the face's Newell normal n (twice its area
+   times the outward unit normal, for a flat face); what names the surface in an error. */
+PetscErrorCode MBCBodyFaceCorners(MBCBody body, PetscInt face, const PetscScalar x[], const char what[], PetscInt vert[4], PetscReal X[4][3], PetscInt *nv, PetscReal n[3])
+{
+  DM        dm = body->dm;
+  PetscInt *closure = NULL, nclosure, vStart, vEnd;
+
+  PetscFunctionBegin;
+  PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
+  *nv = 0;
+  PetscCall(DMPlexGetTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure)); /* vertices in cyclic order */
+  for (PetscInt p = 0; p < 2 * nclosure; p += 2)
+    if (closure[p] >= vStart && closure[p] < vEnd && *nv < 4) vert[(*nv)++] = closure[p];
+  PetscCall(DMPlexRestoreTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure));
+  PetscCheck(*nv == 3 || *nv == 4, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': %s: a face with %" PetscInt_FMT " vertices", body->name, what, *nv);
+  for (PetscInt v = 0; v < *nv; v++) PetscCall(MBCBodyPointCoordinates(body, vert[v], x, X[v]));
+  PetscCall(FaceWindOutward(body, face, x, what, vert, X, *nv, n));
   PetscFunctionReturn(0);
 }

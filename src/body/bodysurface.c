@@ -14,23 +14,21 @@ PetscErrorCode MBCBodySurfaceBlocks(MBCBody body, PetscInt id, MBCFaceWeights we
 {
   DM                 dm = body->dm;
   DMLabel            label;
-  PetscSection       csec, lsec;
+  PetscSection       lsec;
   Vec                coords;
   const PetscScalar *x;
   PetscSF            sf;
   PetscBT            notmine;
   IS                 faceIS = NULL;
   const PetscInt    *faces  = NULL, *leaves;
-  PetscInt           nfaces = 0, vStart, vEnd, pStart, pEnd, nleaves;
+  PetscInt           nfaces = 0, pStart, pEnd, nleaves;
 
   PetscFunctionBegin;
   PetscCall(DMGetLabel(dm, "Face Sets", &label));
   if (label) PetscCall(DMLabelGetStratumIS(label, id, &faceIS));
   if (!faceIS) PetscFunctionReturn(0);
-  PetscCall(DMGetCoordinateSection(dm, &csec));
   PetscCall(DMGetLocalSection(dm, &lsec));
   PetscCall(DMGetCoordinatesLocal(dm, &coords));
-  PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
   PetscCall(DMPlexGetChart(dm, &pStart, &pEnd));
   PetscCall(PetscBTCreate(pEnd, &notmine));
   PetscCall(DMGetPointSF(dm, &sf));
@@ -41,53 +39,13 @@ PetscErrorCode MBCBodySurfaceBlocks(MBCBody body, PetscInt id, MBCFaceWeights we
   PetscCall(ISGetIndices(faceIS, &faces));
   for (PetscInt fi = 0; fi < nfaces; fi++) {
     const PetscInt  face = faces[fi];
-    PetscInt       *closure = NULL, nclosure, nv = 0, vert[4], ns, ncv = 0;
-    const PetscInt *support;
-    PetscReal       X[4][3], fc[3] = {0, 0, 0}, cc[3] = {0, 0, 0}, n[3] = {0, 0, 0}, w[4] = {0, 0, 0, 0}, len;
+    PetscInt        nv, vert[4];
+    PetscReal       X[4][3], n[3], w[4] = {0, 0, 0, 0}, len;
+    char            what[32];
 
     if (PetscBTLookup(notmine, face)) continue;
-    PetscCall(DMPlexGetTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure)); /* vertices in cyclic order */
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2)
-      if (closure[p] >= vStart && closure[p] < vEnd && nv < 4) vert[nv++] = closure[p];
-    PetscCall(DMPlexRestoreTransitiveClosure(dm, face, PETSC_TRUE, &nclosure, &closure));
-    PetscCheck(nv == 3 || nv == 4, PETSC_COMM_SELF, PETSC_ERR_SUP, "Body '%s': surface %" PetscInt_FMT ": a face with %" PetscInt_FMT " vertices", body->name, id, nv);
-    for (PetscInt v = 0; v < nv; v++) {
-      PetscInt coff;
-      PetscCall(PetscSectionGetOffset(csec, vert[v], &coff));
-      for (PetscInt c = 0; c < 3; c++) {
-        X[v][c] = PetscRealPart(x[coff + c]);
-        fc[c] += X[v][c] / nv;
-      }
-    }
-    for (PetscInt v = 0; v < nv; v++) { /* Newell's normal */
-      const PetscReal *p = X[v], *q = X[(v + 1) % nv];
-      n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-      n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-      n[2] += (p[0] - q[0]) * (p[1] + q[1]);
-    }
-    PetscCall(DMPlexGetSupportSize(dm, face, &ns));
-    PetscCall(DMPlexGetSupport(dm, face, &support));
-    PetscCheck(ns == 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Body '%s': surface %" PetscInt_FMT ": a face is not on the body's boundary", body->name, id);
-    PetscCall(DMPlexGetTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-    for (PetscInt p = 0; p < 2 * nclosure; p += 2) {
-      PetscInt coff;
-      if (closure[p] < vStart || closure[p] >= vEnd) continue;
-      PetscCall(PetscSectionGetOffset(csec, closure[p], &coff));
-      for (PetscInt c = 0; c < 3; c++) cc[c] += PetscRealPart(x[coff + c]);
-      ncv++;
-    }
-    PetscCall(DMPlexRestoreTransitiveClosure(dm, support[0], PETSC_TRUE, &nclosure, &closure));
-    if (n[0] * (fc[0] - cc[0] / ncv) + n[1] * (fc[1] - cc[1] / ncv) + n[2] * (fc[2] - cc[2] / ncv) < 0) { /* outward winding */
-      for (PetscInt i = 1, j = nv - 1; i < j; i++, j--) {
-        PetscInt tv = vert[i];
-        vert[i] = vert[j], vert[j] = tv;
-        for (PetscInt c = 0; c < 3; c++) {
-          PetscReal t = X[i][c];
-          X[i][c] = X[j][c], X[j][c] = t;
-        }
-      }
-      for (PetscInt c = 0; c < 3; c++) n[c] = -n[c];
-    }
+    PetscCall(PetscSNPrintf(what, sizeof(what), "surface %" PetscInt_FMT, id));
+    PetscCall(MBCBodyFaceCorners(body, face, x, what, vert, X, &nv, n));
     len = PetscSqrtReal(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (!(len > 0)) continue; /* a degenerate face has no area */
     for (PetscInt c = 0; c < 3; c++) n[c] /= len;

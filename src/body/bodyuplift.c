@@ -18,8 +18,6 @@
    exactly (UpliftFace), so the two sides' meshes need not match and still carry equal and
    opposite resultants. */
 #include <mbc/private/bodyimpl.h>
-#include <petscbt.h>
-#include <petscsf.h>
 
 
 /* The law's head along s from s0 (the heel, or the wet length's end). */
@@ -156,14 +154,8 @@ static void UpliftFace(const MBCUpliftDesc *u, const PetscReal wz[], PetscInt nv
         if (area == 0) continue;
         for (PetscInt g = 0; g < 7; g++) {
           const PetscReal a = q[g][0] * A[0] + q[g][1] * B[0] + q[g][2] * D[0], b = q[g][0] * A[1] + q[g][1] * B[1] + q[g][2] * D[1];
-          PetscReal       N[6], dN[6][2], xa[3] = {0, 0, 0}, xb[3] = {0, 0, 0}, x[3] = {0, 0, 0}, nA[3], p, dA, wq;
-          MBCFaceShape(nv, a, b, N, dN);
-          for (PetscInt i = 0; i < nv; i++)
-            for (PetscInt c = 0; c < 3; c++) {
-              xa[c] += dN[i][0] * X[i][c];
-              xb[c] += dN[i][1] * X[i][c];
-              x[c] += N[i] * X[i][c];
-            }
+          PetscReal       N[6], xa[3], xb[3], x[3], nA[3], p, dA, wq;
+          MBCFaceMap(nv, X, a, b, N, x, xa, xb);
           p = UpliftPiecePressure(u, w, x, 0.5 * (brk[k] + brk[k + 1]));
           if (p == 0) continue;
           nA[0] = xa[1] * xb[2] - xa[2] * xb[1];
@@ -181,68 +173,44 @@ static void UpliftFace(const MBCUpliftDesc *u, const PetscReal wz[], PetscInt nv
   }
 }
 
+typedef struct {
+  const MBCUpliftDesc *u;
+  const PetscReal     *w;
+  PetscReal           *r;
+} UpliftCtx;
+
+/* an uplift's forces on one face: none where the face lies off the joint along or across it */
+static PetscErrorCode UpliftForces(MBCBody body, PetscInt face, const PetscScalar x[], void *ctx, PetscInt pts[6], PetscReal f[6][3], PetscInt *n)
+{
+  const UpliftCtx     *uc = (const UpliftCtx *)ctx;
+  const MBCUpliftDesc *u  = uc->u;
+  PetscInt             nv, nc;
+  PetscReal            X[6][3], smin = PETSC_MAX_REAL, smax = PETSC_MIN_REAL, ymin = PETSC_MAX_REAL, ymax = PETSC_MIN_REAL;
+
+  PetscFunctionBegin;
+  *n = 0;
+  PetscCall(MBCBodyFaceNodes(body, face, x, pts, X, &nv, &nc));
+  for (PetscInt v = 0; v < nv; v++) {
+    const PetscReal s = (X[v][0] - u->origin[0]) * u->direction[0] + (X[v][1] - u->origin[1]) * u->direction[1] + (X[v][2] - u->origin[2]) * u->direction[2];
+    const PetscReal y = (X[v][0] - u->origin[0]) * u->lateral[0] + (X[v][1] - u->origin[1]) * u->lateral[1] + (X[v][2] - u->origin[2]) * u->lateral[2];
+    smin = PetscMin(smin, s), smax = PetscMax(smax, s);
+    ymin = PetscMin(ymin, y), ymax = PetscMax(ymax, y);
+  }
+  if (smax < 0 || smin > u->length || ymax < u->lateral[3] || ymin > u->lateral[4]) PetscFunctionReturn(0);
+  UpliftFace(u, uc->w, nv, (const PetscReal(*)[3])X, nc, f, uc->r);
+  *n = nv;
+  PetscFunctionReturn(0);
+}
+
 /* F: the nodal forces of an uplift load for a unit time factor at the wet lengths w[] (per zone);
    r[4] (this rank's owned faces): int p dA and int p x dA over the load's faces. */
 PetscErrorCode MBCBodyAssembleUplift(MBCBody body, MBCLoadDesc *load, const PetscReal w[], Vec F, PetscReal r[4])
 {
-  const MBCUpliftDesc *u  = &body->scene->couples[load->couple].uplift;
-  DM                   dm = body->dm;
-  DMLabel              label;
-  PetscSection         lsec;
-  Vec                  coords, Floc;
-  const PetscScalar   *x;
-  PetscScalar         *fl;
-  PetscSF              sf;
-  PetscBT              notmine;
-  IS                   faceIS = NULL;
-  const PetscInt      *faces  = NULL, *leaves;
-  PetscInt             nfaces = 0, pStart, pEnd, nleaves;
+  UpliftCtx uc = {&body->scene->couples[load->couple].uplift, w, r};
 
   PetscFunctionBegin;
   PetscCall(PetscArrayzero(r, 4));
-  PetscCall(VecZeroEntries(F));
-  PetscCall(DMGetLabel(dm, "Face Sets", &label));
-  if (label) PetscCall(DMLabelGetStratumIS(label, load->surface_id, &faceIS));
-  PetscCall(DMGetLocalSection(dm, &lsec));
-  PetscCall(DMGetCoordinatesLocal(dm, &coords));
-  PetscCall(DMPlexGetChart(dm, &pStart, &pEnd));
-  PetscCall(PetscBTCreate(pEnd, &notmine)); /* points this rank does not own: leaves of the point SF */
-  PetscCall(DMGetPointSF(dm, &sf));
-  PetscCall(PetscSFGetGraph(sf, NULL, &nleaves, &leaves, NULL));
-  for (PetscInt i = 0; i < nleaves && nleaves > 0; i++) PetscCall(PetscBTSet(notmine, leaves ? leaves[i] : i));
-  PetscCall(DMGetLocalVector(dm, &Floc));
-  PetscCall(VecZeroEntries(Floc));
-  PetscCall(VecGetArray(Floc, &fl));
-  PetscCall(VecGetArrayRead(coords, &x));
-  if (faceIS) PetscCall(ISGetLocalSize(faceIS, &nfaces));
-  if (faceIS) PetscCall(ISGetIndices(faceIS, &faces));
-  for (PetscInt fi = 0; fi < nfaces; fi++) {
-    PetscInt  pts[6], nv, nc;
-    PetscReal X[6][3], f[6][3], smin = PETSC_MAX_REAL, smax = PETSC_MIN_REAL, ymin = PETSC_MAX_REAL, ymax = PETSC_MIN_REAL;
-    if (PetscBTLookup(notmine, faces[fi])) continue;
-    PetscCall(MBCBodyFaceNodes(body, faces[fi], x, pts, X, &nv, &nc));
-    for (PetscInt v = 0; v < nv; v++) {
-      const PetscReal s = (X[v][0] - u->origin[0]) * u->direction[0] + (X[v][1] - u->origin[1]) * u->direction[1] + (X[v][2] - u->origin[2]) * u->direction[2];
-      const PetscReal y = (X[v][0] - u->origin[0]) * u->lateral[0] + (X[v][1] - u->origin[1]) * u->lateral[1] + (X[v][2] - u->origin[2]) * u->lateral[2];
-      smin = PetscMin(smin, s), smax = PetscMax(smax, s);
-      ymin = PetscMin(ymin, y), ymax = PetscMax(ymax, y);
-    }
-    if (smax < 0 || smin > u->length || ymax < u->lateral[3] || ymin > u->lateral[4]) continue;
-    PetscCall(PetscArrayzero(&f[0][0], 18));
-    UpliftFace(u, w, nv, (const PetscReal(*)[3])X, nc, f, r);
-    for (PetscInt v = 0; v < nv; v++) {
-      PetscInt off;
-      PetscCall(PetscSectionGetOffset(lsec, pts[v], &off));
-      for (PetscInt c = 0; c < 3; c++) fl[off + c] += f[v][c];
-    }
-  }
-  if (faceIS) PetscCall(ISRestoreIndices(faceIS, &faces));
-  PetscCall(ISDestroy(&faceIS));
-  PetscCall(VecRestoreArrayRead(coords, &x));
-  PetscCall(VecRestoreArray(Floc, &fl));
-  PetscCall(PetscBTDestroy(&notmine));
-  PetscCall(DMLocalToGlobal(dm, Floc, ADD_VALUES, F));
-  PetscCall(DMRestoreLocalVector(dm, &Floc));
+  PetscCall(MBCBodyAssembleFaces(body, load->surface_id, UpliftForces, &uc, F));
   PetscFunctionReturn(0);
 }
 

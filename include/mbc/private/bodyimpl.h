@@ -120,12 +120,16 @@ PETSC_INTERN PetscErrorCode MBCBodyLayoutSetUp(MBCBody);
 PETSC_INTERN PetscInt       MBCBodyPointNode(MBCBody, PetscInt);
 PETSC_INTERN PetscErrorCode MBCBodyPointCoordinates(MBCBody, PetscInt, const PetscScalar[], PetscReal[3]);
 PETSC_INTERN MBCCellType    MBCBodyCellType(MBCBody, PetscInt);
+PETSC_INTERN PetscErrorCode MBCBodyFaceCorners(MBCBody, PetscInt, const PetscScalar[], const char[], PetscInt[4], PetscReal[4][3], PetscInt *, PetscReal[3]);
 PETSC_INTERN PetscErrorCode MBCBodyFaceNodes(MBCBody, PetscInt, const PetscScalar[], PetscInt[6], PetscReal[6][3], PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode MBCBodyNodePoint(MBCBody, PetscInt, PetscInt *);
 PETSC_INTERN PetscErrorCode MBCBodyLayoutDestroy(MBCBody);
 /* bodyfaceload.c: pressure and traction on a surface; a face's shape functions and quadrature */
 PETSC_INTERN PetscErrorCode MBCBodyAssembleFaceLoad(MBCBody, MBCLoadDesc *, Vec);
+typedef PetscErrorCode (*MBCFaceForceFn)(MBCBody, PetscInt, const PetscScalar[], void *, PetscInt[6], PetscReal[6][3], PetscInt *);
+PETSC_INTERN PetscErrorCode MBCBodyAssembleFaces(MBCBody, PetscInt, MBCFaceForceFn, void *, Vec);
 PETSC_INTERN void           MBCFaceShape(PetscInt, PetscReal, PetscReal, PetscReal[6], PetscReal[6][2]);
+PETSC_INTERN void           MBCFaceMap(PetscInt, const PetscReal[6][3], PetscReal, PetscReal, PetscReal[6], PetscReal[3], PetscReal[3], PetscReal[3]);
 PETSC_INTERN PetscInt       MBCFaceQuadrature(PetscInt, PetscInt, PetscReal *, PetscReal *, PetscReal *);
 PETSC_INTERN void           MBCFaceIntegrate(PetscInt, const PetscReal[6][3], PetscReal (*)(const PetscReal[3], void *), void *, const PetscReal[3], PetscReal[6][3]);
 PETSC_INTERN PetscErrorCode MBCBodyFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *, const char[]);
