@@ -39,7 +39,7 @@ static PetscReal UpliftLawHead(const MBCUpliftDesc *u, PetscReal s0, PetscReal s
    part or the law is the piece's, not decided by the rounding of a point's s at its border. */
 static PetscReal UpliftPiecePressure(const MBCUpliftDesc *u, PetscReal w, const PetscReal x[3], PetscReal sp)
 {
-  const PetscReal s = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
+  const PetscReal s = MBCUpliftAlong(u, u->direction, x);
 
   if (u->penetration && sp < w) return u->unit_weight * PetscMax(u->level - x[u->axis], 0);
   if (u->ntable > 0) {
@@ -57,8 +57,8 @@ static PetscReal UpliftPiecePressure(const MBCUpliftDesc *u, PetscReal w, const 
    between the zones). */
 PetscReal MBCUpliftPressure(const MBCUpliftDesc *u, const PetscReal w[], const PetscReal x[3])
 {
-  const PetscReal s = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
-  const PetscReal y = (x[0] - u->origin[0]) * u->lateral[0] + (x[1] - u->origin[1]) * u->lateral[1] + (x[2] - u->origin[2]) * u->lateral[2];
+  const PetscReal s = MBCUpliftAlong(u, u->direction, x);
+  const PetscReal y = MBCUpliftAlong(u, u->lateral, x);
 
   if (s < 0 || s > u->length) return 0;
   for (PetscInt z = 0; z < u->nzones; z++)
@@ -118,8 +118,8 @@ static void UpliftFace(const MBCUpliftDesc *u, const PetscReal wz[], PetscInt nv
     MBCFaceShape(nv, C[i][0], C[i][1], N, dN);
     for (PetscInt j = 0; j < nv; j++)
       for (PetscInt c = 0; c < 3; c++) x[c] += N[j] * X[j][c];
-    C[i][2] = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
-    C[i][3] = (x[0] - u->origin[0]) * u->lateral[0] + (x[1] - u->origin[1]) * u->lateral[1] + (x[2] - u->origin[2]) * u->lateral[2];
+    C[i][2] = MBCUpliftAlong(u, u->direction, x);
+    C[i][3] = MBCUpliftAlong(u, u->lateral, x);
     ymin = PetscMin(ymin, C[i][3]), ymax = PetscMax(ymax, C[i][3]);
   }
   for (PetscInt z = 0; z < u->nzones; z++) { /* each zone with its wet length */
@@ -191,8 +191,8 @@ static PetscErrorCode UpliftForces(MBCBody body, PetscInt face, const PetscScala
   *n = 0;
   PetscCall(MBCBodyFaceNodes(body, face, x, pts, X, &nv, &nc));
   for (PetscInt v = 0; v < nv; v++) {
-    const PetscReal s = (X[v][0] - u->origin[0]) * u->direction[0] + (X[v][1] - u->origin[1]) * u->direction[1] + (X[v][2] - u->origin[2]) * u->direction[2];
-    const PetscReal y = (X[v][0] - u->origin[0]) * u->lateral[0] + (X[v][1] - u->origin[1]) * u->lateral[1] + (X[v][2] - u->origin[2]) * u->lateral[2];
+    const PetscReal s = MBCUpliftAlong(u, u->direction, X[v]);
+    const PetscReal y = MBCUpliftAlong(u, u->lateral, X[v]);
     smin = PetscMin(smin, s), smax = PetscMax(smax, s);
     ymin = PetscMin(ymin, y), ymax = PetscMax(ymax, y);
   }

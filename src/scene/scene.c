@@ -346,8 +346,6 @@ static PetscErrorCode ReadCoupleUplift(H5Node *e, MBCScene s, MBCCoupleDesc *c)
   PetscFunctionReturn(0);
 }
 
-/* The optional dataset `exclude` of a couple: (n, 2) integers, body and vertex (scene order) of
-   each node taken out of contact (docs/scene-h5.md). */
 /* The joint law of a bonded couple (docs/dam.md): optional, cohesion 0 (absent) is today's
    unbonded contact; the prep resolves the defaults, a hand-made file gets them here. */
 static PetscErrorCode ReadCoupleJoint(H5Node *e, MBCScene s, MBCCoupleDesc *c)
@@ -374,6 +372,8 @@ static PetscErrorCode ReadCoupleJoint(H5Node *e, MBCScene s, MBCCoupleDesc *c)
   PetscFunctionReturn(0);
 }
 
+/* The optional dataset `exclude` of a couple: (n, 2) integers, body and vertex (scene order) of
+   each node taken out of contact (docs/scene-h5.md). */
 static PetscErrorCode ReadCoupleExclude(H5Node *entry, MBCScene scene, MBCCoupleDesc *c)
 {
   PetscFunctionBegin;

@@ -32,7 +32,7 @@ static PetscBool UpliftWetLengths(MBCSolver s, PetscInt i, PetscReal w[])
     for (PetscInt j = 0; j < cp->npoints; j++, k++) {
       const PetscReal *x = &s->cpts.x0[3 * k];
       const PetscInt   z = u->zone_of_body[cp->master.nbody[cp->points[j].master]];
-      const PetscReal  sp = (x[0] - u->origin[0]) * u->direction[0] + (x[1] - u->origin[1]) * u->direction[1] + (x[2] - u->origin[2]) * u->direction[2];
+      const PetscReal  sp = MBCUpliftAlong(u, u->direction, x);
       if (z < 0) continue;
       if (w[z] < 0) w[z] = u->length;
       if (sp < 0 || sp > u->length || !(s->cpts.pressure[k] > u->threshold || (s->cpts.bonded && s->cpts.bonded[k]))) continue;

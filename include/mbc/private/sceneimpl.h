@@ -83,6 +83,12 @@ typedef struct {
   PetscInt   axis;
 } MBCUpliftDesc;
 
+/* (x - origin) . axis: a point's position along the uplift's direction, or across it (lateral) */
+static inline PetscReal MBCUpliftAlong(const MBCUpliftDesc *u, const PetscReal axis[], const PetscReal x[3])
+{
+  return (x[0] - u->origin[0]) * axis[0] + (x[1] - u->origin[1]) * axis[1] + (x[2] - u->origin[2]) * axis[2];
+}
+
 typedef struct {
   PetscInt  k;
   PetscReal mu;
