@@ -21,13 +21,14 @@ dam = load_script("meshes/dam/build.py", "dam_build_kept_inverse")
 G = 9.81
 
 
-def rocking_block(tmp_path, cell, half=False):
+def rocking_block(tmp_path, cell, half=False, mu=0.8, push=0.0):
     """A 1 x 1 x 1.5 m block on a clamped base (mu 0.8, non-matching: 4 x 4 on 5 x 5), its
     weight and a top traction ramped to 8 kPa over 0.03 s, which lifts the heel: the contact goes
     from all stuck to 15 of 25 points separated, the states the reference (all stuck: the inverse
     is built after three direct steps, N = active rows) differs from. half: the base cut at the
     block's y = 0 face and both held in y there (a symmetry plane along the traction), so the
-    points on that plane have a direction without flexibility (frozen rows)."""
+    points on that plane have a direction without flexibility (frozen rows). push: gravity tilted
+    by push g along x, without the traction (the block slides on its whole base)."""
     meshgen.boxes(str(tmp_path / "rock.msh"),
                   [dict(lo=(-0.5, 0.0 if half else -0.5, -1.0), hi=(1.5, 1.5, 0.0), n=(5, 4 if half else 5, 2), name="base", cell=cell),
                    dict(lo=(0, 0, 0), hi=(1, 1, 1.5), n=(4, 4, 3), name="block", cell=cell)])
@@ -37,10 +38,10 @@ def rocking_block(tmp_path, cell, half=False):
         "bodies": {"base": {"mesh": "m", "regions": "base", "material": {"E": 1e9, "nu": 0.25, "density": 2000}},
                    "block": {"mesh": "m", "regions": "block",
                              "material": {"E": 1e9, "nu": 0.25, "density": 2000, "rayleigh_beta": 1e-3}}},
-        "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": 0.8}],
+        "couples": [{"master": "block_zmin", "slave": "base_zmax", "mu": mu}],
         "dirichlet": [{"surface": "base_zmin", "components": "all"}, *plane],
-        "loads": [{"kind": "gravity", "vector": [0, 0, -G], "time": "sudden", "bodies": ["block"]},
-                  {"kind": "traction", "surface": "block_zmax", "vector": [8000.0, 0, 0],
+        "loads": [{"kind": "gravity", "vector": [push * G, 0, -G], "time": "sudden", "bodies": ["block"]},
+                  {"kind": "traction", "surface": "block_zmax", "vector": [0.0 if push else 8000.0, 0, 0],
                    "time": {"table": [[0, 0], [0.03, 1], [1, 1]]}}],
         "analysis": {"type": "dynamic", "dt": 1e-3, "final_time": 0.06},
         "output": {"every": 5, "fields": ["displacement"]},
@@ -96,6 +97,27 @@ def test_frozen_rows_and_separated_rows_in_the_reference(tmp_path, nproc):
     assert np.abs(ca["force"] - cb["force"]).max() <= 1e-10 * np.abs(cb["force"]).max()
     plane = np.abs(ca["reference"][:, 1]) < 1e-12
     assert plane.sum() >= 3 and np.abs(ca["force"][plane, 1]).max() <= 1e-10 * np.abs(ca["force"]).max()
+
+
+@pytest.mark.parametrize("cell", ["hex8", "tet4"])
+@pytest.mark.parametrize("nproc", [1, 2])
+def test_sliding_block_two_rows_a_slipping_point(tmp_path, cell, nproc):
+    """The rocking block's scene with mu 0.2 pushed by its own weight's 0.3 g along x: after the
+    first steps (all stuck: the reference) every point slips and none lifts. A slipping point's
+    normal row is the sticking reference's, so only its two tangential rows are corrected: 2/3 of
+    the active rows differ, within -mbc_newton_lowrank_max 0.8 (with the three rows of each
+    contact counted, every such step went to the direct LU). The same answers as the direct solve
+    to 1e-10."""
+    h5 = rocking_block(tmp_path, cell, mu=0.2, push=0.3)
+    on = solve(h5, "-mbc_output", str(tmp_path / "on"), "-info", ":mbcmultiplier", nproc=nproc)
+    solve(h5, "-mbc_output", str(tmp_path / "off"), "-mbc_newton_lowrank", "0", nproc=nproc)
+    steps = [tuple(map(int, t)) for t in re.findall(r"Newton step by the kept inverse: (\d+) rows differ of (\d+) active", on.stdout)]
+    assert sum(3 * k == 2 * n for k, n in steps) >= 10, steps  # every active point slipping
+    (ua, ca), (ub, cb) = final(str(tmp_path / "on.h5"), "block"), final(str(tmp_path / "off.h5"), "block")
+    assert (ca["state"] == 2).all(), ca["state"]  # every point slipping at the end
+    assert np.array_equal(ca["state"], cb["state"])
+    assert np.abs(ua["displacement"] - ub["displacement"]).max() <= 1e-10 * np.abs(ub["displacement"]).max()
+    assert np.abs(ca["force"] - cb["force"]).max() <= 1e-10 * np.abs(cb["force"]).max()
 
 
 def shaken_dam(tmp_path):

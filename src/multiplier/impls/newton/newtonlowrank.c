@@ -30,12 +30,32 @@ static inline PetscBool NewtonRowsDiffer(const MBC_Newton *nt, PetscInt i)
 }
 
 /* the reference rows of contact i: row d is alpha . x + beta . (W x) over the contact's rows */
-static void NewtonReferenceRow(MBC_Newton *nt, PetscInt i, PetscInt o, PetscInt d, PetscReal sigma, PetscReal a[3], PetscReal b[3])
+static void NewtonReferenceRow(const MBC_Newton *nt, PetscInt i, PetscInt o, PetscInt d, PetscReal sigma, PetscReal a[3], PetscReal b[3])
 {
   for (PetscInt e = 0; e < 3; e++) a[e] = b[e] = 0;
   if (nt->refopen[i]) a[d] = 1;
   else if (nt->frozen[o + d]) a[d] = 1 + sigma;
   else a[d] = sigma, b[d] = nt->rho[2 * i + (d > 0)];
+}
+
+/* row d of contact i less its reference row: q[2 + e] on x_e, q[5 + e] on (W x)_e over the contact's
+   rows; whether they differ at all (a slipping contact's normal row is the sticking reference's) */
+static PetscBool NewtonRowDiff(const MBC_Newton *nt, PetscInt i, PetscInt o, PetscInt dim, PetscInt d, PetscReal sigma, PetscReal q[])
+{
+  PetscReal a[3], bb[3];
+  PetscBool differs = PETSC_FALSE;
+
+  NewtonReferenceRow((MBC_Newton *)nt, i, o, d, sigma, a, bb);
+  for (PetscInt e = 0; e < 3; e++) {
+    PetscReal ac = 0, bc = 0; /* the current row */
+    if (e < dim && nt->active[i]) ac = nt->A[9 * i + dim * d + e] + (d == e ? sigma : 0), bc = nt->B[9 * i + dim * d + e];
+    else if (e == d) ac = 1;
+    q[2 + e] = e < dim ? ac - a[e] : 0;
+    q[5 + e] = e < dim ? bc - bb[e] : 0;
+    if (q[2 + e] != 0 || q[5 + e] != 0) differs = PETSC_TRUE;
+  }
+  q[9] = bb[d];
+  return differs;
 }
 
 /* B: A's rows (an MPIDense N x N) in another row layout, nl rows on this rank */
@@ -677,7 +697,10 @@ static PetscErrorCode NewtonLowRankResidual(MBCMultiplier m, Vec x, Vec b, Vec r
                      open, the reference's rho (0: open or frozen, its W row is zero) */
 typedef struct {
   PetscInt      k;
-  PetscInt     *row;   /* global rows, in rank order */
+  PetscInt     *row;   /* global rows, in rank order: every row of the contacts with a row in C (U^T's
+                          rows read the whole contact's x and W x) */
+  PetscInt      kc, *c; /* the rows C, by their place in row[]: a slipping contact's normal row is the
+                          sticking reference's, so a strong phase's M is two thirds the size */
   PetscReal    *pq;    /* LR_ROW a row */
   PetscScalar  *M;     /* M = I + U^T Z E_C (column-major) */
   Mat           Mm;    /* M as a MATSEQDENSE on that array */
@@ -719,7 +742,7 @@ static PetscErrorCode WColumnsDot(Mat Wd, const LowRank *lr, Vec v, Vec wc)
   PetscFunctionReturn(0);
 }
 
-/* t = U^T v on the rows C, from v and (W v)_C, both on every rank */
+/* t = U^T v on the rows C, from v and W v on the rows row[], both on every rank */
 static PetscErrorCode LowRankApplyU(Mat Wprod, LowRank *lr, Vec v, PetscScalar t[])
 {
   const PetscScalar *a;
@@ -733,13 +756,14 @@ static PetscErrorCode LowRankApplyU(Mat Wprod, LowRank *lr, Vec v, PetscScalar t
   }
   PetscCall(VecScatterBegin(lr->gather, v, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(lr->gather, v, lr->seq, INSERT_VALUES, SCATTER_FORWARD));
-  for (PetscInt r = 0; r < lr->k; r++) t[r] = 0;
+  for (PetscInt j = 0; j < lr->kc; j++) t[j] = 0;
   for (PetscInt pass = 0; pass < 2; pass++) {
     PetscCall(VecGetArrayRead(pass ? lr->wc : lr->seq, &a));
-    for (PetscInt r = 0; r < lr->k; r++) {
+    for (PetscInt j = 0; j < lr->kc; j++) {
+      const PetscInt   r     = lr->c[j];
       const PetscReal *q     = lr->pq + LR_ROW * r;
       const PetscInt   first = r - (PetscInt)q[1];
-      for (PetscInt e = 0; e < (PetscInt)q[0]; e++) t[r] += q[2 + 3 * pass + e] * a[first + e];
+      for (PetscInt e = 0; e < (PetscInt)q[0]; e++) t[j] += q[2 + 3 * pass + e] * a[first + e];
     }
     PetscCall(VecRestoreArrayRead(pass ? lr->wc : lr->seq, &a));
   }
@@ -772,10 +796,10 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
     PetscCall(VecRestoreArrayRead(nt->zx, &sv));
     PetscCall(VecRestoreArrayRead(b, &bv));
   }
-  PetscCall(PetscBLASIntCast(lr->k, &k));
+  PetscCall(PetscBLASIntCast(lr->kc, &k));
   if (k) {
     KSPConvergedReason reason;
-    PetscCall(PetscMalloc1(lr->k, &t));
+    PetscCall(PetscMalloc1(lr->kc, &t));
     PetscCall(LowRankApplyU(nt->Wprod, lr, x, t));
     if (lr->dist) { /* t's share in, the solution gathered on every rank */
       const PetscInt *ranges;
@@ -803,7 +827,7 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
       PetscCall(KSPSolve(lr->kM, lr->tb, lr->tx));
       PetscCall(VecResetArray(lr->tb));
       PetscCall(VecGetArrayRead(lr->tx, &tv));
-      PetscCall(PetscArraycpy(t, tv, lr->k));
+      PetscCall(PetscArraycpy(t, tv, lr->kc));
       PetscCall(VecRestoreArrayRead(lr->tx, &tv));
     }
     PetscCall(KSPGetConvergedReason(lr->kM, &reason));
@@ -813,11 +837,12 @@ static PetscErrorCode NewtonLowRankApply(MBCMultiplier m, LowRank *lr, Vec b, Ve
     PetscCall(MatGetLocalSize(nt->Z, &nS, NULL));
     PetscCall(MatGetOwnershipRangeColumn(nt->Z, &rs, NULL));
     PetscCall(VecGetArray(x, &xv));
-    for (PetscInt r = 0; r < lr->k; r++) { /* Z's column row[r]: on S, and its diagonal on D */
-      const PetscScalar *zc = z + lr->row[r] * lda;
-      const PetscInt     l  = lr->row[r] - rs;
-      for (PetscInt s = 0; s < nS; s++) xv[nt->zsloc[s]] -= zc[s] * t[r];
-      if (l >= 0 && l < nl && nt->zrow[l] < 0) xv[l] -= nt->zdinv[l] * t[r];
+    for (PetscInt j = 0; j < lr->kc; j++) { /* Z's column of C's row j: on S, and its diagonal on D */
+      const PetscInt     row = lr->row[lr->c[j]];
+      const PetscScalar *zc  = z + row * lda;
+      const PetscInt     l   = row - rs;
+      for (PetscInt s = 0; s < nS; s++) xv[nt->zsloc[s]] -= zc[s] * t[j];
+      if (l >= 0 && l < nl && nt->zrow[l] < 0) xv[l] -= nt->zdinv[l] * t[j];
     }
     PetscCall(VecRestoreArray(x, &xv));
     PetscCall(MatDenseRestoreArrayRead(nt->Z, &z));
@@ -884,12 +909,13 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
   PetscCall(PetscLogEventBegin(MBC_NewtonLowRankFactor, m, 0, 0, 0));
   PetscCall(ZRowsCols(nt, lr->is, &z));
   if (nt->Wprod == fp->W) PetscCall(WRowsDense(fp->W, lr->is, &lr->Wc));
-  PetscCall(PetscMalloc1(lr->k * lr->k, &lr->M));
-  for (PetscInt c = 0; c < lr->k; c++)
-    for (PetscInt r = 0; r < lr->k; r++) {
+  PetscCall(PetscMalloc1(lr->kc * lr->kc, &lr->M));
+  for (PetscInt jc = 0; jc < lr->kc; jc++)
+    for (PetscInt jr = 0; jr < lr->kc; jr++) {
+      const PetscInt   c = lr->c[jc], r = lr->c[jr]; /* their places in row[] (Z's entries z) */
       const PetscReal *q     = lr->pq + LR_ROW * r;
       const PetscInt   first = r - (PetscInt)q[1];
-      PetscScalar      v     = r == c ? 1 : 0;
+      PetscScalar      v     = jr == jc ? 1 : 0;
       for (PetscInt e = 0; e < (PetscInt)q[0]; e++) {
         const PetscInt  p    = first + e; /* a row of the same contact */
         const PetscReal beta = q[5 + e];
@@ -903,7 +929,7 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
         } else if (lr->pq[LR_ROW * p + 9] > 0) wzpc = ((p == c ? 1 : 0) - nt->zsigma * z[c * lda + p]) / lr->pq[LR_ROW * p + 9]; /* rho_p (W Z)_p + sigma Z_p = e_p */
         v += beta * wzpc;
       }
-      lr->M[c * lr->k + r] = v;
+      lr->M[jc * lr->kc + jr] = v;
     }
   PetscCall(PetscFree(z));
   { /* M's LU in single precision, refined in double: half the time of getrf where k reaches the
@@ -914,17 +940,17 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
     PetscMPIInt    size;
     PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)m), &size));
 #if defined(PETSC_HAVE_SCALAPACK)
-    lr->dist = (PetscBool)(size > 1 && lr->k >= nt->lowrank_dist_min && strcmp(nt->densetype, MATDENSE));
+    lr->dist = (PetscBool)(size > 1 && lr->kc >= nt->lowrank_dist_min && strcmp(nt->densetype, MATDENSE));
 #endif
     if (lr->dist) {
-      PetscCall(ReplicatedToScaLAPACK(PetscObjectComm((PetscObject)m), lr->k, lr->M, &lr->Mm));
+      PetscCall(ReplicatedToScaLAPACK(PetscObjectComm((PetscObject)m), lr->kc, lr->M, &lr->Mm));
       PetscCall(KSPCreate(PetscObjectComm((PetscObject)m), &lr->kM));
       PetscCall(MatCreateVecs(lr->Mm, &lr->tx, &lr->tb));
     } else {
-      PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, lr->k, lr->k, lr->M, &lr->Mm));
+      PetscCall(MatCreateSeqDense(PETSC_COMM_SELF, lr->kc, lr->kc, lr->M, &lr->Mm));
       PetscCall(KSPCreate(PETSC_COMM_SELF, &lr->kM));
       PetscCall(MatCreateVecs(lr->Mm, &lr->tx, NULL));
-      PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, lr->k, NULL, &lr->tb));
+      PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, lr->kc, NULL, &lr->tb));
     }
     PetscCall(KSPSetType(lr->kM, KSPPREONLY));
     PetscCall(KSPGetPC(lr->kM, &pc));
@@ -944,7 +970,8 @@ static PetscErrorCode NewtonLowRankFactor(MBCMultiplier m, LowRank *lr, PetscBLA
 }
 
 /* k[0]: the rows that differ from the reference (C), k[1]: the active rows, k[2]: the rows that
-   would differ from a reference taken now (active, not sticking); over all ranks */
+   would differ from a reference taken now (the tangential rows of the active contacts not
+   sticking); over all ranks */
 static PetscErrorCode NewtonLowRankCount(MBCMultiplier m, PetscInt k[3])
 {
   MBC_Newton         *nt = (MBC_Newton *)m->data;
@@ -953,10 +980,14 @@ static PetscErrorCode NewtonLowRankCount(MBCMultiplier m, PetscInt k[3])
   PetscFunctionBegin;
   k[0] = k[1] = k[2] = 0;
   for (PetscInt i = 0; i < fp->nc; i++) {
-    const PetscInt dim = fp->off[i + 1] - fp->off[i];
+    const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
     if (nt->active[i]) k[1] += dim;
-    if (nt->active[i] && !nt->sticks[i]) k[2] += dim;
-    if (NewtonRowsDiffer(nt, i)) k[0] += dim;
+    if (nt->active[i] && !nt->sticks[i]) k[2] += dim - 1; /* its normal row sticks */
+    if (NewtonRowsDiffer(nt, i))
+      for (PetscInt d = 0; d < dim; d++) {
+        PetscReal q[LR_ROW];
+        k[0] += NewtonRowDiff(nt, i, o, dim, d, nt->zsigma, q);
+      }
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, k, 3, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)m)));
   PetscFunctionReturn(0);
@@ -1053,20 +1084,11 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
     const PetscInt o = fp->off[i], dim = fp->off[i + 1] - o;
     if (!NewtonRowsDiffer(nt, i)) continue;
     for (PetscInt d = 0; d < dim; d++, nloc++) {
-      PetscReal *q = lpq + LR_ROW * nloc, a[3], bb[3];
-      NewtonReferenceRow(nt, i, o, d, sigma, a, bb);
-      lrow[nloc] = rs + o + d;
-      q[0]       = dim;
-      q[1]       = d;
-      for (PetscInt e = 0; e < 3; e++) {
-        PetscReal ac = 0, bc = 0; /* the current row */
-        if (e < dim && nt->active[i]) ac = nt->A[9 * i + dim * d + e] + (d == e ? sigma : 0), bc = nt->B[9 * i + dim * d + e];
-        else if (e == d) ac = 1;
-        q[2 + e] = e < dim ? ac - a[e] : 0;
-        q[5 + e] = e < dim ? bc - bb[e] : 0;
-      }
-      q[8] = nt->refopen[i];
-      q[9] = bb[d];
+      PetscReal *q = lpq + LR_ROW * nloc;
+      lrow[nloc]   = NewtonRowDiff(nt, i, o, dim, d, sigma, q) ? rs + o + d : -(rs + o + d) - 1; /* < 0: not in C */
+      q[0]         = dim;
+      q[1]         = d;
+      q[8]         = nt->refopen[i];
     }
   }
   PetscCall(PetscMPIIntCast(nloc, &kl));
@@ -1076,10 +1098,15 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscCallMPI(MPI_Allgatherv(lpq, LR_ROW * kl, MPIU_REAL, lr.pq, cnt, dsp, MPIU_REAL, comm));
   PetscCall(PetscFree2(cnt, dsp));
   PetscCall(PetscFree2(lrow, lpq));
+  PetscCall(PetscMalloc1(lr.k + 1, &lr.c));
+  for (PetscInt r = 0; r < lr.k; r++) {
+    if (lr.row[r] >= 0) lr.c[lr.kc++] = r;
+    else lr.row[r] = -lr.row[r] - 1;
+  }
   PetscCall(MatCreateVecs(fp->W, &b, NULL));
   PetscCall(VecDuplicate(b, &res));
   PetscCall(VecDuplicate(b, &dx));
-  if (lr.k) {
+  if (lr.kc) {
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, lr.k, lr.row, PETSC_USE_POINTER, &lr.is));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, lr.k, &lr.seq));
     PetscCall(VecScatterCreate(b, lr.is, lr.seq, NULL, &lr.gather));
@@ -1109,9 +1136,9 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
     }
     *done = (PetscBool)(r0 <= 1e-8 * b0);
     PetscInt closed = 0; /* rows separated in the reference, active now */
-    for (PetscInt r = 0; r < lr.k; r++) closed += lr.pq[LR_ROW * r + 8] > 0.5;
-    PetscCall(PetscInfo(m, "Newton step by the kept inverse: %" PetscInt_FMT " rows differ of %" PetscInt_FMT " active (%" PetscInt_FMT " closed since), residual %g of the right side after %" PetscInt_FMT " refinements%s\n", lr.k, kA[1], closed, (double)(b0 > 0 ? r0 / b0 : 0), refined, *done ? "" : ": the direct solve instead"));
-  } else PetscCall(PetscInfo(m, "Newton step by the kept inverse: its %" PetscInt_FMT " x %" PetscInt_FMT " correction singular, the direct solve instead\n", lr.k, lr.k));
+    for (PetscInt j = 0; j < lr.kc; j++) closed += lr.pq[LR_ROW * lr.c[j] + 8] > 0.5;
+    PetscCall(PetscInfo(m, "Newton step by the kept inverse: %" PetscInt_FMT " rows differ of %" PetscInt_FMT " active (%" PetscInt_FMT " closed since), residual %g of the right side after %" PetscInt_FMT " refinements%s\n", lr.kc, kA[1], closed, (double)(b0 > 0 ? r0 / b0 : 0), refined, *done ? "" : ": the direct solve instead"));
+  } else PetscCall(PetscInfo(m, "Newton step by the kept inverse: its %" PetscInt_FMT " x %" PetscInt_FMT " correction singular, the direct solve instead\n", lr.kc, lr.kc));
   if (*done) nt->lowranks++;
   nt->wdr_of_dr = (PetscBool)(*done && wdr_valid); /* the residual's W dr serves the line search */
   PetscCall(VecDestroy(&b));
@@ -1130,6 +1157,7 @@ PetscErrorCode MBCNewtonLowRankStep(MBCMultiplier m, PetscBool *done)
   PetscCall(VecDestroy(&lr.tx));
   PetscCall(PetscFree(lr.M));
   PetscCall(PetscFree(lr.row));
+  PetscCall(PetscFree(lr.c));
   PetscCall(PetscFree(lr.pq));
   PetscCall(PetscLogEventEnd(MBC_NewtonLowRank, m, 0, 0, 0));
   PetscFunctionReturn(0);
