@@ -6,7 +6,8 @@
    once the direct steps with this W have cost as much, with the contacts separated then as the
    reference. A
    step's J differs from J_ref only in the rows C of the contacts whose state differs from the
-   reference (slipping, separated since, closed since): J = J_ref + E_C U^T with
+   reference (the tangential rows of a slipping one, whose normal row sticks; every row of one
+   separated or closed since): J = J_ref + E_C U^T with
      (U^T x)_r = alpha_r . x_c + beta_r . (W x)_c      (c: the rows of r's contact)
    and Sherman-Morrison-Woodbury gives J^-1 b = Z b - Z E_C M^-1 U^T Z b, M = I + U^T Z E_C: a
    pass over Z, its k = |C| columns, W's k rows and an LU of size k instead of one of the active
