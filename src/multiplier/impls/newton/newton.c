@@ -14,7 +14,7 @@
    multiplier: phi_d = r_d. With equilibrium constraints G r = e (bodies free in a static
    analysis), alpha joins the unknowns and the step solves the saddle point system
    [A + B W, B G^T; G, 0]. The merit that stops the iteration is FCLIB's. */
-#include "newton.h"
+#include "newtonimpl.h"
 #include <mbcontact.h>
 #include <petscblaslapack.h>
 #if defined(PETSC_HAVE_SCALAPACK)

@@ -12,7 +12,7 @@
      P^-1 [x; y] = [P_J^-1 x - Z s; s],  s = S^-1 (G_A P_J^-1 x - y),  Z = P_J^-1 B G_A^T,  S = G_A Z,
    with S (rigid modes x rigid modes) dense on every rank: the step then meets G dr = e - G r to
    GMRES's tolerance. */
-#include "newton.h"
+#include "newtonimpl.h"
 #include <petscblaslapack.h>
 
 typedef struct {

@@ -17,7 +17,7 @@
    step is checked by its residual against J and refined like the direct solve's; where it fails,
    or k is a large part of the active rows, the direct solve runs. A restart restores the
    reference (MBCMultiplierSetRestartState), so that its Z and its steps are the run's own. */
-#include "newton.h"
+#include "newtonimpl.h"
 #include <petscblaslapack.h>
 #if defined(PETSC_HAVE_SCALAPACK)
   #include <petsc/private/petscscalapack.h>
