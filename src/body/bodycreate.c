@@ -339,3 +339,167 @@ PetscErrorCode MBCBodyGetStressDM(MBCBody body, DM *dm)
   *dm = body ? body->dmStress : NULL;
   PetscFunctionReturn(0);
 }
+
+PetscErrorCode MBCBodyGetComm(MBCBody body, MPI_Comm *comm)
+{
+  PetscFunctionBegin;
+  *comm = body->comm;
+  PetscFunctionReturn(0);
+}
+
+/* The body's position in the scene. */
+PetscErrorCode MBCBodyGetIndex(MBCBody body, PetscInt *index)
+{
+  PetscFunctionBegin;
+  *index = body->index;
+  PetscFunctionReturn(0);
+}
+
+/* The element of the body's cells; *rigid: a rigid body (no element, six DOFs). */
+PetscErrorCode MBCBodyGetElement(MBCBody body, MBCElementType *element, PetscBool *rigid)
+{
+  PetscFunctionBegin;
+  if (element) *element = body->element;
+  if (rigid) *rigid = body->desc.rigid;
+  PetscFunctionReturn(0);
+}
+
+/* The prescribed rows this rank owns (global, sorted): those the body's factor holds to their
+   values. */
+PetscErrorCode MBCBodyGetPrescribedRows(MBCBody body, PetscInt *n, const PetscInt **rows)
+{
+  PetscFunctionBegin;
+  *n = body->nbc;
+  if (rows) *rows = body->bc_rows;
+  PetscFunctionReturn(0);
+}
+
+/* For each prescribed row (MBCBodyGetPrescribedRows) the scene's dirichlet entry that prescribes it
+   (-1: an absorbing surface held in a static state). */
+PetscErrorCode MBCBodyGetPrescribedEntries(MBCBody body, const PetscInt **entry)
+{
+  PetscFunctionBegin;
+  *entry = body->bc_entry;
+  PetscFunctionReturn(0);
+}
+
+/* The rows K^+ holds at 0 where a static body floats (owned, sorted; none otherwise). */
+PetscErrorCode MBCBodyGetHeldRows(MBCBody body, PetscInt *n, const PetscInt **rows)
+{
+  PetscFunctionBegin;
+  *n = body->nfix;
+  if (rows) *rows = body->fix_rows;
+  PetscFunctionReturn(0);
+}
+
+/* The free rigid modes of a static body (orthonormal, 0 on the prescribed DOFs; none where it is
+   held or the stage is dynamic). */
+PetscErrorCode MBCBodyGetRigidModes(MBCBody body, PetscInt *n, const Vec **modes)
+{
+  PetscFunctionBegin;
+  *n = body->nrigid;
+  if (modes) *modes = body->rigid;
+  PetscFunctionReturn(0);
+}
+
+/* Of the static iterate (MBCBodyStaticIncrement), per free mode: e = -R^T (F - K u) and the load
+   R^T F it carries, the rounding left in e, and the load's resultant and moment about the origin. */
+PetscErrorCode MBCBodyGetRigidEquilibrium(MBCBody body, const PetscReal **e, const PetscReal **f, PetscReal *eround, const PetscReal **fres)
+{
+  PetscFunctionBegin;
+  if (e) *e = body->erigid;
+  if (f) *f = body->frigid;
+  if (eround) *eround = body->erigid_round;
+  if (fres) *fres = body->fres;
+  PetscFunctionReturn(0);
+}
+
+/* The step's increment du (read it only: MBCBodyAddIncrement adds to it). */
+PetscErrorCode MBCBodyGetIncrement(MBCBody body, Vec *du)
+{
+  PetscFunctionBegin;
+  *du = body->du;
+  PetscFunctionReturn(0);
+}
+
+/* du += x: the response to the contact forces. */
+PetscErrorCode MBCBodyAddIncrement(MBCBody body, Vec x)
+{
+  PetscFunctionBegin;
+  PetscCall(VecAXPY(body->du, 1.0, x));
+  PetscFunctionReturn(0);
+}
+
+/* du += R alpha: the free modes' motion the rigid equilibrium asks for. */
+PetscErrorCode MBCBodyAddRigidIncrement(MBCBody body, const PetscReal alpha[])
+{
+  PetscFunctionBegin;
+  for (PetscInt j = 0; j < body->nrigid; j++) PetscCall(VecAXPY(body->du, alpha[j], body->rigid[j]));
+  PetscFunctionReturn(0);
+}
+
+/* The resultant and moment about the origin of the scene's load l on the body, for a unit time
+   factor; *acts: l acts on the body. Collective on the body. */
+PetscErrorCode MBCBodySceneLoadResultant(MBCBody body, PetscInt l, PetscReal r[6], PetscBool *acts)
+{
+  PetscFunctionBegin;
+  *acts = PETSC_FALSE;
+  for (PetscInt i = 0; i < body->nloads; i++)
+    if (body->load_index[i] == l) {
+      PetscCall(MBCBodyLoadResultant(body, body->load[i], r));
+      *acts = PETSC_TRUE;
+    }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode MBCBodyGetAcceleration(MBCBody body, Vec *a)
+{
+  PetscFunctionBegin;
+  *a = body ? body->a : NULL;
+  PetscFunctionReturn(0);
+}
+
+/* The external work and the damping dissipation so far (dynamic). */
+PetscErrorCode MBCBodyGetWork(MBCBody body, PetscReal *wext, PetscReal *wdamp)
+{
+  PetscFunctionBegin;
+  *wext  = body->wext;
+  *wdamp = body->wdamp;
+  PetscFunctionReturn(0);
+}
+
+/* A restart's: the work and dissipation the checkpoint held. */
+PetscErrorCode MBCBodySetWork(MBCBody body, PetscReal wext, PetscReal wdamp)
+{
+  PetscFunctionBegin;
+  body->wext  = wext;
+  body->wdamp = wdamp;
+  PetscFunctionReturn(0);
+}
+
+/* A dynamic restart's at its time t: the load F(t), where the next step's trapezoidal work starts. */
+PetscErrorCode MBCBodyRestartLoad(MBCBody body, PetscReal t)
+{
+  PetscFunctionBegin;
+  PetscCall(MBCBodyExternalForce(body, t, PETSC_FALSE, body->fold));
+  PetscFunctionReturn(0);
+}
+
+/* The scene index (the order mbcontact-prep wrote) of each local vertex (vStart-based) and cell. */
+PetscErrorCode MBCBodyGetSceneNumbering(MBCBody body, const PetscInt **vnum, const PetscInt **cnum)
+{
+  PetscFunctionBegin;
+  if (vnum) *vnum = body->vnum;
+  if (cnum) *cnum = body->cnum;
+  PetscFunctionReturn(0);
+}
+
+/* Local cell c (from the first cell): its nodes (points) in its kernel's order and its MBCCellType. */
+PetscErrorCode MBCBodyGetCellNodes(MBCBody body, PetscInt c, PetscInt *nv, const PetscInt **v, MBCCellType *type)
+{
+  PetscFunctionBegin;
+  *nv = body->cellvoff[c + 1] - body->cellvoff[c];
+  *v  = &body->cellv[body->cellvoff[c]];
+  if (type) *type = (MBCCellType)body->celltype[c];
+  PetscFunctionReturn(0);
+}

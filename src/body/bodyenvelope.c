@@ -52,3 +52,13 @@ PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody body, PetscReal t)
   PetscCall(DMRestoreGlobalVector(body->dmStress, &stress));
   PetscFunctionReturn(0);
 }
+
+/* The envelope (per cell, stress layout: the largest principal stress so far [0] and its time [1]);
+   that of t = 0 where the body was not stepped yet. */
+PetscErrorCode MBCBodyGetEnvelope(MBCBody body, Vec *envelope)
+{
+  PetscFunctionBegin;
+  if (!body->envelope) PetscCall(MBCBodyEnvelopeUpdate(body, 0.0));
+  *envelope = body->envelope;
+  PetscFunctionReturn(0);
+}

@@ -26,6 +26,14 @@ PetscErrorCode MBCBodySetInitialState(MBCBody body, Vec u0, Vec v0)
   PetscFunctionReturn(0);
 }
 
+/* Whether the body starts from a given state (MBCBodySetInitialState or the scene's `initial`). */
+PetscErrorCode MBCBodyHasInitialState(MBCBody body, PetscBool *has)
+{
+  PetscFunctionBegin;
+  *has = (PetscBool)(body->u0 || body->v0 || body->desc.initial_u || body->desc.initial_v);
+  PetscFunctionReturn(0);
+}
+
 /* x: the scene's per-node values (num_nodes x 3, scene order) at this rank's owned nodes. */
 static PetscErrorCode BodyNodalValues(MBCBody body, const PetscReal values[], Vec x)
 {

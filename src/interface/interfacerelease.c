@@ -79,7 +79,9 @@ PetscErrorCode MBCInterfaceRelease(MBCInterface ifc, PetscInt n, const PetscInt 
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     if (!ifc->H[b]) continue;
     if (!ifc->released[b]) {
-      PetscCall(VecDuplicate(ifc->bodies[b]->u, &ifc->released[b]));
+      Vec u;
+      PetscCall(MBCBodyGetDisplacement(ifc->bodies[b], &u));
+      PetscCall(VecDuplicate(u, &ifc->released[b]));
       PetscCall(VecZeroEntries(ifc->released[b]));
     }
     PetscCall(MatMultAdd(ifc->H[b], ifc->lam[b], ifc->released[b], ifc->released[b]));
@@ -89,12 +91,14 @@ PetscErrorCode MBCInterfaceRelease(MBCInterface ifc, PetscInt n, const PetscInt 
   PetscFunctionReturn(0);
 }
 
-/* rhs += f_n+1 = -c f_n on body b: the released points' force at the end of the step, their mean
-   force over it 0. On the body's ranks. */
-PetscErrorCode MBCInterfaceAddReleasedForce(MBCInterface ifc, PetscInt b, Vec rhs)
+/* f_n+1 = w f with w = -c: the released points' force on body b at the end of the step, their
+   mean force over it 0, which the step adds to the body's right side (f NULL: none). On the body's
+   ranks. */
+PetscErrorCode MBCInterfaceGetReleasedStepForce(MBCInterface ifc, PetscInt b, PetscReal *w, Vec *f)
 {
   PetscFunctionBegin;
-  if (ifc->release && ifc->released[b]) PetscCall(VecAXPY(rhs, -ifc->carry, ifc->released[b]));
+  *w = -ifc->carry;
+  *f = ifc->release ? ifc->released[b] : NULL;
   PetscFunctionReturn(0);
 }
 
@@ -112,7 +116,9 @@ PetscErrorCode MBCInterfaceGetReleasedForce(MBCInterface ifc, PetscInt b, Vec *f
 {
   PetscFunctionBegin;
   if (!ifc->released[b]) {
-    PetscCall(VecDuplicate(ifc->bodies[b]->u, &ifc->released[b]));
+    Vec u;
+    PetscCall(MBCBodyGetDisplacement(ifc->bodies[b], &u));
+    PetscCall(VecDuplicate(u, &ifc->released[b]));
     PetscCall(VecZeroEntries(ifc->released[b]));
   }
   *f = ifc->released[b];

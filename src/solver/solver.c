@@ -242,7 +242,7 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   }
   if (s->memory_mb < 0) PetscCall(SolverRankMemory(s->comm, &s->memory_mb));
   for (PetscInt b = 0; b < s->nbodies; b++)
-    if (s->bodies[b]) s->bodies[b]->memory_mb = s->memory_mb;
+    if (s->bodies[b]) PetscCall(MBCBodySetMemoryLimit(s->bodies[b], s->memory_mb));
   if (!s->search_only)
     for (PetscInt b = 0; b < s->nbodies; b++)
       if (s->bodies[b]) PetscCall(MBCBodySetUp(s->bodies[b], s->has_dynamic, s->mass));
@@ -264,54 +264,31 @@ PetscErrorCode MBCSolverSetUp(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Sums per-body scalars (known on every rank of the body) over all bodies, on every rank. */
-static PetscErrorCode SolverSumOverBodies(MBCSolver s, PetscInt n, PetscReal (*value)(MBCBody, PetscInt), PetscReal sum[])
-{
-  PetscFunctionBegin;
-  for (PetscInt i = 0; i < n; i++) sum[i] = 0;
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    PetscMPIInt brank;
-    if (!s->bodies[b]) continue;
-    PetscCallMPI(MPI_Comm_rank(s->bodies[b]->comm, &brank));
-    if (brank) continue;
-    for (PetscInt i = 0; i < n; i++) sum[i] += value(s->bodies[b], i);
-  }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sum, (PetscMPIInt)n, MPIU_REAL, MPI_SUM, s->comm));
-  PetscFunctionReturn(0);
-}
-
-static PetscReal BodyEnergyTerm(MBCBody body, PetscInt i)
-{
-  return i == 0 ? body->wext : body->wdamp;
-}
-
 /* kinetic, strain, external work, damping dissipation (summed over bodies), frictional
    dissipation and the energy taken by the normal contact forces: total = kinetic + strain - work
    + the three dissipations stays at its initial value (0) up to the integrator's error. */
 PetscErrorCode MBCSolverEnergy(MBCSolver s, PetscReal energy[MBC_NENERGY])
 {
-  PetscReal local[2] = {0, 0}, works[2];
+  PetscReal local[2] = {0, 0}, works[2] = {0, 0};
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody     body = s->bodies[b];
-    PetscScalar vMv = 0, uKu;
+    PetscReal   e[4];
+    MPI_Comm    bcomm;
     PetscMPIInt brank;
     if (!body) continue;
-    PetscCall(MatMult(body->K, body->u, body->work));
-    PetscCall(VecDot(body->u, body->work, &uKu));
-    if (body->v) {
-      PetscCall(MatMult(body->M, body->v, body->work));
-      PetscCall(VecDot(body->v, body->work, &vMv));
-    }
-    PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
-    if (!brank) {
-      local[0] += 0.5 * PetscRealPart(vMv);
-      local[1] += 0.5 * PetscRealPart(uKu);
-    }
+    PetscCall(MBCBodyEnergy(body, e));
+    PetscCall(MBCBodyGetComm(body, &bcomm));
+    PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+    if (brank) continue; /* each body's terms once */
+    local[0] += e[0];
+    local[1] += e[1];
+    works[0] += e[2];
+    works[1] += e[3];
   }
   PetscCallMPI(MPI_Allreduce(local, energy, 2, MPIU_REAL, MPI_SUM, s->comm));
-  PetscCall(SolverSumOverBodies(s, 2, BodyEnergyTerm, works));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, works, 2, MPIU_REAL, MPI_SUM, s->comm));
   energy[2] = works[0];
   energy[3] = works[1];
   energy[4] = s->wfriction;
@@ -381,8 +358,10 @@ static PetscErrorCode SolverMonitor(MBCSolver s)
   if (!s->monitor) PetscFunctionReturn(0);
   for (PetscInt b = 0; b < s->nbodies; b++) {
     PetscReal n;
+    Vec       u;
     if (!s->bodies[b]) continue;
-    PetscCall(VecNorm(s->bodies[b]->u, NORM_INFINITY, &n));
+    PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
+    PetscCall(VecNorm(u, NORM_INFINITY, &n));
     umax = PetscMax(umax, n);
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, s->comm));
@@ -409,9 +388,12 @@ static PetscErrorCode SolverCheckDisplacementSize(MBCSolver s)
   for (PetscInt d = 0; d < 3; d++) box[d] = box[3 + d] = PETSC_MIN_REAL; /* -lo, hi */
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
-    Vec     X;
-    if (!body || !body->u) continue;
-    PetscCall(DMGetCoordinates(body->dm, &X));
+    Vec     X, u = NULL;
+    DM      dm;
+    PetscCall(MBCBodyGetDisplacement(body, &u));
+    if (!u) continue;
+    PetscCall(MBCBodyGetDM(body, &dm));
+    PetscCall(DMGetCoordinates(dm, &X));
     for (PetscInt d = 0; d < 3; d++) {
       PetscReal lo, hi;
       PetscCall(VecStrideMin(X, d, NULL, &lo));
@@ -419,7 +401,7 @@ static PetscErrorCode SolverCheckDisplacementSize(MBCSolver s)
       box[d]     = PetscMax(box[d], -lo);
       box[3 + d] = PetscMax(box[3 + d], hi);
     }
-    PetscCall(VecNorm(body->u, NORM_INFINITY, &ub[b]));
+    PetscCall(VecNorm(u, NORM_INFINITY, &ub[b]));
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, box, 6, MPIU_REAL, MPIU_MAX, s->comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, ub, (PetscMPIInt)s->nbodies, MPIU_REAL, MPIU_MAX, s->comm));
@@ -447,48 +429,36 @@ static PetscErrorCode SolverCheckDisplacementSize(MBCSolver s)
    check that every body is held. */
 static PetscErrorCode SolverStaticBegin(MBCSolver s)
 {
-  PetscBool stabilized = PETSC_FALSE, floating = PETSC_FALSE;
+  PetscBool stabilized = PETSC_FALSE, floating = PETSC_FALSE, *free;
 
   PetscFunctionBegin;
   if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, 1.0, PETSC_FALSE)); /* no inertia: the contact force of the step is lambda_n+1 */
+  PetscCall(PetscCalloc1(s->nbodies, &free));
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    if (!body) continue;
-    PetscCall(MBCBodyAbsorbingHold(body)); /* a truncated foundation's support in a static state */
-    PetscCall(MBCBodyRigidModes(body)); /* the free rigid modes, exact (FETI), unless a spring is asked for */
-    body->stab = (s->static_stabilize > 0 && body->nrigid) ? s->static_stabilize : 0.0;
-    if (body->stab > 0) {
-      stabilized = PETSC_TRUE;
-      PetscCall(MBCBodyRigidModesDestroy(body));
-    }
-    if (body->nrigid) floating = PETSC_TRUE;
+    PetscBool bstab, bfloat;
+    if (!s->bodies[b]) continue;
+    PetscCall(MBCBodyStaticBegin(s->bodies[b], s->static_stabilize, &bstab, &bfloat));
+    free[b]    = (PetscBool)(bstab || bfloat);
+    stabilized = (PetscBool)(stabilized || bstab);
+    floating   = (PetscBool)(floating || bfloat);
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &stabilized, 1, MPIU_BOOL, MPI_LOR, s->comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &floating, 1, MPIU_BOOL, MPI_LOR, s->comm));
   /* before anything is factored or D is built from a singular K (which fails first, with a
      message that does not name the body) */
   for (PetscInt b = 0; b < s->nbodies; b++) { /* a body free in some direction must touch a couple */
-    PetscBool touches = PETSC_FALSE, free = PETSC_FALSE;
-    if (s->bodies[b]) free = (PetscBool)(s->bodies[b]->nrigid > 0 || s->bodies[b]->stab > 0);
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &free, 1, MPIU_BOOL, MPI_LOR, s->comm));
+    PetscBool touches = PETSC_FALSE;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &free[b], 1, MPIU_BOOL, MPI_LOR, s->comm));
     for (PetscInt i = 0; s->contact && i < s->contact->ncouples && !touches; i++) {
       MBCSurface *side[2] = {&s->contact->couples[i].master, &s->contact->couples[i].slave};
       for (PetscInt k = 0; k < 2; k++)
         for (PetscInt n = 0; n < side[k]->nnodes && !touches; n++) touches = (PetscBool)(side[k]->nbody[n] == b);
     }
-    PetscCheck(!free || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
+    PetscCheck(!free[b] || touches, s->comm, PETSC_ERR_ARG_WRONG, "Scene file %s: body '%s' has no prescribed displacement in some direction and no contact surface to hold it: its static stiffness is singular (rigid-body motion); prescribe it on some surface or run a dynamic analysis", s->scene->filename, s->scene->bodies[b].name);
   }
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    if (!body) continue;
-    PetscCall(KSPDestroy(&body->ksp)); /* a dynamic stage's (a reference) */
-    PetscCall(MatDestroy(&body->A));
-    PetscCall(MBCBodyFactor(body, 1.0, 0.0, &body->ksp, &body->A, "static stiffness"));
-    body->aK = 1.0;
-    body->aM = 0.0;
-    if (body->v) PetscCall(VecZeroEntries(body->v)); /* after a dynamic stage: a static one has no inertia */
-    if (body->a) PetscCall(VecZeroEntries(body->a));
-  }
+  PetscCall(PetscFree(free));
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(MBCBodyStaticFactor(s->bodies[b]));
   s->static_stabilized = stabilized;
   s->static_floating   = floating;
   if (s->restarting) PetscFunctionReturn(0); /* H and D come with the checkpoint's state */
@@ -511,58 +481,18 @@ static PetscErrorCode SolverStaticEquilibrium(MBCSolver s)
   s->contact_failed = PETSC_FALSE;
   if (s->iface) PetscCall(MBCInterfaceLoadStepBegin(s->iface));
   for (s->static_its = 1;; s->static_its++) {
-    for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody body = s->bodies[b];
-      if (!body) continue;
-      PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->rhs));
-      for (PetscInt j = 0; j < body->nrigid; j++) { /* the load on each free mode */
-        PetscScalar d;
-        PetscCall(VecDot(body->rhs, body->rigid[j], &d));
-        body->frigid[j] = PetscRealPart(d);
-      }
-      if (body->nrigid) { /* and its resultant and moment */
-        PetscCall(MBCBodyLoadResultant(body, body->rhs, body->fres));
-        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, body->fres, 6, MPIU_REAL, MPIU_SUM, body->comm));
-      }
-      PetscCall(MatMult(body->K, body->u, body->work));
-      PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-      body->erigid_round = 0;
-      for (PetscInt j = 0; j < body->nrigid; j++) { /* the equilibrium's right side -R^T (F - K u) */
-        PetscScalar d;
-        PetscReal   knorm, unorm, rnorm;
-        PetscCall(VecDot(body->rhs, body->rigid[j], &d));
-        body->erigid[j] = -PetscRealPart(d);
-        PetscCall(MatNorm(body->K, NORM_INFINITY, &knorm));
-        PetscCall(VecNorm(body->u, NORM_INFINITY, &unorm));
-        PetscCall(VecNorm(body->rigid[j], NORM_1, &rnorm));
-        body->erigid_round = PetscMax(body->erigid_round, PETSC_MACHINE_EPSILON * knorm * unorm * rnorm);
-      }
-      PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
-      PetscCall(MBCBodyConstrainedSolve(body, body->ksp, 1.0, 0.0, body->g, body->rhs, body->du));
-    }
+    for (PetscInt b = 0; b < s->nbodies; b++)
+      if (s->bodies[b]) PetscCall(MBCBodyStaticIncrement(s->bodies[b], s->time));
     if (s->contact) PetscCall(SolverContactForces(s)); /* du += A^-1 H lambda (+ R alpha) */
     if (s->contact_failed) break; /* the caller cuts the step */
     fmax = kumax = kufloor = 0;
     for (PetscInt b = 0; b < s->nbodies; b++) {
-      MBCBody   body = s->bodies[b];
-      PetscReal n, knorm;
-      if (!body) continue;
-      PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
-      if (body->nrigid) { /* K du off the prescribed rows: A du is not the force of a rigid motion */
-        PetscCall(MatMult(body->K, body->du, body->work));
-        PetscCall(MBCBodySetConstrainedRows(body, NULL, body->work));
-      } else PetscCall(MatMult(body->A, body->du, body->work));
-      PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
-      fmax = PetscMax(fmax, n);
-      PetscCall(VecAXPY(body->u, 1.0, body->du));
-      PetscCall(MatMult(body->K, body->u, body->work));
-      PetscCall(VecNorm(body->work, NORM_INFINITY, &n));
-      kumax = PetscMax(kumax, n);
-      /* K u is known only to about eps |K|_inf |u|_inf: where the bodies move rigidly (a load step
-         that closes a gap) K u is that rounding, and so is the out-of-balance force */
-      PetscCall(MatNorm(body->K, NORM_INFINITY, &knorm));
-      PetscCall(VecNorm(body->u, NORM_INFINITY, &n));
-      kufloor = PetscMax(kufloor, PETSC_MACHINE_EPSILON * knorm * n);
+      PetscReal n[3];
+      if (!s->bodies[b]) continue;
+      PetscCall(MBCBodyStaticUpdate(s->bodies[b], s->time, n));
+      fmax    = PetscMax(fmax, n[0]);
+      kumax   = PetscMax(kumax, n[1]);
+      kufloor = PetscMax(kufloor, n[2]);
     }
     {
       PetscReal mx[3] = {fmax, kumax, kufloor};
@@ -590,12 +520,8 @@ static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t
   const PetscBool may_fail = (PetscBool)(s->dt_cut && level + 1 < MBC_MAX_CUTS && (t1 - t0) / 2 >= s->dt_min * (1 - 1e-12));
 
   PetscFunctionBegin;
-  for (PetscInt b = 0; may_fail && b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    if (!body) continue;
-    if (!body->ustart) PetscCall(VecDuplicate(body->u, &body->ustart));
-    PetscCall(VecCopy(body->u, body->ustart));
-  }
+  for (PetscInt b = 0; may_fail && b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(MBCBodyStepSave(s->bodies[b]));
   s->time             = t1;
   s->contact_may_fail = may_fail;
   PetscCall(SolverStaticEquilibrium(s));
@@ -606,7 +532,7 @@ static PetscErrorCode SolverStaticAdvance(MBCSolver s, PetscReal t0, PetscReal t
   if (s->iface && s->iface->mult->reason < 0) PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g contact: %s solve %s: the load step from t %g is cut to two\n", s->step, (double)t1, ((PetscObject)s->iface->mult)->type_name, MBCMultiplierConvergedReasonName(s->iface->mult->reason), (double)t0));
   else PetscCall(PetscPrintf(s->comm, "step %5" PetscInt_FMT " t %-12.6g static: no equilibrium after %" PetscInt_FMT " iterations: the load step from t %g is cut to two\n", s->step, (double)t1, s->static_its, (double)t0));
   for (PetscInt b = 0; b < s->nbodies; b++)
-    if (s->bodies[b]) PetscCall(VecCopy(s->bodies[b]->ustart, s->bodies[b]->u));
+    if (s->bodies[b]) PetscCall(MBCBodyStepRestore(s->bodies[b]));
   if (s->iface) PetscCall(MBCInterfaceStepAbandon(s->iface)); /* the slip the attempt made */
   s->time = t0;
   PetscCall(SolverContact(s)); /* the search where the step began */
@@ -629,97 +555,10 @@ static PetscErrorCode SolverStaticStep(MBCSolver s)
   PetscFunctionReturn(0);
 }
 
-/* The acceleration the forces at time t give the body in its state: M a = F(t) - K u - C v +
-   fc on the free DOFs (fc: the contact force H lambda, or NULL); body->fold = F(t). */
-static PetscErrorCode BodyAcceleration(MBCBody body, PetscReal t, Vec fc)
-{
-  PetscReal rnorm;
-  KSP       ksp;
-  Mat       A;
-
-  PetscFunctionBegin;
-  PetscCall(MBCBodyExternalForce(body, t, PETSC_FALSE, body->fold));
-  PetscCall(VecCopy(body->fold, body->rhs));
-  PetscCall(MatMult(body->K, body->u, body->work));
-  PetscCall(VecAXPY(body->rhs, -1.0, body->work));
-  if (MBCBodyDamped(body)) PetscCall(MBCBodyAddDamping(body, -1.0, body->v, body->rhs));
-  if (fc) PetscCall(VecAXPY(body->rhs, 1.0, fc));
-  PetscCall(MBCBodySetConstrainedRows(body, NULL, body->rhs));
-  PetscCall(VecZeroEntries(body->a));
-  if (body->desc.massless) PetscFunctionReturn(0); /* no inertia: its Newmark acceleration starts at 0 */
-  PetscCall(VecNorm(body->rhs, NORM_INFINITY, &rnorm));
-  if (rnorm > 0) {
-    PetscCall(MBCBodyFactor(body, 0.0, 1.0, &ksp, &A, "mass"));
-    PetscCall(MBCBodyConstrainedSolve(body, ksp, 0.0, 1.0, NULL, body->rhs, body->a));
-    PetscCall(KSPDestroy(&ksp));
-    PetscCall(MatDestroy(&A));
-  }
-  PetscFunctionReturn(0);
-}
-
-/* Initial state of a dynamic analysis: the displacement and velocity given (the scene's
-   `initial`, MBCBodySetInitialState), else the static equilibrium under the constant loads and the
-   prescribed values at t = 0, at rest; the acceleration the forces at t = 0 give. */
-static PetscErrorCode BodyDynamicInitialState(MBCBody body)
-{
-  PetscReal fnorm, gnorm;
-  KSP       ksp;
-  Mat       A;
-  PetscBool hasu, hasv;
-
-  PetscFunctionBegin;
-  PetscCall(VecZeroEntries(body->u));
-  PetscCall(VecZeroEntries(body->v));
-  PetscCall(VecZeroEntries(body->a));
-  PetscCall(MBCBodyAbsorbingHold(body));
-  PetscCall(MBCBodyInitialState(body, &hasu, &hasv));
-  PetscCall(MBCBodyExternalForce(body, 0.0, PETSC_TRUE, body->rhs));
-  PetscCall(MBCBodyPrescribed(body, 0.0, body->g));
-  PetscCall(VecNorm(body->rhs, NORM_INFINITY, &fnorm));
-  PetscCall(VecNorm(body->g, NORM_INFINITY, &gnorm));
-  if (!hasu && (fnorm > 0 || gnorm > 0)) {
-    PetscCall(MBCBodyFactor(body, 1.0, 0.0, &ksp, &A, "initial static stiffness"));
-    PetscCall(MBCBodyConstrainedSolve(body, ksp, 1.0, 0.0, body->g, body->rhs, body->u));
-    PetscCall(KSPDestroy(&ksp));
-    PetscCall(MatDestroy(&A));
-  }
-  PetscCall(MBCBodyAbsorbingRelease(body, 0.0)); /* the motion from here on through the dashpots */
-  PetscCall(BodyAcceleration(body, 0.0, NULL));
-  PetscCall(VecDot(body->fold, body->u, &body->wext)); /* so that total = T + U - F.u for constant F */
-  if (hasu || hasv) { /* the energy the initial state holds counts as work done on the body before t = 0: total starts at 0 */
-    PetscScalar uKu, vMv = 0;
-    PetscCall(MatMult(body->K, body->u, body->work));
-    PetscCall(VecDot(body->u, body->work, &uKu));
-    PetscCall(MatMult(body->M, body->v, body->work));
-    PetscCall(VecDot(body->v, body->work, &vMv));
-    body->wext = 0.5 * PetscRealPart(uKu + vMv);
-  }
-  body->wdamp = 0;
-  PetscFunctionReturn(0);
-}
-
 /* The integrator's coefficients for a step h of the current stage (solvergenalpha.c). */
 static MBCTimeCoefficients Newmark(MBCSolver s, PetscReal h)
 {
   return MBCTimeScheme(h, s->beta, s->gamma, s->am, s->af);
-}
-
-/* body->ksp, body->A: the factor of step level `level` (h = dt / 2^level), factored once and kept. */
-static PetscErrorCode BodyUseLevel(MBCBody body, PetscInt level, MBCTimeCoefficients c)
-{
-  PetscFunctionBegin;
-  body->aK = 1 + c.a1 * body->cK;
-  body->aM = c.aM + c.a1 * body->cM;
-  body->aC = c.a1; /* the dashpots, if any */
-  if (!body->kspcut[level]) PetscCall(MBCBodyFactor(body, body->aK, body->aM, &body->kspcut[level], &body->Acut[level], level ? "Newmark effective stiffness (cut step)" : "Newmark effective stiffness"));
-  body->aC = 0;
-  PetscCall(PetscObjectReference((PetscObject)body->kspcut[level]));
-  PetscCall(PetscObjectReference((PetscObject)body->Acut[level]));
-  PetscCall(KSPDestroy(&body->ksp));
-  PetscCall(MatDestroy(&body->A));
-  body->ksp = body->kspcut[level];
-  body->A   = body->Acut[level];
-  PetscFunctionReturn(0);
 }
 
 /* Every body's factor for h = dt / 2^level, and D rebuilt for it (the pairs unchanged). */
@@ -729,7 +568,7 @@ static PetscErrorCode SolverDynamicUseLevel(MBCSolver s, PetscInt level)
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++)
-    if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], level, c));
+    if (s->bodies[b]) PetscCall(MBCBodyUseStepLevel(s->bodies[b], level, c));
   s->level       = level;
   s->force_build = PETSC_TRUE;
   PetscCall(MBCContactSlidingReset(s->contact)); /* another step: pairs fixed for it afresh */
@@ -750,8 +589,8 @@ static PetscErrorCode SolverDynamicBegin(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
-    PetscCall(BodyDynamicInitialState(body));
-    PetscCall(BodyUseLevel(body, 0, Newmark(s, dt)));
+    PetscCall(MBCBodyDynamicInitialState(body));
+    PetscCall(MBCBodyUseStepLevel(body, 0, Newmark(s, dt)));
   }
   s->level = 0;
   s->step  = 0;
@@ -778,17 +617,8 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
     if (!body) continue;
-    body->stab = 0;
-    PetscCall(MBCBodyRigidModesDestroy(body)); /* a static stage's free modes: the mass holds them now */
-    for (PetscInt l = 0; l < MBC_MAX_CUTS; l++) {
-      PetscCall(KSPDestroy(&body->kspcut[l]));
-      PetscCall(MatDestroy(&body->Acut[l]));
-    }
-    PetscCall(KSPDestroy(&body->ksp));
-    PetscCall(MatDestroy(&body->A));
-    if (after_static) PetscCall(VecZeroEntries(body->v));
-    PetscCall(MBCBodyAbsorbingRelease(body, s->time));
-    PetscCall(BodyUseLevel(body, 0, Newmark(s, dt)));
+    PetscCall(MBCBodyDynamicStageBegin(body, after_static, s->time));
+    PetscCall(MBCBodyUseStepLevel(body, 0, Newmark(s, dt)));
   }
   s->level = s->start_level = s->good_steps = 0;
   if (!s->restarting) PetscCall(MBCContactSlidingReset(s->contact)); /* small sliding: pairs fixed per stage */
@@ -798,15 +628,16 @@ static PetscErrorCode SolverDynamicStageBegin(MBCSolver s)
   }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
-    Vec     fc   = NULL;
+    Vec     fc   = NULL, u;
     if (!body) continue;
     if (s->iface) {
-      PetscCall(VecDuplicate(body->u, &fc));
+      PetscCall(MBCBodyGetDisplacement(body, &u));
+      PetscCall(VecDuplicate(u, &fc));
       PetscCall(MBCInterfaceBodyForce(s->iface, b, fc));
     }
-    PetscCall(BodyAcceleration(body, s->time, fc));
+    PetscCall(MBCBodyAcceleration(body, s->time, fc));
     PetscCall(VecDestroy(&fc));
-    if (after_static) PetscCall(VecDot(body->fold, body->u, &body->wext)); /* as at a dynamic run's start */
+    if (after_static) PetscCall(MBCBodyWorkStart(body)); /* as at a dynamic run's start */
   }
   PetscFunctionReturn(0);
 }
@@ -827,7 +658,7 @@ static PetscErrorCode SolverStageSet(MBCSolver s, PetscInt i)
   s->scheme   = st->scheme;
   PetscCall(MBCSolverStageLog(s, i));
   for (PetscInt b = 0; b < s->nbodies; b++)
-    if (s->bodies[b]) s->bodies[b]->stage = i;
+    if (s->bodies[b]) PetscCall(MBCBodySetStage(s->bodies[b], i));
   PetscFunctionReturn(0);
 }
 
@@ -842,7 +673,7 @@ PetscErrorCode MBCSolverStageResume(MBCSolver s, PetscInt i)
   else {
     if (s->iface) PetscCall(MBCInterfaceSetTimeStepping(s->iface, s->analysis, MBCTimeContactWeight(s->gamma, s->am, s->af), MBCTimeContactThroughAcceleration(s->af)));
     for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(BodyUseLevel(s->bodies[b], s->level, Newmark(s, s->dt / PetscPowInt(2, s->level))));
+      if (s->bodies[b]) PetscCall(MBCBodyUseStepLevel(s->bodies[b], s->level, Newmark(s, s->dt / PetscPowInt(2, s->level))));
   }
   s->restarting = PETSC_FALSE;
   PetscFunctionReturn(0);
@@ -865,58 +696,29 @@ static PetscErrorCode SolverStageBegin(MBCSolver s, PetscInt i)
    with s->contact_failed set and the state untouched when the contact solve did not converge. */
 static PetscErrorCode SolverDynamicIncrement(MBCSolver s, MBCTimeCoefficients c)
 {
-  const PetscReal h = c.h, a0 = c.a0, a2 = c.a2, a3 = c.a3, a6 = c.a6, a7 = c.a7;
-
   PetscFunctionBegin;
   if (s->iface && c.cf != 0) PetscCall(MBCInterfaceMultipliersToBodies(s->iface)); /* lambda_n: generalized-alpha's force average */
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    Vec     fc   = NULL;
+    MBCBody   body = s->bodies[b];
+    Vec       fc   = NULL, fr = NULL, u;
+    PetscReal wr   = 0;
     if (!body) continue;
-    PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->f));
     if (s->iface && c.cf != 0) {
-      PetscCall(VecDuplicate(body->u, &fc));
+      PetscCall(MBCBodyGetDisplacement(body, &u));
+      PetscCall(VecDuplicate(u, &fc));
       PetscCall(MBCInterfaceBodyForce(s->iface, b, fc));
     }
-    PetscCall(MBCSolverStepRHS(body, c, fc));
+    if (s->iface) PetscCall(MBCInterfaceGetReleasedStepForce(s->iface, b, &wr, &fr)); /* the points that left the contact set: an open point's force */
+    PetscCall(MBCBodyDynamicIncrement(body, s->time, c, fc, wr, fr));
     PetscCall(VecDestroy(&fc));
-    if (s->iface) PetscCall(MBCInterfaceAddReleasedForce(s->iface, b, body->rhs)); /* the points that left the contact set: an open point's force */
-    PetscCall(MBCBodyPrescribedIncrement(body, s->time, body->g));
-    PetscCall(MBCBodyConstrainedSolve(body, body->ksp, body->aK, body->aM, body->g, body->rhs, body->du));
   }
   if (s->contact) { /* du += A^-1 H lambda */
     PetscCall(SolverContactForces(s));
     if (s->contact_failed) PetscFunctionReturn(0); /* nothing changed: the caller cuts the step */
     PetscCall(MBCInterfaceReleasedStep(s->iface));
   }
-  for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody     body = s->bodies[b];
-    PetscScalar work, dv;
-    if (!body) continue;
-    PetscCall(MBCBodyCheckFinite(body, body->du, "displacement increment", s->time));
-
-    /* trapezoidal work of the external loads */
-    PetscCall(VecAXPY(body->fold, 1.0, body->f));
-    PetscCall(VecDot(body->fold, body->du, &work));
-    body->wext += 0.5 * PetscRealPart(work);
-    PetscCall(VecCopy(body->f, body->fold));
-
-    /* a_new = a0 du - a2 v - a3 a (in work2); v_new = v + a6 a + a7 a_new */
-    PetscCall(VecAXPBY(body->work2, a0, 0.0, body->du));
-    PetscCall(VecAXPY(body->work2, -a2, body->v));
-    PetscCall(VecAXPY(body->work2, -a3, body->a));
-    PetscCall(VecAXPBYPCZ(body->v, a6, a7, 1.0, body->a, body->work2)); /* v = v + a6 a + a7 a_new */
-    PetscCall(VecCopy(body->work2, body->a));
-    PetscCall(VecAXPY(body->u, 1.0, body->du));
-    /* damping dissipation with the mid-step velocity (v_n + v_n+1)/2 = du/dt for gamma = 1/2 */
-    if (MBCBodyDamped(body)) {
-      PetscCall(VecAXPBY(body->work2, 1.0 / h, 0.0, body->du));
-      PetscCall(VecZeroEntries(body->rhs));
-      PetscCall(MBCBodyAddDamping(body, 1.0, body->work2, body->rhs));
-      PetscCall(VecDot(body->work2, body->rhs, &dv));
-      body->wdamp += h * PetscRealPart(dv);
-    }
-  }
+  for (PetscInt b = 0; b < s->nbodies; b++)
+    if (s->bodies[b]) PetscCall(MBCBodyDynamicUpdate(s->bodies[b], s->time, c));
   PetscFunctionReturn(0);
 }
 
@@ -960,8 +762,9 @@ static PetscErrorCode SolverCheckNoInitialState(MBCSolver s)
 
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    const MBCBody body = s->bodies[b];
-    if (body && (body->u0 || body->v0 || body->desc.initial_u || body->desc.initial_v)) given = PetscMax(given, b + 1);
+    PetscBool has = PETSC_FALSE;
+    if (s->bodies[b]) PetscCall(MBCBodyHasInitialState(s->bodies[b], &has));
+    if (has) given = PetscMax(given, b + 1);
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &given, 1, MPIU_INT, MPI_MAX, s->comm));
   PetscCheck(!given, s->comm, PETSC_ERR_ARG_INCOMP, "Body '%s' has an initial displacement or velocity (scene file %s's `initial`, or MBCBodySetInitialState) but the analysis starts static: initial conditions start a dynamic analysis", s->scene->bodies[given - 1].name, s->scene->filename);
@@ -1174,20 +977,22 @@ PetscErrorCode MBCSolverView(MBCSolver s, PetscViewer viewer)
     const PetscInt ndof = 3 * s->scene->bodies[b].num_nodes; /* the displacement: 3 per node (tet10: its midside nodes too) */
     PetscInt       nbc  = 0, element = 0;
     if (s->bodies[b]) {
-      nbc     = s->bodies[b]->nbc;
-      element = s->bodies[b]->element;
-      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_SUM, s->bodies[b]->comm));
+      MBCElementType et;
+      MPI_Comm       bcomm;
+      PetscCall(MBCBodyGetPrescribedRows(s->bodies[b], &nbc, NULL));
+      PetscCall(MBCBodyGetElement(s->bodies[b], &et, NULL));
+      PetscCall(MBCBodyGetComm(s->bodies[b], &bcomm));
+      element = (PetscInt)et;
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_SUM, bcomm));
     }
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbc, 1, MPIU_INT, MPI_MAX, s->comm));
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &element, 1, MPIU_INT, MPI_MAX, s->comm));
     PetscCall(PetscViewerASCIIPrintf(viewer, "  body %s: ranks %d-%d, %" PetscInt_FMT " DOFs, %" PetscInt_FMT " prescribed (element %s)\n", s->scene->bodies[b].name, s->body_first_rank[b], s->body_first_rank[b] + s->body_nranks[b] - 1, ndof, nbc, MBCElementTypes[element]));
     for (PetscInt l = 0; l < s->scene->nloads; l++) { /* what each load amounts to, to check a scene against hand values */
       PetscReal r[7] = {0, 0, 0, 0, 0, 0, 0};
-      for (PetscInt i = 0; s->bodies[b] && i < s->bodies[b]->nloads; i++)
-        if (s->bodies[b]->load_index[i] == l) {
-          PetscCall(MBCBodyLoadResultant(s->bodies[b], s->bodies[b]->load[i], r));
-          r[6] = 1;
-        }
+      PetscBool acts = PETSC_FALSE;
+      if (s->bodies[b]) PetscCall(MBCBodySceneLoadResultant(s->bodies[b], l, r, &acts));
+      r[6] = acts ? 1 : 0;
       PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, r, 7, MPIU_REAL, MPIU_SUM, s->comm));
       if (r[6] > 0) PetscCall(PetscViewerASCIIPrintf(viewer, "    load %" PetscInt_FMT " (%s): resultant %.10e %.10e %.10e, moment about the origin %.10e %.10e %.10e\n", l, MBCLoadKinds[s->scene->loads[l].kind], (double)r[0], (double)r[1], (double)r[2], (double)r[3], (double)r[4], (double)r[5]));
     }

@@ -46,33 +46,6 @@ PetscBool MBCTimeContactThroughAcceleration(PetscReal af)
   return (PetscBool)(af == 0);
 }
 
-/* body->rhs: the right side of the step's increment (above) without the prescribed values' and the
-   new multipliers' parts; body->f holds F_n+1, body->fold F_n. fc: H lambda_n (NULL: none). */
-PetscErrorCode MBCSolverStepRHS(MBCBody body, MBCTimeCoefficients c, Vec fc)
-{
-  PetscFunctionBegin;
-  PetscCall(VecCopy(body->f, body->rhs));
-  if (c.cf != 0) PetscCall(VecAXPY(body->rhs, c.cf, body->fold));
-  /* the vectors summed before the products: rhs += K (cK y - (1 + cf) u) + M (w + cM y) + Cb y with
-     w = ((1 - am)(a2 v + a3 a) - am a) / (1 - af) and y = (a4 - cf) v + a5 a (Rayleigh's C =
-     cM M + cK K + the dashpots' Cb): two products with the body's matrices a step, not four */
-  PetscCall(VecAXPBY(body->work2, c.a2 * (1 - c.am) / (1 - c.af), 0.0, body->v));
-  PetscCall(VecAXPY(body->work2, (c.a3 * (1 - c.am) - c.am) / (1 - c.af), body->a));
-  PetscCall(VecSet(body->work, 0.0));
-  if (MBCBodyDamped(body)) {
-    PetscCall(VecAXPBY(body->work, c.a4 - c.cf, 0.0, body->v));
-    PetscCall(VecAXPY(body->work, c.a5, body->a));
-    if (body->Cb) PetscCall(MatMultAdd(body->Cb, body->work, body->rhs, body->rhs));
-    if (body->cM != 0) PetscCall(VecAXPY(body->work2, body->cM, body->work));
-    PetscCall(VecScale(body->work, body->cK));
-  }
-  PetscCall(VecAXPY(body->work, -(1 + c.cf), body->u));
-  PetscCall(MatMultAdd(body->K, body->work, body->rhs, body->rhs));
-  PetscCall(MatMultAdd(body->M, body->work2, body->rhs, body->rhs));
-  if (fc && c.cf != 0) PetscCall(VecAXPY(body->rhs, c.cf, fc));
-  PetscFunctionReturn(0);
-}
-
 /* -mbc_scheme, -mbc_hht_alpha, -mbc_galpha_rho_inf: the integrator of a scene without stages,
    overriding its own; beta, gamma, am, af of the solver set from them. *set: some was given. */
 PetscErrorCode MBCSolverSchemeSetFromOptions(MBCSolver s, PetscOptionItems *PetscOptionsObject, PetscBool *set)

@@ -36,6 +36,12 @@ PETSC_EXTERN const char *const MBCCellTypes[];
 
 #define MBC_MAX_CUTS 11 /* dt / 1024 */
 
+/* The coefficients of one step of h: Newmark's a0..a7, generalized-alpha's am, af, cf = af / (1 - af)
+   and the mass's coefficient aM = a0 (1 - am) / (1 - af) in the step's operator K + aM M + a1 C. */
+typedef struct {
+  PetscReal h, a0, a1, a2, a3, a4, a5, a6, a7, am, af, cf, aM;
+} MBCTimeCoefficients;
+
 struct _n_MBCBody {
   PETSCHEADER(struct _MBCBodyOps);
   char        name[MBC_NAME_LEN];
@@ -158,9 +164,11 @@ PETSC_INTERN PetscErrorCode MBCBodyAbsorbingHold(MBCBody);
 PETSC_INTERN PetscErrorCode MBCBodyAbsorbingRelease(MBCBody, PetscReal);
 PETSC_INTERN PetscErrorCode MBCBodyGroundLoad(MBCBody, MBCLoadDesc *, Vec, PetscBool *);
 PETSC_INTERN PetscErrorCode MBCBodyEnvelopeUpdate(MBCBody, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyGetEnvelope(MBCBody, Vec *);
 PETSC_INTERN PetscErrorCode MBCBodyAddDamping(MBCBody, PetscReal, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyNodalBlockMatrix(MBCBody, Mat *);
 PETSC_INTERN PetscErrorCode MBCBodyInitialState(MBCBody, PetscBool *, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCBodyHasInitialState(MBCBody, PetscBool *);
 /* bodyrigidbody.c: a rigid body's six DOFs */
 PETSC_INTERN PetscErrorCode MBCBodyRigidSetUp(MBCBody, PetscBool);
 PETSC_INTERN PetscErrorCode MBCBodyRigidFactor(MBCBody, PetscReal, PetscReal, KSP *, Mat *);
@@ -176,3 +184,39 @@ PETSC_INTERN PetscErrorCode MBCBodySpringPattern(MBCBody, Mat);
 PETSC_INTERN PetscErrorCode MBCBodySpringsSetUp(MBCBody, PetscBool);
 PETSC_INTERN void           MBCBodySpringHeld(MBCBody, PetscBool[3]);
 PETSC_INTERN PetscBool      MBCBodyDamped(MBCBody);
+/* bodycreate.c: what other modules read of a body, and the contact's share of its increment */
+PETSC_INTERN PetscErrorCode MBCBodyGetComm(MBCBody, MPI_Comm *);
+PETSC_INTERN PetscErrorCode MBCBodyGetIndex(MBCBody, PetscInt *);
+PETSC_INTERN PetscErrorCode MBCBodyGetElement(MBCBody, MBCElementType *, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCBodyGetPrescribedRows(MBCBody, PetscInt *, const PetscInt **);
+PETSC_INTERN PetscErrorCode MBCBodyGetPrescribedEntries(MBCBody, const PetscInt **);
+PETSC_INTERN PetscErrorCode MBCBodyGetHeldRows(MBCBody, PetscInt *, const PetscInt **);
+PETSC_INTERN PetscErrorCode MBCBodyGetRigidModes(MBCBody, PetscInt *, const Vec **);
+PETSC_INTERN PetscErrorCode MBCBodyGetRigidEquilibrium(MBCBody, const PetscReal **, const PetscReal **, PetscReal *, const PetscReal **);
+PETSC_INTERN PetscErrorCode MBCBodyGetIncrement(MBCBody, Vec *);
+PETSC_INTERN PetscErrorCode MBCBodyAddIncrement(MBCBody, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyAddRigidIncrement(MBCBody, const PetscReal[]);
+PETSC_INTERN PetscErrorCode MBCBodyGetAcceleration(MBCBody, Vec *);
+PETSC_INTERN PetscErrorCode MBCBodyGetWork(MBCBody, PetscReal *, PetscReal *);
+PETSC_INTERN PetscErrorCode MBCBodySetWork(MBCBody, PetscReal, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyRestartLoad(MBCBody, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyGetSceneNumbering(MBCBody, const PetscInt **, const PetscInt **);
+PETSC_INTERN PetscErrorCode MBCBodyGetCellNodes(MBCBody, PetscInt, PetscInt *, const PetscInt **, MBCCellType *);
+PETSC_INTERN PetscErrorCode MBCBodySceneLoadResultant(MBCBody, PetscInt, PetscReal[6], PetscBool *);
+/* bodystep.c: the body's part of a load or time step */
+PETSC_INTERN PetscErrorCode MBCBodySetMemoryLimit(MBCBody, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodySetStage(MBCBody, PetscInt);
+PETSC_INTERN PetscErrorCode MBCBodyEnergy(MBCBody, PetscReal[4]);
+PETSC_INTERN PetscErrorCode MBCBodyStaticBegin(MBCBody, PetscReal, PetscBool *, PetscBool *);
+PETSC_INTERN PetscErrorCode MBCBodyStaticFactor(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyStaticIncrement(MBCBody, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyStaticUpdate(MBCBody, PetscReal, PetscReal[3]);
+PETSC_INTERN PetscErrorCode MBCBodyStepSave(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyStepRestore(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyAcceleration(MBCBody, PetscReal, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyWorkStart(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyDynamicInitialState(MBCBody);
+PETSC_INTERN PetscErrorCode MBCBodyDynamicStageBegin(MBCBody, PetscBool, PetscReal);
+PETSC_INTERN PetscErrorCode MBCBodyUseStepLevel(MBCBody, PetscInt, MBCTimeCoefficients);
+PETSC_INTERN PetscErrorCode MBCBodyDynamicIncrement(MBCBody, PetscReal, MBCTimeCoefficients, Vec, PetscReal, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyDynamicUpdate(MBCBody, PetscReal, MBCTimeCoefficients);

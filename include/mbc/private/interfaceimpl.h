@@ -128,7 +128,7 @@ PETSC_INTERN PetscErrorCode MBCInterfaceGatherFromBodies(MBCInterface, Vec[], Ve
 PETSC_INTERN PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface, PetscInt, PetscInt, const PetscInt[], Mat *, Mat *);
 /* interfacerelease.c: the points that leave the contact set in a dynamic step */
 PETSC_INTERN PetscErrorCode MBCInterfaceRelease(MBCInterface, PetscInt, const PetscInt[], PetscReal[]);
-PETSC_INTERN PetscErrorCode MBCInterfaceAddReleasedForce(MBCInterface, PetscInt, Vec);
+PETSC_INTERN PetscErrorCode MBCInterfaceGetReleasedStepForce(MBCInterface, PetscInt, PetscReal *, Vec *);
 PETSC_INTERN PetscErrorCode MBCInterfaceReleasedStep(MBCInterface);
 PETSC_INTERN PetscErrorCode MBCInterfaceGetReleasedForce(MBCInterface, PetscInt, Vec *);
 PETSC_INTERN PetscErrorCode MBCInterfaceReleasedClear(MBCInterface);

@@ -32,12 +32,6 @@ typedef enum {
 } MBCSchemeType;
 PETSC_INTERN const char *const MBCSchemeTypes[];
 
-/* The coefficients of one step of h: Newmark's a0..a7, generalized-alpha's am, af, cf = af / (1 - af)
-   and the mass's coefficient aM = a0 (1 - am) / (1 - af) in the step's operator K + aM M + a1 C. */
-typedef struct {
-  PetscReal h, a0, a1, a2, a3, a4, a5, a6, a7, am, af, cf, aM;
-} MBCTimeCoefficients;
-
 #define MBC_NENERGY 6 /* kinetic, strain, external work, damping, friction, normal contact */
 
 /* One analysis stage of the run (the scene's stages, or the one analysis): its steps are
@@ -213,6 +207,5 @@ PETSC_INTERN PetscErrorCode MBCSolverModalSolve(MBCSolver);
 PETSC_INTERN MBCTimeCoefficients MBCTimeScheme(PetscReal, PetscReal, PetscReal, PetscReal, PetscReal);
 PETSC_INTERN PetscReal      MBCTimeContactWeight(PetscReal, PetscReal, PetscReal);
 PETSC_INTERN PetscBool      MBCTimeContactThroughAcceleration(PetscReal);
-PETSC_INTERN PetscErrorCode MBCSolverStepRHS(MBCBody, MBCTimeCoefficients, Vec);
 PETSC_INTERN PetscErrorCode MBCSolverSchemeSetFromOptions(MBCSolver, PetscOptionItems *, PetscBool *);
 PETSC_INTERN MBCSchemeType  MBCSchemeFromName(const char *);
