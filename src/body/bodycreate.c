@@ -213,6 +213,8 @@ PetscErrorCode MBCBodyDestroy(MBCBody *body)
   }
   PetscCall(PetscFree2(b->bc_rows, b->bc_entry));
   PetscCall(VecDestroy(&b->fhold));
+  PetscCall(MatDestroy(&b->Ainv));
+  PetscCall(VecDestroy(&b->fheld));
   PetscCall(MBCBodyRigidModesDestroy(b));
   PetscCall(MatDestroy(&b->K));
   PetscCall(MatDestroy(&b->M));

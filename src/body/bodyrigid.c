@@ -323,6 +323,7 @@ PetscErrorCode MBCBodyRigidModes(MBCBody body)
 PetscErrorCode MBCBodyRigidModesDestroy(MBCBody body)
 {
   PetscFunctionBegin;
+  if (body->Ainv) PetscCall(MatSetNullSpace(body->Ainv, NULL)); /* the modes it held go */
   for (PetscInt j = 0; j < body->nrigid; j++) PetscCall(VecDestroy(&body->rigid[j]));
   PetscCall(PetscFree(body->rigid));
   PetscCall(PetscFree3(body->fix_rows, body->erigid, body->frigid));

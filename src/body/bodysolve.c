@@ -185,13 +185,22 @@ PetscErrorCode MBCBodySetConstrainedRows(MBCBody body, Vec g, Vec rhs)
   PetscFunctionReturn(0);
 }
 
+/* Checks a solve of the body's factor, on the body's ranks. */
+static PetscErrorCode BodySolveCheck(MBCBody body, KSP ksp)
+{
+  KSPConvergedReason reason;
+
+  PetscFunctionBegin;
+  PetscCall(KSPGetConvergedReason(ksp, &reason));
+  PetscCheck(reason > 0, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': linear solve failed (%s)", body->name, KSPConvergedReasons[reason]);
+  PetscFunctionReturn(0);
+}
+
 /* Solves A x = rhs where A = aK K + aM M was factored with constrained rows/cols zeroed.
    g (or NULL for zero) holds the prescribed values on constrained rows: their columns are
    moved to the right side, as MatZeroRowsColumns would. rhs is overwritten. */
 PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, PetscReal aM, Vec g, Vec rhs, Vec x)
 {
-  KSPConvergedReason reason;
-
   PetscFunctionBegin;
   if (body->desc.rigid) {
     PetscCall(MBCBodyRigidSolve(body, ksp, aM, g, rhs, x));
@@ -218,28 +227,89 @@ PetscErrorCode MBCBodyConstrainedSolve(MBCBody body, KSP ksp, PetscReal aK, Pets
     PetscCall(MBCBodyZeroHeldRows(body, rhs, NULL));
   }
   PetscCall(KSPSolve(ksp, rhs, x));
-
-  PetscCall(KSPGetConvergedReason(ksp, &reason));
-  PetscCheck(reason > 0, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': linear solve failed (%s)", body->name, KSPConvergedReasons[reason]);
+  PetscCall(BodySolveCheck(body, ksp));
   PetscCall(PetscLogEventEnd(MBC_BodySolve, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 
-/* x = A^-1 f by the body's factored operator with f's held rows zeroed (K^+ f where the body
-   floats): the body's response to forces on its free rows, the contact forces. f is overwritten.
-   A body solve like the step's own (MBC_BodySolve), so that the log compares the interface's
-   work with every solve of the bodies. */
-PetscErrorCode MBCBodyApplyInverse(MBCBody body, Vec f, Vec x)
+/* y = A^+ x: the body's current factor (its stage's, its step size's) on x with x's held rows
+   zeroed in a copy. A body solve like the step's own (MBC_BodySolve), so that the log compares
+   the contact's work with every solve of the bodies. */
+static PetscErrorCode BodyInverseMult(Mat Ainv, Vec x, Vec y)
 {
-  KSPConvergedReason reason;
+  MBCBody body;
 
   PetscFunctionBegin;
+  PetscCall(MatShellGetContext(Ainv, &body));
   PetscCall(PetscLogEventBegin(MBC_BodySolve, 0, 0, 0, 0));
-  PetscCall(MBCBodyZeroHeldRows(body, f, NULL));
-  PetscCall(KSPSolve(body->ksp, f, x));
-  PetscCall(KSPGetConvergedReason(body->ksp, &reason));
-  PetscCheck(reason > 0, body->comm, PETSC_ERR_NOT_CONVERGED, "Body '%s': linear solve failed (%s)", body->name, KSPConvergedReasons[reason]);
+  if (body->nrigid) { /* nrigid, not this rank's nfix: every rank of the body creates the same objects */
+    if (!body->fheld) PetscCall(VecDuplicate(x, &body->fheld));
+    PetscCall(VecCopy(x, body->fheld));
+    PetscCall(MBCBodyZeroHeldRows(body, body->fheld, NULL));
+    x = body->fheld;
+  }
+  PetscCall(KSPSolve(body->ksp, x, y));
+  PetscCall(BodySolveCheck(body, body->ksp));
   PetscCall(PetscLogEventEnd(MBC_BodySolve, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* C = A^+ B for a dense B of several right sides: one multi-right-hand-side solve. */
+static PetscErrorCode BodyInverseMatMult(Mat Ainv, Mat B, Mat C, void *ctx)
+{
+  MBCBody body;
+  Mat     Bheld = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(MatShellGetContext(Ainv, &body));
+  PetscCall(PetscLogEventBegin(MBC_BodySolve, 0, 0, 0, 0));
+  if (body->nrigid) {
+    PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &Bheld));
+    PetscCall(MBCBodyZeroHeldRows(body, NULL, Bheld));
+    B = Bheld;
+  }
+  PetscCall(KSPMatSolve(body->ksp, B, C));
+  PetscCall(MatDestroy(&Bheld));
+  PetscCall(PetscLogEventEnd(MBC_BodySolve, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* The body's generalised inverse as an operator (as PERMON's MatCreateInv): MatMult and, for a
+   dense B, MatMatMult apply A^-1 by the body's current factor with the held rows of the right
+   side zeroed, which is K^+ where a static body floats; its free rigid modes are then the Mat's
+   null space. The body keeps it (no reference is given): after the body's factor changes (a stage,
+   a step size) it applies the new one. Collective on the body the first time. */
+PetscErrorCode MBCBodyGetInverse(MBCBody body, Mat *Ainv)
+{
+  MatNullSpace nsp;
+
+  PetscFunctionBegin;
+  if (!body->Ainv) {
+    PetscInt n, N;
+    PetscCall(VecGetLocalSize(body->u, &n));
+    PetscCall(VecGetSize(body->u, &N));
+    PetscCall(MatCreateShell(body->comm, n, n, N, N, body, &body->Ainv));
+    PetscCall(MatShellSetOperation(body->Ainv, MATOP_MULT, (void (*)(void))BodyInverseMult));
+    PetscCall(MatShellSetMatProductOperation(body->Ainv, MATPRODUCT_AB, NULL, BodyInverseMatMult, NULL, MATDENSE, MATDENSE));
+  }
+  PetscCall(MatGetNullSpace(body->Ainv, &nsp));
+  if (body->nrigid && !nsp) { /* the modes of this static stage (MBCBodyRigidModesDestroy drops it) */
+    PetscCall(MatNullSpaceCreate(body->comm, PETSC_FALSE, body->nrigid, body->rigid, &nsp));
+    PetscCall(MatSetNullSpace(body->Ainv, nsp));
+    PetscCall(MatNullSpaceDestroy(&nsp));
+  }
+  *Ainv = body->Ainv;
+  PetscFunctionReturn(0);
+}
+
+/* The KSP of the factor that MBCBodyGetInverse's Mat applies now (PERMON's MatInvGetKSP). */
+PetscErrorCode MBCInverseGetKSP(Mat Ainv, KSP *ksp)
+{
+  MBCBody body;
+
+  PetscFunctionBegin;
+  PetscCall(MatShellGetContext(Ainv, &body));
+  *ksp = body->ksp;
   PetscFunctionReturn(0);
 }
 

@@ -99,7 +99,7 @@ PetscErrorCode MBCContactSetFromOptions(MBCContact c, const char prefix[])
 /* Faces of this rank's part of a body carrying a contact label, oriented outward. */
 static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscReal **buf, PetscInt *n, PetscInt *cap)
 {
-  DM                 dm = body->dm, cdm;
+  DM                 dm, cdm;
   PetscSection       csec, gsec, lsec;
   Vec                coords, uloc = NULL;
   const PetscScalar *x, *ul = NULL;
@@ -108,8 +108,11 @@ static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscR
   const PetscInt    *leaves;
   PetscBT            notmine;
   const char        *labels[2] = {"contact_master", "contact_slave"};
+  PetscInt           bindex;
 
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetDM(body, &dm));
+  PetscCall(MBCBodyGetIndex(body, &bindex));
   PetscCall(DMGetCoordinateDM(dm, &cdm));
   PetscCall(DMGetLocalSection(cdm, &csec));
   PetscCall(DMGetGlobalSection(dm, &gsec));
@@ -159,7 +162,7 @@ static PetscErrorCode BodyContactFaces(MBCContact c, MBCBody body, Vec u, PetscR
         PetscCall(PetscArrayzero(r, FACE_REC));
         r[0] = ci;
         r[1] = side;
-        r[2] = body->index;
+        r[2] = bindex;
         r[3] = nv;
         for (PetscInt i = 0; i < nv; i++) {
           PetscInt off, loff;
@@ -295,10 +298,10 @@ static int CompareFaceKey(const void *a, const void *b)
 /* Gathers every couple's faces from all bodies to every rank, in canonical order. */
 static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodies[], PetscBool reference, PetscReal **all, PetscInt *nall)
 {
-  PetscReal   *mine = NULL, *sorted;
-  PetscInt     nmine = 0, cap = 0;
-  PetscMPIInt  size, *counts, *displs, count;
-  FaceKey     *keys;
+  PetscReal  *mine = NULL, *sorted;
+  PetscInt    nmine = 0, cap = 0;
+  PetscMPIInt size, *counts, *displs, count;
+  FaceKey    *keys;
 
   PetscFunctionBegin;
   /* the ranks meet here first: the time a rank waits for the slowest (its bodies' factorizations,
@@ -307,8 +310,12 @@ static PetscErrorCode ContactGather(MBCContact c, PetscInt nbodies, MBCBody bodi
   PetscCallMPI(MPI_Barrier(c->comm));
   PetscCall(PetscLogEventEnd(MBC_RankWait, 0, 0, 0, 0));
   PetscCall(PetscLogEventBegin(MBC_ContactGather, 0, 0, 0, 0));
-  for (PetscInt b = 0; b < nbodies; b++)
-    if (bodies[b]) PetscCall(BodyContactFaces(c, bodies[b], reference ? NULL : bodies[b]->u, &mine, &nmine, &cap));
+  for (PetscInt b = 0; b < nbodies; b++) {
+    Vec u;
+    if (!bodies[b]) continue;
+    PetscCall(MBCBodyGetDisplacement(bodies[b], &u));
+    PetscCall(BodyContactFaces(c, bodies[b], reference ? NULL : u, &mine, &nmine, &cap));
+  }
   PetscCallMPI(MPI_Comm_size(c->comm, &size));
   PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
   PetscCall(PetscMPIIntCast(nmine * FACE_REC, &count));
@@ -516,9 +523,13 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
   global = (PetscBool)(force || c->nsearches == 0 || (c->small_sliding && !keep));
   for (PetscInt b = 0; b < nbodies && !global; b++) { /* largest displacement since the last search */
     PetscReal d = 0;
-    if (!bodies[b] || !bodies[b]->u || !c->usearch[b]) continue;
-    PetscCall(VecWAXPY(bodies[b]->work, -1.0, c->usearch[b], bodies[b]->u));
-    PetscCall(VecNorm(bodies[b]->work, NORM_INFINITY, &d));
+    Vec       u = NULL, du;
+    PetscCall(MBCBodyGetDisplacement(bodies[b], &u));
+    if (!u || !c->usearch[b]) continue;
+    PetscCall(VecDuplicate(u, &du));
+    PetscCall(VecWAXPY(du, -1.0, c->usearch[b], u));
+    PetscCall(VecNorm(du, NORM_INFINITY, &d));
+    PetscCall(VecDestroy(&du));
     moved = PetscMax(moved, PetscSqrtReal(3.0) * d);
   }
   if (!global) {
@@ -551,9 +562,11 @@ PetscErrorCode MBCContactUpdate(MBCContact c, PetscInt nbodies, MBCBody bodies[]
   if (global) {
     c->nsearches++;
     for (PetscInt b = 0; b < nbodies; b++) {
-      if (!bodies[b] || !bodies[b]->u) continue;
-      if (!c->usearch[b]) PetscCall(VecDuplicate(bodies[b]->u, &c->usearch[b]));
-      PetscCall(VecCopy(bodies[b]->u, c->usearch[b]));
+      Vec u = NULL;
+      PetscCall(MBCBodyGetDisplacement(bodies[b], &u));
+      if (!u) continue;
+      if (!c->usearch[b]) PetscCall(VecDuplicate(u, &c->usearch[b]));
+      PetscCall(VecCopy(u, c->usearch[b]));
     }
   }
   if (c->small_sliding && !keep) PetscCall(MBCContactSlidingFreeze(c));

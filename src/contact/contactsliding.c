@@ -124,10 +124,12 @@ PetscErrorCode MBCContactSlidingGather(MBCContact c, PetscInt nbodies, MBCBody b
   PetscCall(PetscMalloc5(4 * n + 1, &mine, nbodies, &u, nbodies, &rs, nbodies, &re, 2 * n + 1, &x));
   x0 = x + n;
   for (PetscInt b = 0; b < nbodies; b++) {
-    u[b] = NULL;
-    if (!bodies[b] || !bodies[b]->u) continue;
-    PetscCall(VecGetOwnershipRange(bodies[b]->u, &rs[b], &re[b]));
-    PetscCall(VecGetArrayRead(bodies[b]->u, &u[b]));
+    Vec ub = NULL;
+    u[b]   = NULL;
+    PetscCall(MBCBodyGetDisplacement(bodies[b], &ub));
+    if (!ub) continue;
+    PetscCall(VecGetOwnershipRange(ub, &rs[b], &re[b]));
+    PetscCall(VecGetArrayRead(ub, &u[b]));
   }
   for (PetscInt i = 0; i < c->ncouples; i++)
     for (PetscInt side = 0; side < 2; side++) {
@@ -141,8 +143,12 @@ PetscErrorCode MBCContactSlidingGather(MBCContact c, PetscInt nbodies, MBCBody b
         nmine++;
       }
     }
-  for (PetscInt b = 0; b < nbodies; b++)
-    if (u[b]) PetscCall(VecRestoreArrayRead(bodies[b]->u, &u[b]));
+  for (PetscInt b = 0; b < nbodies; b++) {
+    Vec ub;
+    if (!u[b]) continue;
+    PetscCall(MBCBodyGetDisplacement(bodies[b], &ub));
+    PetscCall(VecRestoreArrayRead(ub, &u[b]));
+  }
   PetscCallMPI(MPI_Comm_size(c->comm, &size));
   PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
   PetscCall(PetscMPIIntCast(4 * nmine, &count));

@@ -373,11 +373,17 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
   MBCContact  c = ifc->contact;
   PetscMPIInt brank;
   PetscInt    ndof, nloc, rstart, k = 0, *cnt, *onz;
+  MPI_Comm    bcomm;
+  Vec         bu;
+  PetscInt    bindex;
 
   PetscFunctionBegin;
-  PetscCall(VecGetSize(body->u, &ndof));
-  PetscCall(VecGetLocalSize(body->u, &nloc));
-  PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetDisplacement(body, &bu));
+  PetscCall(MBCBodyGetIndex(body, &bindex));
+  PetscCall(VecGetSize(bu, &ndof));
+  PetscCall(VecGetLocalSize(bu, &nloc));
+  PetscCall(VecGetOwnershipRange(bu, &rstart, NULL));
   /* preallocation: per local row the entries inserted into it (an upper bound: a slave node's row
      takes the columns of every point whose integrated constraint reaches it, often more than the
      24 a row had; every row that overflowed copied the whole matrix, 12 % of the 20k dam's run) */
@@ -389,25 +395,25 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
       if (first[kk] < 0) continue;
       for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
         const PetscInt node = cp->mnode[l], r = cp->master.nrow[node] - rstart;
-        if (cp->master.nbody[node] != body->index || r < 0 || r >= nloc) continue;
+        if (cp->master.nbody[node] != bindex || r < 0 || r >= nloc) continue;
         for (PetscInt d = 0; d < 3; d++) cnt[r + d] += dim;
       }
       for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) {
         const PetscInt node = cp->snode[l], r = cp->slave.nrow[node] - rstart;
-        if (cp->slave.nbody[node] != body->index || r < 0 || r >= nloc) continue;
+        if (cp->slave.nbody[node] != bindex || r < 0 || r >= nloc) continue;
         for (PetscInt d = 0; d < 3; d++) cnt[r + d] += dim;
       }
     }
   }
   {
-    PetscInt nlc = PETSC_DECIDE, N = ifc->nbcols[body->index];
-    PetscCall(PetscSplitOwnership(body->comm, &nlc, &N));
+    PetscInt nlc = PETSC_DECIDE, N = ifc->nbcols[bindex];
+    PetscCall(PetscSplitOwnership(bcomm, &nlc, &N));
     for (PetscInt r = 0; r < nloc; r++) onz[r] = PetscMin(cnt[r], N - nlc), cnt[r] = PetscMin(cnt[r], nlc);
-    PetscCall(MatCreateAIJ(body->comm, nloc, nlc, ndof, N, 0, cnt, 0, onz, H));
+    PetscCall(MatCreateAIJ(bcomm, nloc, nlc, ndof, N, 0, cnt, 0, onz, H));
   }
   PetscCall(PetscFree2(cnt, onz));
   PetscCall(MatSetOption(*H, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
-  PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
+  PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
   for (PetscInt i = 0; i < c->ncouples; i++) {
     MBCCouple  *cp = &c->couples[i];
     MBCSurface *m = &cp->master, *sl = &cp->slave;
@@ -419,12 +425,12 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
         if (ifc->held[k] & (1 << a)) continue; /* held on both sides: no multiplier acts along it */
         for (PetscInt l = cp->moff[j]; l < cp->moff[j + 1]; l++) {
           const PetscInt node = cp->mnode[l];
-          if (m->nbody[node] != body->index) continue;
+          if (m->nbody[node] != bindex) continue;
           for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, m->nrow[node] + d, col, cp->mw[l] * e[a][d], ADD_VALUES));
         }
         for (PetscInt l = cp->soff[j]; l < cp->soff[j + 1]; l++) {
           const PetscInt node = cp->snode[l];
-          if (sl->nbody[node] != body->index) continue;
+          if (sl->nbody[node] != bindex) continue;
           for (PetscInt d = 0; d < 3; d++) PetscCall(MatSetValue(*H, sl->nrow[node] + d, col, -cp->sw[l] * e[a][d], ADD_VALUES));
         }
       }
@@ -432,7 +438,12 @@ static PetscErrorCode BodyContactMatrix(MBCInterface ifc, MBCBody body, const Pe
   }
   PetscCall(MatAssemblyBegin(*H, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*H, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatZeroRows(*H, body->nbc, body->bc_rows, 0.0, NULL, NULL));
+  {
+    PetscInt        nbc;
+    const PetscInt *bcrows;
+    PetscCall(MBCBodyGetPrescribedRows(body, &nbc, &bcrows));
+    PetscCall(MatZeroRows(*H, nbc, bcrows, 0.0, NULL, NULL));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -628,8 +639,12 @@ PetscErrorCode MBCInterfaceGapRate(MBCInterface ifc, Vec q)
   PetscInt     rstart;
 
   PetscFunctionBegin;
-  for (PetscInt b = 0; b < ifc->nbodies; b++)
-    if (ifc->H[b]) PetscCall(MatMultTranspose(ifc->H[b], ifc->bodies[b]->du, ifc->Hu[b]));
+  for (PetscInt b = 0; b < ifc->nbodies; b++) {
+    Vec du;
+    if (!ifc->H[b]) continue;
+    PetscCall(MBCBodyGetIncrement(ifc->bodies[b], &du));
+    PetscCall(MatMultTranspose(ifc->H[b], du, ifc->Hu[b]));
+  }
   PetscCall(MBCInterfaceFromBodies(ifc, q));
   PetscCall(VecGetOwnershipRange(q, &rstart, NULL));
   PetscCall(VecGetArray(q, &a));
@@ -822,11 +837,15 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscI
   PetscInt     n, nl = 0, rs, *idx, *all = NULL;
   PetscMPIInt  size, rank, cnt, *counts = NULL, *displs = NULL;
   PetscScalar *ra;
+  MPI_Comm     bcomm;
+  Vec          bu;
 
   PetscFunctionBegin;
-  PetscCallMPI(MPI_Comm_size(body->comm, &size));
-  PetscCallMPI(MPI_Comm_rank(body->comm, &rank));
-  PetscCall(VecDuplicate(body->u, &r));
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetDisplacement(body, &bu));
+  PetscCallMPI(MPI_Comm_size(bcomm, &size));
+  PetscCallMPI(MPI_Comm_rank(bcomm, &rank));
+  PetscCall(VecDuplicate(bu, &r));
   PetscCall(VecGetLocalSize(r, &n));
   PetscCall(VecGetOwnershipRange(r, &rs, NULL));
   PetscCall(BodyContactDofs(ifc, b, r));
@@ -836,7 +855,7 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscI
     if (ra[i] != 0.0) idx[nl++] = rs + i;
   PetscCall(VecRestoreArray(r, &ra));
   PetscCall(VecDestroy(&r));
-  PetscCall(MPIU_Allreduce(&nl, nC, 1, MPIU_INT, MPI_SUM, body->comm));
+  PetscCall(MPIU_Allreduce(&nl, nC, 1, MPIU_INT, MPI_SUM, bcomm));
   if (!is) {
     PetscCall(PetscFree(idx));
     PetscFunctionReturn(0);
@@ -847,9 +866,9 @@ static PetscErrorCode BodyContactIS(MBCInterface ifc, PetscInt b, IS *is, PetscI
   }
   PetscCall(PetscMPIIntCast(nl, &cnt));
   if (!rank) PetscCall(PetscMalloc3(size, &counts, size, &displs, *nC + 1, &all));
-  PetscCallMPI(MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, body->comm));
+  PetscCallMPI(MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, bcomm));
   for (PetscMPIInt p = 0; !rank && p < size; p++) displs[p] = p ? displs[p - 1] + counts[p - 1] : 0;
-  PetscCallMPI(MPI_Gatherv(idx, cnt, MPIU_INT, all, counts, displs, MPIU_INT, 0, body->comm)); /* rank order: ascending */
+  PetscCallMPI(MPI_Gatherv(idx, cnt, MPIU_INT, all, counts, displs, MPIU_INT, 0, bcomm)); /* rank order: ascending */
   PetscCall(PetscFree(idx));
   PetscCall(ISCreateGeneral(PETSC_COMM_SELF, rank ? 0 : *nC, all, PETSC_COPY_VALUES, is));
   if (!rank) PetscCall(PetscFree3(counts, displs, all));
@@ -870,10 +889,14 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
 {
   MBCBody     body = ifc->bodies[b];
   PetscMPIInt brank;
+  PetscBool   rigid;
+  MPI_Comm    bcomm;
+  const char *bname;
 
   PetscFunctionBegin;
   *schur = PETSC_FALSE;
-  if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE || body->desc.rigid) PetscFunctionReturn(0); /* a rigid body has no factor: its projection is cheap */
+  PetscCall(MBCBodyGetElement(body, NULL, &rigid));
+  if (ifc->droute == MBC_D_ROUTE_MULTIRHS || ifc->droute == MBC_D_ROUTE_MATFREE || rigid) PetscFunctionReturn(0); /* a rigid body has no factor: its projection is cheap */
   if (ifc->droute == MBC_D_ROUTE_SCHUR) {
     *schur = PETSC_TRUE;
     PetscFunctionReturn(0);
@@ -881,12 +904,14 @@ static PetscErrorCode BodyUsesSchur(MBCInterface ifc, PetscInt b, PetscBool *sch
   if (ifc->schur_fits[b] < 0) {
     PetscInt  nC;
     PetscReal mb, pat;
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetName(body, &bname));
     PetscCall(BodyContactIS(ifc, b, NULL, &nC));
     mb                 = 8.0 * nC * nC / 1048576.0;
     pat                = 12.0 * nC * PetscMin(nC, MBC_SINV_BLOCK) / 1048576.0;
     ifc->schur_fits[b] = mb + pat <= ifc->schur_max_mb;
-    PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
-    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, the inverse's entries asked %g): %s -mbc_d_schur_max_mb %g\n", body->name, nC, mb + pat, mb, pat, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
+    PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the Schur route onto %" PetscInt_FMT " contact DOFs would take %g MB (S^-1 %g, the inverse's entries asked %g): %s -mbc_d_schur_max_mb %g\n", bname, nC, mb + pat, mb, pat, ifc->schur_fits[b] ? "within" : "beyond", (double)ifc->schur_max_mb));
   }
   *schur = (PetscBool)ifc->schur_fits[b];
   PetscFunctionReturn(0);
@@ -992,39 +1017,48 @@ static PetscErrorCode BodyInverseEntries(Mat F, MPI_Comm comm, IS isC, PetscInt 
 static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *ok)
 {
   MBCBody          body = ifc->bodies[b];
-  Mat              A, P, S, F;
+  Mat              Ainv, A, P, S, F;
+  KSP              ksp;
   PC               pc;
   PetscInt         n, nC, infog1;
   PetscObjectState state;
   PetscObjectId    id;
   PetscLogDouble   t0, t1;
   PetscMPIInt      bsize, brank;
+  MPI_Comm         bcomm;
+  Vec              bu;
+  const char      *bname;
 
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetDisplacement(body, &bu));
+  PetscCall(MBCBodyGetName(body, &bname));
   *ok = PETSC_TRUE;
-  PetscCallMPI(MPI_Comm_size(body->comm, &bsize));
-  PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
-  PetscCall(KSPGetOperators(body->ksp, &A, &P));
+  PetscCallMPI(MPI_Comm_size(bcomm, &bsize));
+  PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+  PetscCall(MBCBodyGetInverse(body, &Ainv));
+  PetscCall(MBCInverseGetKSP(Ainv, &ksp));
+  PetscCall(KSPGetOperators(ksp, &A, &P));
   PetscCall(PetscObjectStateGet((PetscObject)A, &state));
   PetscCall(PetscObjectGetId((PetscObject)A, &id));
   if (ifc->sinv[b] && ifc->sinv_id[b] == id && ifc->sinv_state[b] == state) {
-    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement, S^-1 reused\n", body->name));
+    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement, S^-1 reused\n", bname));
     PetscFunctionReturn(0);
   }
   PetscCall(MatDestroy(&ifc->sinv[b]));
   PetscCall(ISDestroy(&ifc->sinv_is[b]));
   PetscCall(BodyContactIS(ifc, b, &ifc->sinv_is[b], &nC)); /* the held rows depend on the operator (K^+) */
-  PetscCall(VecGetSize(body->u, &n));
+  PetscCall(VecGetSize(bu, &n));
   PetscCall(PetscTime(&t0));
   /* also where every DOF lies on a contact surface (S^-1 = A^-1: a coarse monolith with joints on
      both sides), which the Schur factorization had to take by LAPACK on A dense */
-  PetscCall(KSPGetPC(body->ksp, &pc));
+  PetscCall(KSPGetPC(ksp, &pc));
   PetscCall(PCFactorGetMatrix(pc, &F));
-  PetscCall(BodyInverseEntries(F, body->comm, ifc->sinv_is[b], n, nC, &S, &infog1, ok));
+  PetscCall(BodyInverseEntries(F, bcomm, ifc->sinv_is[b], n, nC, &S, &infog1, ok));
   if (!*ok) { /* MUMPS's workspace or the machine's memory ran out: the caller takes the solves */
     PetscCall(ISDestroy(&ifc->sinv_is[b]));
-    PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, body->comm, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", body->name, nC, infog1);
-    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", body->name, infog1));
+    PetscCheck(ifc->droute == MBC_D_ROUTE_AUTO, bcomm, PETSC_ERR_MEM, "Body '%s': the entries of its inverse on its %" PetscInt_FMT " contact DOFs failed (MUMPS INFOG(1) = %" PetscInt_FMT "); -mbc_d_route schur cannot be used for it", bname, nC, infog1);
+    if (!brank) PetscCall(PetscInfo(NULL, "Body %s: the entries of its inverse failed (INFOG(1) = %" PetscInt_FMT "): its D by solves from now on\n", bname, infog1));
     ifc->schur_fits[b] = 0;
     PetscFunctionReturn(0);
   }
@@ -1032,7 +1066,7 @@ static PetscErrorCode BodySchurInverse(MBCInterface ifc, PetscInt b, PetscBool *
   ifc->sinv_id[b]    = id;
   ifc->sinv_state[b] = state;
   PetscCall(PetscTime(&t1));
-  if (!brank) PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT " (S^-1, the inverse's entries from the body's factor, %d rank%s, in %g s)\n", body->name, nC, n, (int)bsize, bsize > 1 ? "s" : "", t1 - t0));
+  if (!brank) PetscCall(PetscInfo(NULL, "Body %s: D through the Schur complement onto %" PetscInt_FMT " contact DOFs of %" PetscInt_FMT " (S^-1, the inverse's entries from the body's factor, %d rank%s, in %g s)\n", bname, nC, n, (int)bsize, bsize > 1 ? "s" : "", t1 - t0));
   PetscFunctionReturn(0);
 }
 
@@ -1133,9 +1167,11 @@ static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool
     for (PetscInt b = 0; b < ifc->nbodies; b++) {
       PetscBool   schur = PETSC_TRUE;
       PetscMPIInt brank = 1;
+      MPI_Comm    bcomm;
       if (!ifc->bodies[b] || !ifc->nbcols[b]) continue;
       PetscCall(BodyUsesSchur(ifc, b, &schur));
-      PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
+      PetscCall(MBCBodyGetComm(ifc->bodies[b], &bcomm));
+      PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
       if (!schur && !brank) solves += ifc->nbcols[b];
     }
     PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &solves, 1, MPIU_REAL, MPIU_SUM, ifc->comm));
@@ -1152,12 +1188,15 @@ static PetscErrorCode InterfaceUsesShell(MBCInterface ifc, PetscInt m, PetscBool
 PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface ifc, PetscInt b, PetscInt n, const PetscInt hcols[], Mat *Hd, Mat *X)
 {
   MBCBody      body = ifc->bodies[b];
+  Mat          Ainv;
   PetscScalar *h;
   PetscInt     lda, rlo, rhi;
+  MPI_Comm     bcomm;
 
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetComm(body, &bcomm));
   PetscCall(MatGetOwnershipRange(ifc->H[b], &rlo, &rhi));
-  PetscCall(MatCreateDense(body->comm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, n, NULL, Hd));
+  PetscCall(MatCreateDense(bcomm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, n, NULL, Hd));
   PetscCall(MatDenseGetArrayWrite(*Hd, &h));
   PetscCall(MatDenseGetLDA(*Hd, &lda));
   PetscCall(PetscArrayzero(h, lda * n));
@@ -1174,9 +1213,9 @@ PetscErrorCode MBCInterfaceBodySolveColumns(MBCInterface ifc, PetscInt b, PetscI
     PetscCall(MatRestoreRow(ifc->H[b], row, &ncols, &cols, &vals));
   }
   PetscCall(MatDenseRestoreArrayWrite(*Hd, &h));
-  PetscCall(MatDuplicate(*Hd, MAT_DO_NOT_COPY_VALUES, X));
   PetscCall(MBCBodyZeroHeldRows(body, NULL, *Hd));
-  PetscCall(KSPMatSolve(body->ksp, *Hd, *X));
+  PetscCall(MBCBodyGetInverse(body, &Ainv));
+  PetscCall(MatMatMult(Ainv, *Hd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, X));
   PetscFunctionReturn(0);
 }
 

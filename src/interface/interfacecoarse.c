@@ -128,11 +128,13 @@ PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface ifc, PetscInt mloc)
     }
     for (PetscInt b = 0; b < N; b++) {
       PetscInt rlo, rhi;
+      MPI_Comm bcomm;
       for (PetscInt j = j0; j < j1; j++)
         if (bt[b * (j1 - j0) + j - j0]) pos[b * (j1 - j0) + j - j0] = nbj[b]++;
       if (!Hl[b] || !nbj[b]) continue;
       PetscCall(VecGetOwnershipRange(Hl[b], &rlo, &rhi));
-      PetscCall(MatCreateDense(ifc->bodies[b]->comm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, nbj[b], NULL, &R[b]));
+      PetscCall(MBCBodyGetComm(ifc->bodies[b], &bcomm));
+      PetscCall(MatCreateDense(bcomm, rhi - rlo, PETSC_DECIDE, PETSC_DETERMINE, nbj[b], NULL, &R[b]));
     }
     for (PetscInt j = j0; j < j1; j++) { /* R_b's columns: H_b Phi_j */
       PetscScalar *pa;
@@ -153,11 +155,10 @@ PetscErrorCode MBCInterfaceBuildCoarse(MBCInterface ifc, PetscInt mloc)
       }
     }
     for (PetscInt b = 0; b < N; b++) { /* Y_b = H_b^T A_b^-1 R_b */
-      Mat X;
+      Mat Ainv, X;
       if (!R[b]) continue;
-      PetscCall(MatDuplicate(R[b], MAT_DO_NOT_COPY_VALUES, &X));
-      PetscCall(MBCBodyZeroHeldRows(ifc->bodies[b], NULL, R[b]));
-      PetscCall(KSPMatSolve(ifc->bodies[b]->ksp, R[b], X));
+      PetscCall(MBCBodyGetInverse(ifc->bodies[b], &Ainv));
+      PetscCall(MatMatMult(Ainv, R[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &X));
       PetscCall(MatTransposeMatMult(ifc->H[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y[b]));
       PetscCall(MatDestroy(&X));
     }

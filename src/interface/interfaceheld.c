@@ -22,10 +22,13 @@ static PetscErrorCode NodePrescribed(MBCInterface ifc, PetscInt **mask, PetscInt
     for (PetscInt side = 0; side < 2; side++) {
       const MBCSurface *s = side ? &c->couples[i].slave : &c->couples[i].master;
       for (PetscInt v = 0; v < s->nnodes; v++) {
-        const MBCBody body = ifc->bodies[s->nbody[v]];
+        const MBCBody   body = ifc->bodies[s->nbody[v]];
+        PetscInt        nbc  = 0;
+        const PetscInt *bcrows = NULL;
+        if (body) PetscCall(MBCBodyGetPrescribedRows(body, &nbc, &bcrows));
         for (PetscInt d = 0; body && d < 3; d++) {
           PetscInt at;
-          PetscCall(PetscFindInt(s->nrow[v] + d, body->nbc, body->bc_rows, &at));
+          PetscCall(PetscFindInt(s->nrow[v] + d, nbc, bcrows, &at));
           if (at >= 0) (*mask)[(*off)[2 * i + side] + v] |= 1 << d;
         }
       }

@@ -31,10 +31,11 @@ static PetscErrorCode DShellMult(Mat W, Vec x, Vec y)
   PetscCall(PetscLogEventBegin(MBC_FlexibilityMult, 0, 0, 0, 0));
   PetscCall(MBCInterfaceScatterToBodies(ifc, x, ctx->lam));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    MBCBody body = ifc->bodies[b];
+    Mat Ainv;
     if (!ctx->lam[b]) continue;
     PetscCall(MatMult(ifc->H[b], ctx->lam[b], ctx->Hl[b]));
-    PetscCall(MBCBodyApplyInverse(body, ctx->Hl[b], ctx->Xl[b]));
+    PetscCall(MBCBodyGetInverse(ifc->bodies[b], &Ainv));
+    PetscCall(MatMult(Ainv, ctx->Hl[b], ctx->Xl[b]));
     PetscCall(MatMultTranspose(ifc->H[b], ctx->Xl[b], ctx->Hu[b]));
   }
   PetscCall(MBCInterfaceGatherFromBodies(ifc, ctx->Hu, y));
@@ -63,13 +64,19 @@ static PetscErrorCode DShellDestroy(Mat W)
 /* K_b = H~_b^T A_b H~_b (nb x nb, H's column layout) of body b on its ranks. */
 static PetscErrorCode BodyLumped(MBCInterface ifc, PetscInt b, Mat *Kb)
 {
-  MBCBody body = ifc->bodies[b];
-  Mat     A, Ht;
+  MBCBody         body = ifc->bodies[b];
+  Mat             Ainv, A, Ht;
+  KSP             ksp;
+  PetscInt        nheld;
+  const PetscInt *held;
 
   PetscFunctionBegin;
-  PetscCall(KSPGetOperators(body->ksp, &A, NULL));
+  PetscCall(MBCBodyGetInverse(body, &Ainv));
+  PetscCall(MBCInverseGetKSP(Ainv, &ksp));
+  PetscCall(KSPGetOperators(ksp, &A, NULL));
+  PetscCall(MBCBodyGetHeldRows(body, &nheld, &held));
   PetscCall(MatDuplicate(ifc->H[b], MAT_COPY_VALUES, &Ht));
-  PetscCall(MatZeroRows(Ht, body->nfix, body->fix_rows, 0.0, NULL, NULL));
+  PetscCall(MatZeroRows(Ht, nheld, held, 0.0, NULL, NULL));
   PetscCall(MatPtAP(A, Ht, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Kb));
   PetscCall(MatDestroy(&Ht));
   PetscFunctionReturn(0);
@@ -101,8 +108,8 @@ static PetscErrorCode LumpedAdd(MBCInterface ifc, Mat Kb[], Mat Kl)
 /* fp.W (the shell), fp.Winv and dscale for m multipliers, mloc on this rank. */
 PetscErrorCode MBCInterfaceBuildDShell(MBCInterface ifc, PetscInt m, PetscInt mloc)
 {
-  DShell   *ctx;
-  Mat      *Kb, pre;
+  DShell *ctx;
+  Mat    *Kb, pre;
 
   PetscFunctionBegin;
   PetscCall(PetscNew(&ctx));

@@ -124,8 +124,12 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
   PetscCall(PetscCalloc1(ifc->nbodies + 1, &nr));
   for (PetscInt b = 0; b < ifc->nbodies; b++) { /* a body's count, once (from its first rank) */
     PetscMPIInt brank = 1;
-    if (ifc->bodies[b]) PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
-    if (!brank) nr[b] = ifc->bodies[b]->nrigid;
+    MPI_Comm    bcomm;
+    if (ifc->bodies[b]) {
+      PetscCall(MBCBodyGetComm(ifc->bodies[b], &bcomm));
+      PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+    }
+    if (!brank) PetscCall(MBCBodyGetRigidModes(ifc->bodies[b], &nr[b], NULL));
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nr, ifc->nbodies, MPIU_INT, MPI_SUM, ifc->comm));
   for (PetscInt b = 0; b < ifc->nbodies; b++) ifc->goff[b + 1] = ifc->goff[b] + nr[b];
@@ -139,6 +143,9 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
   PetscCall(VecDuplicate(ifc->fp.q, &rowabs));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     PetscReal *hsum = NULL; /* |H_b|^T 1: per column of H_b, the sum of its magnitudes */
+    const Vec *modes = NULL;
+    PetscInt   nmodes;
+    if (ifc->bodies[b]) PetscCall(MBCBodyGetRigidModes(ifc->bodies[b], &nmodes, &modes));
     if (ifc->goff[b + 1] > ifc->goff[b] && ifc->H[b]) {
       PetscCall(PetscMalloc1(ifc->nbcols[b] + 1, &hsum));
       PetscCall(MatGetColumnNorms(ifc->H[b], NORM_1, hsum));
@@ -148,7 +155,7 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
       PetscInt           rstart, n, g = ifc->goff[b] + j;
       for (PetscInt o = 0; o < ifc->nbodies; o++) { /* H_b^T R_bj, the other bodies 0 */
         if (!ifc->Hu[o]) continue;
-        if (o == b) PetscCall(MatMultTranspose(ifc->H[o], ifc->bodies[o]->rigid[j], ifc->Hu[o]));
+        if (o == b) PetscCall(MatMultTranspose(ifc->H[o], modes[j], ifc->Hu[o]));
         else PetscCall(VecZeroEntries(ifc->Hu[o]));
       }
       PetscCall(MBCInterfaceFromBodies(ifc, row));
@@ -157,7 +164,7 @@ PetscErrorCode MBCInterfaceRigidModes(MBCInterface ifc)
         PetscReal    rmax;
         PetscScalar *hu;
         PetscInt     cstart, cend;
-        PetscCall(VecNorm(ifc->bodies[b]->rigid[j], NORM_INFINITY, &rmax));
+        PetscCall(VecNorm(modes[j], NORM_INFINITY, &rmax));
         PetscCall(VecGetOwnershipRange(ifc->Hu[b], &cstart, &cend));
         PetscCall(VecGetArray(ifc->Hu[b], &hu));
         for (PetscInt i = cstart; i < cend; i++) hu[i - cstart] = rmax * hsum[i];
@@ -246,10 +253,8 @@ PetscErrorCode MBCInterfaceRigidMotion(MBCInterface ifc)
     PetscCall(VecRestoreArrayRead(ifc->fp.alpha, &a));
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, alpha, ng, MPIU_REAL, MPIU_SUM, ifc->comm));
-  for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    if (!ifc->bodies[b]) continue;
-    for (PetscInt j = 0; j < ifc->bodies[b]->nrigid; j++) PetscCall(VecAXPY(ifc->bodies[b]->du, alpha[ifc->goff[b] + j], ifc->bodies[b]->rigid[j]));
-  }
+  for (PetscInt b = 0; b < ifc->nbodies; b++)
+    if (ifc->bodies[b]) PetscCall(MBCBodyAddRigidIncrement(ifc->bodies[b], &alpha[ifc->goff[b]]));
   PetscCall(PetscFree(alpha));
   PetscFunctionReturn(0);
 }
@@ -271,12 +276,19 @@ PetscErrorCode MBCInterfaceRigidRHS(MBCInterface ifc, PetscInt step, PetscReal t
   PetscCallMPI(MPI_Comm_rank(ifc->comm, &rank));
   PetscCall(PetscCalloc1(2 * ng + 1, &e));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
-    PetscMPIInt brank;
+    PetscMPIInt      brank;
+    MPI_Comm         bcomm;
+    PetscInt         nr;
+    const PetscReal *eb, *fb;
+    PetscReal        ebround;
     if (!ifc->bodies[b]) continue;
-    PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
+    PetscCall(MBCBodyGetComm(ifc->bodies[b], &bcomm));
+    PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+    PetscCall(MBCBodyGetRigidModes(ifc->bodies[b], &nr, NULL));
+    PetscCall(MBCBodyGetRigidEquilibrium(ifc->bodies[b], &eb, &fb, &ebround, NULL));
     if (!brank)
-      for (PetscInt j = 0; j < ifc->bodies[b]->nrigid; j++) e[ifc->goff[b] + j] = ifc->bodies[b]->erigid[j], e[ng + ifc->goff[b] + j] = ifc->bodies[b]->frigid[j];
-    eround = PetscMax(eround, ifc->bodies[b]->erigid_round);
+      for (PetscInt j = 0; j < nr; j++) e[ifc->goff[b] + j] = eb[j], e[ng + ifc->goff[b] + j] = fb[j];
+    eround = PetscMax(eround, ebround);
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, e, 2 * ng, MPIU_REAL, MPIU_SUM, ifc->comm));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &eround, 1, MPIU_REAL, MPIU_MAX, ifc->comm));

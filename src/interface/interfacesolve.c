@@ -164,12 +164,18 @@ static PetscErrorCode InterfaceFrictionCapacity(MBCInterface ifc, PetscInt step,
     PetscReal F[8] = {0, 0, 0, 0, 0, 0, 0, 0}, n[3] = {0, 0, 0}, mu = 0, fn = 0, ft[3], T = 0, N, cA = 0;
     PetscInt  cnt = 0;
     if (ifc->bodies[b]) { /* F, its moment and whether the body is free (held only by contact), from its first rank */
-      PetscMPIInt brank;
-      PetscCallMPI(MPI_Comm_rank(ifc->bodies[b]->comm, &brank));
-      if (!brank && ifc->bodies[b]->nrigid) {
-        for (PetscInt d = 0; d < 3; d++) F[d] = ifc->bodies[b]->fres[d], F[4 + d] = ifc->bodies[b]->fres[3 + d];
+      PetscMPIInt      brank;
+      MPI_Comm         bcomm;
+      PetscInt         nr;
+      const PetscReal *fres;
+      PetscCall(MBCBodyGetComm(ifc->bodies[b], &bcomm));
+      PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+      PetscCall(MBCBodyGetRigidModes(ifc->bodies[b], &nr, NULL));
+      PetscCall(MBCBodyGetRigidEquilibrium(ifc->bodies[b], NULL, NULL, NULL, &fres));
+      if (!brank && nr) {
+        for (PetscInt d = 0; d < 3; d++) F[d] = fres[d], F[4 + d] = fres[3 + d];
         F[3] = 1;
-        F[7] = ifc->bodies[b]->nrigid == 6;
+        F[7] = nr == 6;
       }
     }
     PetscCall(MPIU_Allreduce(MPI_IN_PLACE, F, 8, MPIU_REAL, MPIU_SUM, ifc->comm));
@@ -350,7 +356,7 @@ PetscErrorCode MBCInterfaceStepAbandon(MBCInterface ifc)
   PetscFunctionReturn(0);
 }
 
-/* Given every body's free increment in body->du, solves for the multipliers of step `step`
+/* Given every body's free increment du, solves for the multipliers of step `step`
    (ending at `time`) and adds A^-1 H lambda. A solve that may fail (the caller can cut the step)
    and does returns *failed with nothing changed; otherwise a failed solve is an error. */
 PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time, PetscBool may_fail, PetscBool *failed)
@@ -406,10 +412,12 @@ PetscErrorCode MBCInterfaceSolve(MBCInterface ifc, PetscInt step, PetscReal time
   PetscCall(MBCInterfaceToBodies(ifc, ifc->lamprev));
   for (PetscInt b = 0; b < ifc->nbodies; b++) {
     MBCBody body = ifc->bodies[b];
+    Mat     Ainv;
     if (!body || !ifc->H[b]) continue;
     PetscCall(MatMult(ifc->H[b], ifc->lam[b], ifc->Hl[b]));
-    PetscCall(MBCBodyApplyInverse(body, ifc->Hl[b], ifc->Xl[b]));
-    PetscCall(VecAXPY(body->du, 1.0, ifc->Xl[b]));
+    PetscCall(MBCBodyGetInverse(body, &Ainv));
+    PetscCall(MatMult(Ainv, ifc->Hl[b], ifc->Xl[b]));
+    PetscCall(MBCBodyAddIncrement(body, ifc->Xl[b]));
   }
   if (ifc->fp.G) PetscCall(MBCInterfaceRigidMotion(ifc));
   PetscFunctionReturn(0);

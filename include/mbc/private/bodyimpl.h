@@ -79,6 +79,8 @@ struct _n_MBCBody {
   const PetscInt *bcrows_of; /* the bc_rows they were taken for */
   Mat A;                  /* operator factored by ksp: K or Newmark's K + a0 M + a1 C, constrained rows/cols zeroed */
   KSP ksp;
+  Mat Ainv;               /* the generalised inverse as an operator (MBCBodyGetInverse) */
+  Vec fheld;              /* its work: a right side with the held rows zeroed */
   KSP kspcut[MBC_MAX_CUTS]; /* dynamic: the factor of each step size dt / 2^level used (solver.c) */
   Mat Acut[MBC_MAX_CUTS];
   PetscReal a0, a1;       /* coefficients of A = aK K + aM M */
@@ -144,7 +146,8 @@ PETSC_INTERN PetscErrorCode MBCBodyPrescribed(MBCBody, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyPrescribedIncrement(MBCBody, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode MBCBodySetConstrainedRows(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyConstrainedSolve(MBCBody, KSP, PetscReal, PetscReal, Vec, Vec, Vec);
-PETSC_INTERN PetscErrorCode MBCBodyApplyInverse(MBCBody, Vec, Vec);
+PETSC_INTERN PetscErrorCode MBCBodyGetInverse(MBCBody, Mat *);
+PETSC_INTERN PetscErrorCode MBCInverseGetKSP(Mat, KSP *);
 PETSC_INTERN PetscErrorCode MBCBodyPrescribedRowsForce(MBCBody, PetscBool, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyComputeStress(MBCBody, Vec, Vec);
 PETSC_INTERN PetscErrorCode MBCBodyCheckFinite(MBCBody, Vec, const char[], PetscReal);
