@@ -19,11 +19,12 @@ PetscErrorCode MBCSolverCheckpointTrack(MBCSolver s)
   PetscFunctionBegin;
   if (!s->ubuild) PetscCall(PetscCalloc2(s->nbodies, &s->ubuild, s->nbodies, &s->ugsbuild));
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody body = s->bodies[b];
-    if (!body) continue;
-    if (!s->ubuild[b]) PetscCall(VecDuplicate(body->u, &s->ubuild[b]));
-    if (!s->ugsbuild[b]) PetscCall(VecDuplicate(body->u, &s->ugsbuild[b]));
-    PetscCall(VecCopy(body->u, s->ubuild[b]));
+    Vec u;
+    if (!s->bodies[b]) continue;
+    PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
+    if (!s->ubuild[b]) PetscCall(VecDuplicate(u, &s->ubuild[b]));
+    if (!s->ugsbuild[b]) PetscCall(VecDuplicate(u, &s->ugsbuild[b]));
+    PetscCall(VecCopy(u, s->ubuild[b]));
     if (s->contact->usearch[b]) PetscCall(VecCopy(s->contact->usearch[b], s->ugsbuild[b]));
     else PetscCall(VecZeroEntries(s->ugsbuild[b]));
   }
@@ -146,12 +147,16 @@ static PetscErrorCode CheckpointBodyEnergies(MBCSolver s, PetscReal e[], PetscBo
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody     body = s->bodies[b];
     PetscMPIInt brank = 1;
-    if (body) PetscCallMPI(MPI_Comm_rank(body->comm, &brank));
+    MPI_Comm    bcomm;
+    if (body) {
+      PetscCall(MBCBodyGetComm(body, &bcomm));
+      PetscCallMPI(MPI_Comm_rank(bcomm, &brank));
+    }
     if (load) {
-      if (body) body->wext = e[2 * b], body->wdamp = e[2 * b + 1];
+      if (body) PetscCall(MBCBodySetWork(body, e[2 * b], e[2 * b + 1]));
     } else {
       e[2 * b] = e[2 * b + 1] = 0;
-      if (!brank) e[2 * b] = body->wext, e[2 * b + 1] = body->wdamp;
+      if (!brank) PetscCall(MBCBodyGetWork(body, &e[2 * b], &e[2 * b + 1]));
     }
   }
   if (!load) PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, e, 2 * (PetscMPIInt)s->nbodies, MPIU_REAL, MPI_SUM, s->comm));
@@ -189,14 +194,18 @@ PetscErrorCode MBCSolverCheckpointWrite(MBCSolver s)
   PetscCall(PetscFree(e));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
+    Vec     u, vel, acc;
     char    group[MBC_NAME_LEN + 16];
+    PetscCall(MBCBodyGetDisplacement(body, &u));
+    PetscCall(MBCBodyGetVelocity(body, &vel));
+    PetscCall(MBCBodyGetAcceleration(body, &acc));
     PetscCall(PetscSNPrintf(group, sizeof(group), "/bodies/%s", s->scene->bodies[b].name));
     PetscCall(PetscViewerHDF5PushGroup(v, group));
-    PetscCall(CheckpointBodyVec(s, v, b, body ? body->u : NULL, "u", PETSC_FALSE));
+    PetscCall(CheckpointBodyVec(s, v, b, u, "u", PETSC_FALSE));
     PetscCall(PetscViewerHDF5WriteAttribute(v, group, "num_vertices", PETSC_INT, &s->scene->bodies[b].num_vertices));
     if (s->has_dynamic) {
-      PetscCall(CheckpointBodyVec(s, v, b, body ? body->v : NULL, "v", PETSC_FALSE));
-      PetscCall(CheckpointBodyVec(s, v, b, body ? body->a : NULL, "a", PETSC_FALSE));
+      PetscCall(CheckpointBodyVec(s, v, b, vel, "v", PETSC_FALSE));
+      PetscCall(CheckpointBodyVec(s, v, b, acc, "a", PETSC_FALSE));
       if (s->iface) {
         Vec f = NULL;
         if (body) PetscCall(MBCInterfaceGetReleasedForce(s->iface, b, &f));
@@ -317,13 +326,17 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
   PetscCall(PetscFree(e));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody body = s->bodies[b];
+    Vec     u, vel, acc;
     char    group[MBC_NAME_LEN + 16];
+    PetscCall(MBCBodyGetDisplacement(body, &u));
+    PetscCall(MBCBodyGetVelocity(body, &vel));
+    PetscCall(MBCBodyGetAcceleration(body, &acc));
     PetscCall(PetscSNPrintf(group, sizeof(group), "/bodies/%s", s->scene->bodies[b].name));
     PetscCall(PetscViewerHDF5PushGroup(v, group));
-    PetscCall(CheckpointBodyVec(s, v, b, body ? body->u : NULL, "u", PETSC_TRUE));
+    PetscCall(CheckpointBodyVec(s, v, b, u, "u", PETSC_TRUE));
     if (s->has_dynamic) {
-      PetscCall(CheckpointBodyVec(s, v, b, body ? body->v : NULL, "v", PETSC_TRUE));
-      PetscCall(CheckpointBodyVec(s, v, b, body ? body->a : NULL, "a", PETSC_TRUE));
+      PetscCall(CheckpointBodyVec(s, v, b, vel, "v", PETSC_TRUE));
+      PetscCall(CheckpointBodyVec(s, v, b, acc, "a", PETSC_TRUE));
       if (s->iface) { /* the released contact points' force in a (a checkpoint written before it was kept has none) */
         char      path[MBC_NAME_LEN + 48];
         PetscBool has;
@@ -333,7 +346,7 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
         if (body) PetscCall(MBCInterfaceGetReleasedForce(s->iface, b, &f));
         if (has) PetscCall(CheckpointBodyVec(s, v, b, f, "contact_force_released", PETSC_TRUE));
       }
-      if (body) PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->fold)); /* the energies' trapezoidal work */
+      if (body) PetscCall(MBCBodyRestartLoad(body, s->time)); /* the energies' trapezoidal work */
     }
     PetscCall(PetscViewerHDF5PopGroup(v));
   }
@@ -346,17 +359,22 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
     const char *step[3] = {"u_search_build", "u_build", "u_search"};
 
     PetscCall(PetscCalloc1(s->nbodies, &ucur));
-    for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(VecDuplicate(s->bodies[b]->u, &ucur[b]));
-    for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(VecCopy(s->bodies[b]->u, ucur[b]));
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      Vec u;
+      if (!s->bodies[b]) continue;
+      PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
+      PetscCall(VecDuplicate(u, &ucur[b]));
+      PetscCall(VecCopy(u, ucur[b]));
+    }
     c->check_penetration = PETSC_FALSE; /* a deformed state: its gaps were accepted when it was reached */
     for (PetscInt k = 0; k < 3; k++) {
       for (PetscInt b = 0; b < s->nbodies; b++) {
         char group[MBC_NAME_LEN + 16];
+        Vec  u;
+        PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
         PetscCall(PetscSNPrintf(group, sizeof(group), "/bodies/%s", s->scene->bodies[b].name));
         PetscCall(PetscViewerHDF5PushGroup(v, group));
-        PetscCall(CheckpointBodyVec(s, v, b, s->bodies[b] ? s->bodies[b]->u : NULL, step[k], PETSC_TRUE));
+        PetscCall(CheckpointBodyVec(s, v, b, u, step[k], PETSC_TRUE));
         PetscCall(PetscViewerHDF5PopGroup(v));
       }
       if (k == 1) { /* H's build: its search kept the faces of the pairs it built where they tie (MBCContactSetPreferredFaces), and searching with those pairs' faces preferred finds them again */
@@ -398,8 +416,12 @@ PetscErrorCode MBCSolverRestart(MBCSolver s)
         PetscCall(PetscFree4(lam, r, slip, pr));
       }
     }
-    for (PetscInt b = 0; b < s->nbodies; b++)
-      if (s->bodies[b]) PetscCall(VecCopy(ucur[b], s->bodies[b]->u));
+    for (PetscInt b = 0; b < s->nbodies; b++) {
+      Vec u;
+      if (!s->bodies[b]) continue;
+      PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
+      PetscCall(VecCopy(ucur[b], u));
+    }
     PetscCall(MBCContactUpdate(c, s->nbodies, s->bodies, PETSC_FALSE, NULL));
     for (PetscInt b = 0; b < s->nbodies; b++) PetscCall(VecDestroy(&ucur[b]));
     PetscCall(PetscFree(ucur));

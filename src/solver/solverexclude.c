@@ -6,19 +6,25 @@
 /* rows[i]: the first global row of vertex v[i] (scene order) of body b where this rank owns it, else left. */
 static PetscErrorCode BodyVertexRows(MBCBody body, PetscInt n, const PetscInt pairs[], PetscInt rows[])
 {
-  PetscSection gsec;
-  PetscInt     vStart, vEnd, nmine = 0, *key, *idx;
+  PetscSection    gsec;
+  PetscInt        vStart, vEnd, nmine = 0, *key, *idx;
+  const PetscInt *vnum;
+  PetscInt        bindex;
+  DM              bdm;
 
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetIndex(body, &bindex));
+  PetscCall(MBCBodyGetDM(body, &bdm));
+  PetscCall(MBCBodyGetSceneNumbering(body, &vnum, NULL));
   PetscCall(PetscMalloc2(n + 1, &key, n + 1, &idx));
   for (PetscInt i = 0; i < n; i++)
-    if (pairs[2 * i] == body->index) key[nmine] = pairs[2 * i + 1], idx[nmine++] = i;
+    if (pairs[2 * i] == bindex) key[nmine] = pairs[2 * i + 1], idx[nmine++] = i;
   PetscCall(PetscSortIntWithArray(nmine, key, idx));
-  PetscCall(DMGetGlobalSection(body->dm, &gsec));
-  PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+  PetscCall(DMGetGlobalSection(bdm, &gsec));
+  PetscCall(DMPlexGetDepthStratum(bdm, 0, &vStart, &vEnd));
   for (PetscInt v = vStart; v < vEnd && nmine; v++) {
     PetscInt at, off;
-    PetscCall(PetscFindInt(body->vnum[v - vStart], nmine, key, &at));
+    PetscCall(PetscFindInt(vnum[v - vStart], nmine, key, &at));
     if (at < 0) continue;
     PetscCall(PetscSectionGetOffset(gsec, v, &off));
     if (off >= 0) rows[idx[at]] = off;

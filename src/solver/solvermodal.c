@@ -69,9 +69,11 @@ static PetscErrorCode ModalLayoutCreate(MBCSolver s, PetscInt nmult, ModalLayout
   PetscCall(PetscCalloc1(3 * s->nbodies, &mine));
   L->nlocal = 0;
   for (PetscInt b = 0; b < s->nbodies; b++) {
+    Vec u;
     L->boff[b] = -1;
     if (!s->bodies[b]) continue;
-    PetscCall(VecGetOwnershipRange(s->bodies[b]->u, &mine[3 * b], &mine[3 * b + 1]));
+    PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
+    PetscCall(VecGetOwnershipRange(u, &mine[3 * b], &mine[3 * b + 1]));
     L->boff[b] = L->nlocal;
     L->nlocal += mine[3 * b + 1] - mine[3 * b];
   }
@@ -114,7 +116,7 @@ static PetscErrorCode ModalInsert(MBCSolver s, const ModalLayout *L, PetscBool s
     Mat      X;
     PetscInt rlo, rhi;
     if (!body) continue;
-    X = stiffness ? body->K : body->M;
+    PetscCall(MBCBodyGetOperators(body, stiffness ? &X : NULL, stiffness ? NULL : &X, NULL));
     PetscCall(MatGetOwnershipRange(X, &rlo, &rhi));
     for (PetscInt row = rlo; row < rhi; row++) {
       const PetscInt    *cols;
@@ -178,14 +180,18 @@ static PetscErrorCode ModalOperators(MBCSolver s, const ModalLayout *L, Mat *Ksy
   PetscFunctionBegin;
   for (PetscInt b = 0; b < s->nbodies; b++) {
     Vec       d;
+    Mat       K;
     PetscReal m;
+    PetscInt  nbcb;
     if (!s->bodies[b]) continue;
-    PetscCall(MatCreateVecs(s->bodies[b]->K, &d, NULL));
-    PetscCall(MatGetDiagonal(s->bodies[b]->K, d));
+    PetscCall(MBCBodyGetOperators(s->bodies[b], &K, NULL, NULL));
+    PetscCall(MatCreateVecs(K, &d, NULL));
+    PetscCall(MatGetDiagonal(K, d));
     PetscCall(VecNorm(d, NORM_INFINITY, &m));
     PetscCall(VecDestroy(&d));
     kmax = PetscMax(kmax, m);
-    nbc += s->bodies[b]->nbc;
+    PetscCall(MBCBodyGetPrescribedRows(s->bodies[b], &nbcb, NULL));
+    nbc += nbcb;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &kmax, 1, MPIU_REAL, MPIU_MAX, s->comm));
   *eps = 1e-10 / kmax;
@@ -209,11 +215,15 @@ static PetscErrorCode ModalOperators(MBCSolver s, const ModalLayout *L, Mat *Ksy
   PetscCall(MatAssemblyEnd(*Bsys, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscMalloc1(nbc, &rows));
   for (PetscInt b = 0; b < s->nbodies; b++) {
-    MBCBody  body = s->bodies[b];
-    PetscInt rlo;
+    MBCBody         body = s->bodies[b];
+    Vec             u;
+    PetscInt        rlo, nbcb;
+    const PetscInt *bcrows;
     if (!body) continue;
-    PetscCall(VecGetOwnershipRange(body->u, &rlo, NULL));
-    for (PetscInt i = 0; i < body->nbc; i++) rows[k++] = L->rstart + L->boff[b] + body->bc_rows[i] - rlo;
+    PetscCall(MBCBodyGetDisplacement(body, &u));
+    PetscCall(MBCBodyGetPrescribedRows(body, &nbcb, &bcrows));
+    PetscCall(VecGetOwnershipRange(u, &rlo, NULL));
+    for (PetscInt i = 0; i < nbcb; i++) rows[k++] = L->rstart + L->boff[b] + bcrows[i] - rlo;
   }
   PetscCall(MatZeroRowsColumns(*Ksys, nbc, rows, 1.0, NULL, NULL));
   PetscCall(MatZeroRowsColumns(*Bsys, nbc, rows, 0.0, NULL, NULL));
@@ -233,11 +243,13 @@ static PetscErrorCode ModalToBodies(MBCSolver s, const ModalLayout *L, Vec x)
   for (PetscInt b = 0; b < s->nbodies; b++) {
     PetscScalar *u;
     PetscInt     n;
+    Vec          ub;
     if (!s->bodies[b]) continue;
-    PetscCall(VecGetLocalSize(s->bodies[b]->u, &n));
-    PetscCall(VecGetArray(s->bodies[b]->u, &u));
+    PetscCall(MBCBodyGetDisplacement(s->bodies[b], &ub));
+    PetscCall(VecGetLocalSize(ub, &n));
+    PetscCall(VecGetArray(ub, &u));
     PetscCall(PetscArraycpy(u, xa + L->boff[b], n));
-    PetscCall(VecRestoreArray(s->bodies[b]->u, &u));
+    PetscCall(VecRestoreArray(ub, &u));
   }
   PetscCall(VecRestoreArrayRead(x, &xa));
   PetscFunctionReturn(0);
@@ -253,9 +265,11 @@ static PetscErrorCode ModalDirection(MBCSolver s, const ModalLayout *L, PetscInt
   PetscCall(VecGetArray(e, &ea));
   for (PetscInt b = 0; b < s->nbodies; b++) {
     PetscInt n, rlo;
+    Vec      u;
     if (!s->bodies[b]) continue;
-    PetscCall(VecGetLocalSize(s->bodies[b]->u, &n));
-    PetscCall(VecGetOwnershipRange(s->bodies[b]->u, &rlo, NULL));
+    PetscCall(MBCBodyGetDisplacement(s->bodies[b], &u));
+    PetscCall(VecGetLocalSize(u, &n));
+    PetscCall(VecGetOwnershipRange(u, &rlo, NULL));
     for (PetscInt i = 0; i < n; i++) ea[L->boff[b] + i] = ((rlo + i) % 3 == d) ? 1.0 : 0.0;
   }
   PetscCall(VecRestoreArray(e, &ea));

@@ -38,12 +38,16 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
     Vec                coords;
     const PetscScalar *x;
     PetscInt           vStart, vEnd;
+    DM                 dm;
+    const char        *name;
     if (!body) continue;
-    PetscCall(DMGetGlobalSection(body->dm, &gsec));
-    PetscCall(DMGetCoordinateSection(body->dm, &csec));
-    PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
+    PetscCall(MBCBodyGetDM(body, &dm));
+    PetscCall(MBCBodyGetName(body, &name));
+    PetscCall(DMGetGlobalSection(dm, &gsec));
+    PetscCall(DMGetCoordinateSection(dm, &csec));
+    PetscCall(DMGetCoordinatesLocal(dm, &coords));
     PetscCall(VecGetArrayRead(coords, &x));
-    PetscCall(DMPlexGetDepthStratum(body->dm, 0, &vStart, &vEnd));
+    PetscCall(DMPlexGetDepthStratum(dm, 0, &vStart, &vEnd));
     for (PetscInt v = vStart; v < vEnd; v++) {
       PetscInt off, coff;
       PetscCall(PetscSectionGetOffset(gsec, v, &off));
@@ -56,7 +60,7 @@ static PetscErrorCode SolverLocatePoints(MBCSolver s)
       for (PetscInt p = 0; p < scene->npoints; p++) {
         PetscReal d = 0;
         PetscBool same = PETSC_TRUE;
-        if (scene->points[p].body[0]) PetscCall(PetscStrcmp(scene->points[p].body, body->name, &same));
+        if (scene->points[p].body[0]) PetscCall(PetscStrcmp(scene->points[p].body, name, &same));
         if (!same) continue;
         for (PetscInt c = 0; c < 3; c++) d += PetscSqr(PetscRealPart(x[coff + c]) - scene->points[p].x[c]);
         d = PetscSqrtReal(d);
@@ -261,8 +265,10 @@ static PetscErrorCode SolverOutputPoints(MBCSolver s)
     MBCBody  body;
     if (s->points[p].row < 0) continue;
     body = s->bodies[s->points[p].body];
-    vecs[0] = body->u, vecs[1] = body->v, vecs[2] = body->a;
-    PetscCall(VecGetOwnershipRange(body->u, &rstart, NULL));
+    PetscCall(MBCBodyGetDisplacement(body, &vecs[0]));
+    PetscCall(MBCBodyGetVelocity(body, &vecs[1]));
+    PetscCall(MBCBodyGetAcceleration(body, &vecs[2]));
+    PetscCall(VecGetOwnershipRange(vecs[0], &rstart, NULL));
     for (PetscInt q = 0; q < (absolute ? 3 : 1); q++) {
       const PetscScalar *x;
       PetscCall(VecGetArrayRead(vecs[q], &x));
@@ -289,11 +295,11 @@ static PetscErrorCode SolverOutputPoints(MBCSolver s)
 
 PetscErrorCode MBCSolverOutputStep(MBCSolver s)
 {
-  MBCScene  scene = s->scene;
-  PetscBool fields = (PetscBool)(scene->output_displacement || scene->output_stress || scene->output_envelope);
+  MBCScene              scene = s->scene;
+  PetscBool             fields = (PetscBool)(scene->output_displacement || scene->output_stress || scene->output_envelope);
   const MBCSolverStage *st = &s->stages[s->istage];
-  PetscBool fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == st->step0 + st->nsteps)); /* and each stage's end */
-  int       sig;
+  PetscBool             fieldstep = (PetscBool)((fields || s->contact) && (s->step % s->output_every == 0 || s->step == st->step0 + st->nsteps)); /* and each stage's end */
+  int                   sig;
 
   PetscFunctionBegin;
   PetscCall(MBCStopSignalled(s->comm, &sig)); /* between steps: a signal makes this the last one, written whole */

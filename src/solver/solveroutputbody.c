@@ -117,10 +117,16 @@ static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscIn
   PetscReal         *xl;
   PetscInt          *cl, *cr, cStart;
   PetscSF            sf;
+  DM                 bdm;
+  MPI_Comm           bcomm;
+  const char        *bname;
 
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetDM(body, &bdm));
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetName(body, &bname));
   (void)vscene;
-  PetscCall(DMGetCoordinatesLocal(body->dm, &coords));
+  PetscCall(DMGetCoordinatesLocal(bdm, &coords));
   PetscCall(VecGetArrayRead(coords, &xa));
   PetscCall(PetscMalloc1(3 * o->nvown, &xl));
   for (PetscInt i = 0; i < o->nvown; i++) PetscCall(MBCBodyPointCoordinates(body, vpoint[i], xa, &xl[3 * i]));
@@ -129,15 +135,17 @@ static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscIn
   PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, xl, x, MPI_REPLACE));
   PetscCall(PetscFree(xl));
 
-  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, NULL));
+  PetscCall(DMPlexGetHeightStratum(bdm, 0, &cStart, NULL));
   PetscCall(PetscMalloc2(o->nvpc * o->ncown, &cl, o->nvpc * o->ncrows, &cr));
   for (PetscInt i = 0; i < o->ncown; i++) {
-    const PetscInt  c = cpoint[i], *v = &body->cellv[body->cellvoff[c - cStart]], nv = body->cellvoff[c - cStart + 1] - body->cellvoff[c - cStart];
-    const PetscInt  t = body->celltype[c - cStart];
-    PetscCheck(nv <= o->nvpc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': cell %" PetscInt_FMT " has %" PetscInt_FMT " nodes, more than %" PetscInt_FMT, body->name, cscene[i], nv, o->nvpc);
+    const PetscInt *v;
+    PetscInt        nv;
+    MBCCellType     t;
+    PetscCall(MBCBodyGetCellNodes(body, cpoint[i] - cStart, &nv, &v, &t));
+    PetscCheck(nv <= o->nvpc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "Body '%s': cell %" PetscInt_FMT " has %" PetscInt_FMT " nodes, more than %" PetscInt_FMT, bname, cscene[i], nv, o->nvpc);
     for (PetscInt j = 0; j < o->nvpc; j++) cl[o->nvpc * i + j] = j < nv ? MBCBodyPointNode(body, v[ToXdmf[t][j]]) : -1;
   }
-  PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, o->nvpc, body->name, "cell", &sf));
+  PetscCall(RowSFCreate(bcomm, o->ncrows, o->ncown, cscene, o->nvpc, bname, "cell", &sf));
   PetscCall(PetscSFReduceBegin(sf, MPIU_INT, cl, cr, MPI_REPLACE));
   PetscCall(PetscSFReduceEnd(sf, MPIU_INT, cl, cr, MPI_REPLACE));
   PetscCall(PetscSFDestroy(&sf));
@@ -151,16 +159,22 @@ static PetscErrorCode BodyGeometry(MBCBody body, MBCBodyOutput *o, const PetscIn
    (solvercheckpoint.c), which stores the state in the scene's order. */
 PetscErrorCode MBCBodyVertexMapCreate(MBCBody body, MBCBodyOutput *o, PetscInt **vpoint, PetscInt **vscene)
 {
-  PetscInt pStart, pEnd, *vp, *vs, *num;
+  PetscInt    pStart, pEnd, *vp, *vs, *num;
+  MPI_Comm    bcomm;
+  DM          bdm;
+  const char *bname;
 
   PetscFunctionBegin;
-  PetscCall(SplitRows(body->comm, o->nv, &o->vstart, &o->nvrows));
-  PetscCall(DMPlexGetChart(body->dm, &pStart, &pEnd));
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetDM(body, &bdm));
+  PetscCall(MBCBodyGetName(body, &bname));
+  PetscCall(SplitRows(bcomm, o->nv, &o->vstart, &o->nvrows));
+  PetscCall(DMPlexGetChart(bdm, &pStart, &pEnd));
   PetscCall(PetscMalloc1(pEnd - pStart + 1, &num));
   for (PetscInt p = pStart; p < pEnd; p++) num[p - pStart] = MBCBodyPointNode(body, p); /* the nodes: vertices, tet10's edges */
-  PetscCall(OwnedPoints(body->dm, pStart, pEnd, num, &o->nvown, &vp, &o->vrow, &vs));
+  PetscCall(OwnedPoints(bdm, pStart, pEnd, num, &o->nvown, &vp, &o->vrow, &vs));
   PetscCall(PetscFree(num));
-  PetscCall(RowSFCreate(body->comm, o->nvrows, o->nvown, vs, 3, body->name, "vertex", &o->vsf));
+  PetscCall(RowSFCreate(bcomm, o->nvrows, o->nvown, vs, 3, bname, "vertex", &o->vsf));
   if (vpoint) *vpoint = vp;
   else PetscCall(PetscFree(vp));
   if (vscene) *vscene = vs;
@@ -171,14 +185,24 @@ PetscErrorCode MBCBodyVertexMapCreate(MBCBody body, MBCBodyOutput *o, PetscInt *
 /* The maps of a body this rank is in, and its vertices and cells in this rank's rows. */
 static PetscErrorCode BodyOutputSetUp(MBCBody body, MBCBodyOutput *o, PetscReal **x, int **cells)
 {
-  PetscInt cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
+  PetscInt        cStart, cEnd, *vpoint, *vscene, *cpoint, *cscene;
+  const PetscInt *cnum;
+  DM              dmStress;
+  MPI_Comm        bcomm;
+  DM              bdm;
+  const char     *bname;
 
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetComm(body, &bcomm));
+  PetscCall(MBCBodyGetDM(body, &bdm));
+  PetscCall(MBCBodyGetName(body, &bname));
   PetscCall(MBCBodyVertexMapCreate(body, o, &vpoint, &vscene));
-  PetscCall(SplitRows(body->comm, o->nc, &o->cstart, &o->ncrows));
-  PetscCall(DMPlexGetHeightStratum(body->dm, 0, &cStart, &cEnd));
-  PetscCall(OwnedPoints(body->dmStress, cStart, cEnd, body->cnum, &o->ncown, &cpoint, &o->crow, &cscene));
-  PetscCall(RowSFCreate(body->comm, o->ncrows, o->ncown, cscene, 6, body->name, "cell", &o->csf));
+  PetscCall(SplitRows(bcomm, o->nc, &o->cstart, &o->ncrows));
+  PetscCall(DMPlexGetHeightStratum(bdm, 0, &cStart, &cEnd));
+  PetscCall(MBCBodyGetStressDM(body, &dmStress));
+  PetscCall(MBCBodyGetSceneNumbering(body, NULL, &cnum));
+  PetscCall(OwnedPoints(dmStress, cStart, cEnd, cnum, &o->ncown, &cpoint, &o->crow, &cscene));
+  PetscCall(RowSFCreate(bcomm, o->ncrows, o->ncown, cscene, 6, bname, "cell", &o->csf));
   PetscCall(PetscMalloc2(6 * PetscMax(o->nvown, o->ncown), &o->leaf, 3 * o->nvrows + 6 * o->ncrows, &o->root));
   PetscCall(PetscMalloc1(3 * o->nvrows, x));
   PetscCall(PetscMalloc1(o->nvpc * o->ncrows, cells));
@@ -270,26 +294,31 @@ PetscErrorCode MBCSolverOutputBodiesOpen(MBCSolver s)
    then stress). */
 static PetscErrorCode BodyFields(MBCScene scene, MBCBody body, MBCBodyOutput *o)
 {
+  Vec bu;
+
   PetscFunctionBegin;
+  PetscCall(MBCBodyGetDisplacement(body, &bu));
   if (scene->output_displacement) {
     const PetscScalar *u;
-    PetscCall(VecGetArrayRead(body->u, &u));
+    PetscCall(VecGetArrayRead(bu, &u));
     for (PetscInt i = 0; i < o->nvown; i++)
       for (PetscInt c = 0; c < 3; c++) o->leaf[3 * i + c] = PetscRealPart(u[o->vrow[i] + c]);
-    PetscCall(VecRestoreArrayRead(body->u, &u));
+    PetscCall(VecRestoreArrayRead(bu, &u));
     PetscCall(PetscSFReduceBegin(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
     PetscCall(PetscSFReduceEnd(o->vsf, MPIU_REAL, o->leaf, o->root, MPI_REPLACE));
   }
   if (scene->output_stress) {
     const PetscScalar *sa;
     Vec                stress;
-    PetscCall(DMGetGlobalVector(body->dmStress, &stress));
-    PetscCall(MBCBodyComputeStress(body, body->u, stress));
+    DM                 dmStress;
+    PetscCall(MBCBodyGetStressDM(body, &dmStress));
+    PetscCall(DMGetGlobalVector(dmStress, &stress));
+    PetscCall(MBCBodyComputeStress(body, bu, stress));
     PetscCall(VecGetArrayRead(stress, &sa));
     for (PetscInt i = 0; i < o->ncown; i++) /* Voigt (xx yy zz xy yz xz) into XDMF's Tensor6 order (xx xy xz yy yz zz) */
       for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(sa[o->crow[i] + VoigtOfTensor6[c]]);
     PetscCall(VecRestoreArrayRead(stress, &sa));
-    PetscCall(DMRestoreGlobalVector(body->dmStress, &stress));
+    PetscCall(DMRestoreGlobalVector(dmStress, &stress));
     PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));
     PetscCall(PetscSFReduceEnd(o->csf, MPIU_REAL, o->leaf, o->root + 3 * o->nvrows, MPI_REPLACE));
   }
@@ -302,15 +331,16 @@ static PetscErrorCode BodyEnvelope(MBCBody body, MBCBodyOutput *o, PetscReal **e
 {
   const PetscScalar *ea;
   PetscReal         *rows;
+  Vec                envelope;
 
   PetscFunctionBegin;
   PetscCall(PetscMalloc1(2 * o->ncrows, env));
   PetscCall(PetscMalloc1(6 * o->ncrows, &rows));
-  if (!body->envelope) PetscCall(MBCBodyEnvelopeUpdate(body, 0.0)); /* not stepped yet */
-  PetscCall(VecGetArrayRead(body->envelope, &ea));
+  PetscCall(MBCBodyGetEnvelope(body, &envelope));
+  PetscCall(VecGetArrayRead(envelope, &ea));
   for (PetscInt i = 0; i < o->ncown; i++)
     for (PetscInt c = 0; c < 6; c++) o->leaf[6 * i + c] = PetscRealPart(ea[o->crow[i] + c]);
-  PetscCall(VecRestoreArrayRead(body->envelope, &ea));
+  PetscCall(VecRestoreArrayRead(envelope, &ea));
   PetscCall(PetscSFReduceBegin(o->csf, MPIU_REAL, o->leaf, rows, MPI_REPLACE));
   PetscCall(PetscSFReduceEnd(o->csf, MPIU_REAL, o->leaf, rows, MPI_REPLACE));
   for (PetscInt i = 0; i < o->ncrows; i++) {
@@ -325,8 +355,8 @@ static PetscErrorCode BodyEnvelope(MBCBody body, MBCBodyOutput *o, PetscReal **e
    its bodies' rows, then all write body after body. Collective. */
 PetscErrorCode MBCSolverOutputBodiesStep(MBCSolver s)
 {
-  MBCScene   scene = s->scene;
-  int        step  = (int)s->step;
+  MBCScene    scene = s->scene;
+  int         step  = (int)s->step;
   PetscReal **env  = NULL;
 
   PetscFunctionBegin;

@@ -48,15 +48,17 @@ PetscErrorCode MBCSolverOutputReactionsOpen(MBCSolver s)
    and the reactions disagreed by it). */
 static PetscErrorCode BodyPrescribedContactForce(MBCSolver s, PetscInt b, const PetscReal lam[], Vec f)
 {
-  MBCInterface ifc  = s->iface;
-  MBCBody      body = s->bodies[b];
-  MBCContact   c    = s->contact;
-  PetscScalar *fv;
-  PetscInt     rstart;
+  MBCInterface    ifc  = s->iface;
+  MBCBody         body = s->bodies[b];
+  MBCContact      c    = s->contact;
+  PetscScalar    *fv;
+  PetscInt        rstart, nbc;
+  const PetscInt *bcrows;
 
   PetscFunctionBegin;
   PetscCall(VecZeroEntries(f));
-  if (!body->nbc) PetscFunctionReturn(0);
+  PetscCall(MBCBodyGetPrescribedRows(body, &nbc, &bcrows));
+  if (!nbc) PetscFunctionReturn(0);
   PetscCall(VecGetOwnershipRange(f, &rstart, NULL));
   PetscCall(VecGetArray(f, &fv));
   for (PetscInt k = 0; k < ifc->ncontact; k++) {
@@ -74,7 +76,7 @@ static PetscErrorCode BodyPrescribedContactForce(MBCSolver s, PetscInt b, const 
         if (sf->nbody[node[l]] != b) continue;
         for (PetscInt d = 0; d < 3; d++) {
           PetscInt at;
-          PetscCall(PetscFindInt(sf->nrow[node[l]] + d, body->nbc, body->bc_rows, &at));
+          PetscCall(PetscFindInt(sf->nrow[node[l]] + d, nbc, bcrows, &at));
           if (at >= 0) fv[sf->nrow[node[l]] + d - rstart] += (side ? -w[l] : w[l]) * force[d];
         }
       }
@@ -89,17 +91,20 @@ static PetscErrorCode BodyPrescribedContactForce(MBCSolver s, PetscInt b, const 
 static PetscErrorCode BodyResidual(MBCSolver s, PetscInt b, const PetscReal lam[], Vec r)
 {
   MBCBody body = s->bodies[b];
+  Vec     f;
 
   PetscFunctionBegin;
+  PetscCall(VecDuplicate(r, &f));
   PetscCall(MBCBodyPrescribedRowsForce(body, (PetscBool)(s->analysis == MBC_ANALYSIS_DYNAMIC), r));
-  PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, body->work));
-  PetscCall(VecAXPY(r, -1.0, body->work));
+  PetscCall(MBCBodyExternalForce(body, s->time, PETSC_FALSE, f));
+  PetscCall(VecAXPY(r, -1.0, f));
   if (s->iface) { /* H lambda_n+1 of the step (MBCInterfaceMultipliersToBodies) */
-    PetscCall(MBCInterfaceBodyForce(s->iface, b, body->work));
-    PetscCall(VecAXPY(r, -1.0, body->work));
-    PetscCall(BodyPrescribedContactForce(s, b, lam, body->work));
-    PetscCall(VecAXPY(r, -1.0, body->work));
+    PetscCall(MBCInterfaceBodyForce(s->iface, b, f));
+    PetscCall(VecAXPY(r, -1.0, f));
+    PetscCall(BodyPrescribedContactForce(s, b, lam, f));
+    PetscCall(VecAXPY(r, -1.0, f));
   }
+  PetscCall(VecDestroy(&f));
   PetscFunctionReturn(0);
 }
 
@@ -124,18 +129,22 @@ PetscErrorCode MBCSolverOutputReactionsStep(MBCSolver s)
   }
   for (PetscInt b = 0; b < s->nbodies; b++) {
     MBCBody            body = s->bodies[b];
-    Vec                r;
+    Vec                u, r;
     const PetscScalar *rv;
-    PetscInt           rstart;
+    PetscInt           rstart, nbc;
+    const PetscInt    *bcrows, *bcentry;
     if (!body) continue;
-    PetscCall(VecDuplicate(body->u, &r));
+    PetscCall(MBCBodyGetDisplacement(body, &u));
+    PetscCall(MBCBodyGetPrescribedRows(body, &nbc, &bcrows));
+    PetscCall(MBCBodyGetPrescribedEntries(body, &bcentry));
+    PetscCall(VecDuplicate(u, &r));
     PetscCall(BodyResidual(s, b, lam, r));
     PetscCall(VecGetOwnershipRange(r, &rstart, NULL));
     PetscCall(VecGetArrayRead(r, &rv));
-    for (PetscInt i = 0; i < body->nbc; i++) {
-      const PetscInt d = body->bc_entry[i];
+    for (PetscInt i = 0; i < nbc; i++) {
+      const PetscInt d = bcentry[i];
       if (d < 0) continue; /* an absorbing surface held in a static state (bodyabsorbing.c) */
-      sum[3 * first[d] + scene->dirichlet[d].component] += PetscRealPart(rv[body->bc_rows[i] - rstart]);
+      sum[3 * first[d] + scene->dirichlet[d].component] += PetscRealPart(rv[bcrows[i] - rstart]);
     }
     PetscCall(VecRestoreArrayRead(r, &rv));
     PetscCall(VecDestroy(&r));
