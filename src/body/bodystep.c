@@ -209,12 +209,9 @@ PetscErrorCode MBCBodyDynamicInitialState(MBCBody body)
   PetscCall(MBCBodyAcceleration(body, 0.0, NULL));
   PetscCall(MBCBodyWorkStart(body));
   if (hasu || hasv) { /* the energy the initial state holds counts as work done on the body before t = 0: total starts at 0 */
-    PetscScalar uKu, vMv = 0;
-    PetscCall(MatMult(body->K, body->u, body->work));
-    PetscCall(VecDot(body->u, body->work, &uKu));
-    PetscCall(MatMult(body->M, body->v, body->work));
-    PetscCall(VecDot(body->v, body->work, &vMv));
-    body->wext = 0.5 * PetscRealPart(uKu + vMv);
+    PetscReal e[4];
+    PetscCall(MBCBodyEnergy(body, e));
+    body->wext = e[0] + e[1];
   }
   body->wdamp = 0;
   PetscFunctionReturn(0);

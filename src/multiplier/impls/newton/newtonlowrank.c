@@ -46,7 +46,7 @@ static PetscBool NewtonRowDiff(const MBC_Newton *nt, PetscInt i, PetscInt o, Pet
   PetscReal a[3], bb[3];
   PetscBool differs = PETSC_FALSE;
 
-  NewtonReferenceRow((MBC_Newton *)nt, i, o, d, sigma, a, bb);
+  NewtonReferenceRow(nt, i, o, d, sigma, a, bb);
   for (PetscInt e = 0; e < 3; e++) {
     PetscReal ac = 0, bc = 0; /* the current row */
     if (e < dim && nt->active[i]) ac = nt->A[9 * i + dim * d + e] + (d == e ? sigma : 0), bc = nt->B[9 * i + dim * d + e];
